@@ -1,0 +1,294 @@
+//! Convex polygon operations in a plane's 2-D coordinates, and clipping of 3-D planar polygons.
+//!
+//! The pair plan describes the visible part of an element as a set of disjoint convex polygons:
+//! a triangle clipped by half-planes (the node's tangent plane) minus convex shadows. Subtracting a
+//! convex polygon from a convex polygon by its edge lines keeps every piece convex and needs no
+//! general polygon Boolean, so the pieces are exact up to rounding of line intersections.
+
+use glam::{DVec2, DVec3};
+
+/// Relative tolerance (of a polygon's size) under which a vertex counts as lying on a clipping line.
+const ON_LINE: f64 = 1e-13;
+
+/// The closed half-plane `{ x : normal·x + offset >= 0 }`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HalfPlane {
+    /// Normal pointing into the half-plane (need not be a unit vector).
+    pub normal: DVec2,
+    /// Offset.
+    pub offset: f64,
+}
+
+impl HalfPlane {
+    /// The half-plane to the left of the directed line from `p` to `q` (the inside of a CCW edge).
+    pub fn left_of(p: DVec2, q: DVec2) -> Self {
+        let d = q - p;
+        let normal = DVec2::new(-d.y, d.x);
+        Self {
+            normal,
+            offset: -normal.dot(p),
+        }
+    }
+
+    /// The complementary closed half-plane.
+    pub fn flipped(&self) -> Self {
+        Self {
+            normal: -self.normal,
+            offset: -self.offset,
+        }
+    }
+
+    /// Signed value `normal·x + offset` (positive inside).
+    pub fn eval(&self, x: DVec2) -> f64 {
+        self.normal.dot(x) + self.offset
+    }
+}
+
+/// The signed area of a polygon (positive when counter-clockwise).
+pub fn signed_area(poly: &[DVec2]) -> f64 {
+    let n = poly.len();
+    let mut s = 0.0;
+    for k in 0..n {
+        let a = poly[k];
+        let b = poly[(k + 1) % n];
+        s += a.perp_dot(b);
+    }
+    0.5 * s
+}
+
+/// Axis-aligned bounding box `(min, max)` of a non-empty point set.
+pub fn bounding_box(points: &[DVec2]) -> (DVec2, DVec2) {
+    points.iter().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    )
+}
+
+fn scale_of(poly: &[DVec2]) -> f64 {
+    let (lo, hi) = bounding_box(poly);
+    (hi - lo).length()
+}
+
+/// Removes repeated vertices and returns `None` when fewer than three distinct vertices or no area
+/// is left.
+fn cleaned(mut poly: Vec<DVec2>, eps: f64) -> Option<Vec<DVec2>> {
+    poly.dedup_by(|a, b| (*a - *b).length() <= eps);
+    while poly.len() > 1 && (poly[0] - poly[poly.len() - 1]).length() <= eps {
+        poly.pop();
+    }
+    if poly.len() < 3 || signed_area(&poly).abs() <= eps * eps {
+        return None;
+    }
+    Some(poly)
+}
+
+/// Clips a convex polygon to a half-plane (Sutherland–Hodgman, one plane). Vertices within a relative
+/// tolerance of the line count as on it, so no slivers are made. Returns `None` if nothing with area
+/// is left.
+pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
+    let scale = scale_of(poly);
+    let eps = ON_LINE * scale * hp.normal.length();
+    let d: Vec<f64> = poly
+        .iter()
+        .map(|&p| {
+            let v = hp.eval(p);
+            if v.abs() <= eps { 0.0 } else { v }
+        })
+        .collect();
+    if d.iter().all(|&v| v >= 0.0) {
+        return cleaned(poly.to_vec(), ON_LINE * scale);
+    }
+    if d.iter().all(|&v| v <= 0.0) {
+        return None;
+    }
+    let n = poly.len();
+    let mut out = Vec::with_capacity(n + 2);
+    for k in 0..n {
+        let (p, q) = (poly[k], poly[(k + 1) % n]);
+        let (dp, dq) = (d[k], d[(k + 1) % n]);
+        if dp >= 0.0 {
+            out.push(p);
+        }
+        if (dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0) {
+            out.push(p + (q - p) * (dp / (dp - dq)));
+        }
+    }
+    cleaned(out, ON_LINE * scale)
+}
+
+/// Whether a point lies in a counter-clockwise convex polygon, boundary included up to a relative
+/// tolerance.
+pub fn convex_contains(poly: &[DVec2], x: DVec2) -> bool {
+    let eps = ON_LINE * scale_of(poly);
+    let n = poly.len();
+    (0..n).all(|k| {
+        let (p, q) = (poly[k], poly[(k + 1) % n]);
+        (q - p).perp_dot(x - p) >= -eps * (q - p).length()
+    })
+}
+
+/// `piece \ hole` for convex counter-clockwise polygons, as disjoint convex pieces.
+///
+/// Walks the hole's edges: the part of what is left that lies outside an edge's line is a piece of
+/// the difference; the part inside goes on to the next edge. What remains at the end is
+/// `piece ∩ hole` and is dropped.
+pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
+    let (plo, phi) = bounding_box(piece);
+    let (hlo, hhi) = bounding_box(hole);
+    if phi.x <= hlo.x || hhi.x <= plo.x || phi.y <= hlo.y || hhi.y <= plo.y {
+        return vec![piece.to_vec()];
+    }
+    let mut rest = piece.to_vec();
+    let mut out = Vec::new();
+    let n = hole.len();
+    for k in 0..n {
+        let inside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
+        if let Some(outside_part) = clip_convex(&rest, &inside.flipped()) {
+            out.push(outside_part);
+        }
+        match clip_convex(&rest, &inside) {
+            Some(r) => rest = r,
+            None => return out,
+        }
+    }
+    out
+}
+
+/// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`.
+/// For a convex polygon the result is convex; returns `None` when nothing with area is left.
+pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec<DVec3>> {
+    let (lo, hi) = poly.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    let scale = (hi - lo).length();
+    let eps = ON_LINE * scale * normal.length();
+    let d: Vec<f64> = poly
+        .iter()
+        .map(|&p| {
+            let v = normal.dot(p) + offset;
+            if v.abs() <= eps { 0.0 } else { v }
+        })
+        .collect();
+    if d.iter().all(|&v| v <= 0.0) {
+        return None;
+    }
+    let n = poly.len();
+    let mut out: Vec<DVec3> = Vec::with_capacity(n + 2);
+    for k in 0..n {
+        let (p, q) = (poly[k], poly[(k + 1) % n]);
+        let (dp, dq) = (d[k], d[(k + 1) % n]);
+        if dp >= 0.0 {
+            out.push(p);
+        }
+        if (dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0) {
+            out.push(p + (q - p) * (dp / (dp - dq)));
+        }
+    }
+    out.dedup_by(|a, b| (*a - *b).length() <= ON_LINE * scale);
+    while out.len() > 1 && (out[0] - out[out.len() - 1]).length() <= ON_LINE * scale {
+        out.pop();
+    }
+    let area2 = (1..out.len().saturating_sub(1))
+        .map(|k| (out[k] - out[0]).cross(out[k + 1] - out[0]))
+        .sum::<DVec3>()
+        .length();
+    if out.len() < 3 || area2 <= (ON_LINE * scale).powi(2) {
+        return None;
+    }
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(lo: f64, hi: f64) -> Vec<DVec2> {
+        vec![
+            DVec2::new(lo, lo),
+            DVec2::new(hi, lo),
+            DVec2::new(hi, hi),
+            DVec2::new(lo, hi),
+        ]
+    }
+
+    #[test]
+    fn clipping_a_square_by_a_diagonal_half_plane_keeps_half() {
+        let sq = square(0.0, 2.0);
+        let hp = HalfPlane::left_of(DVec2::new(0.0, 0.0), DVec2::new(2.0, 2.0));
+        let part = clip_convex(&sq, &hp).unwrap();
+        assert!((signed_area(&part) - 2.0).abs() < 1e-15);
+        assert_eq!(
+            part.len(),
+            3,
+            "a vertex on the line must not double: {part:?}"
+        );
+    }
+
+    #[test]
+    fn clipping_away_everything_or_nothing() {
+        let sq = square(0.0, 1.0);
+        let keep_all = HalfPlane {
+            normal: DVec2::X,
+            offset: 0.0,
+        };
+        assert_eq!(clip_convex(&sq, &keep_all).unwrap().len(), 4);
+        assert!(clip_convex(&sq, &keep_all.flipped()).is_none());
+    }
+
+    #[test]
+    fn subtraction_conserves_area_and_keeps_pieces_disjoint() {
+        let piece = vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(4.0, 0.0),
+            DVec2::new(0.0, 3.0),
+        ];
+        let hole = square(0.5, 1.5);
+        let parts = subtract_convex(&piece, &hole);
+        let total: f64 = parts.iter().map(|p| signed_area(p)).sum();
+        assert!((total - (6.0 - 1.0)).abs() < 1e-13, "area {total}");
+        assert!(parts.iter().all(|p| signed_area(p) > 0.0));
+        // Disjoint: sample points belong to at most one piece.
+        for i in 0..40 {
+            for j in 0..40 {
+                let x = DVec2::new(0.05 + 0.1 * i as f64, 0.037 + 0.075 * j as f64);
+                let count = parts.iter().filter(|p| strictly_inside(p, x)).count();
+                assert!(count <= 1, "{x} in {count} pieces");
+            }
+        }
+    }
+
+    fn strictly_inside(poly: &[DVec2], x: DVec2) -> bool {
+        let n = poly.len();
+        (0..n).all(|k| (poly[(k + 1) % n] - poly[k]).perp_dot(x - poly[k]) > 1e-12)
+    }
+
+    #[test]
+    fn subtracting_a_covering_hole_leaves_nothing() {
+        let piece = square(0.2, 0.8);
+        assert!(subtract_convex(&piece, &square(0.0, 1.0)).is_empty());
+        assert_eq!(
+            subtract_convex(&piece, &square(2.0, 3.0)),
+            vec![piece.clone()]
+        );
+    }
+
+    #[test]
+    fn containment_includes_the_boundary() {
+        let sq = square(0.0, 1.0);
+        assert!(convex_contains(&sq, DVec2::new(1.0, 0.5)));
+        assert!(convex_contains(&sq, DVec2::new(0.5, 0.5)));
+        assert!(!convex_contains(&sq, DVec2::new(1.0 + 1e-9, 0.5)));
+    }
+
+    #[test]
+    fn clipping_in_3d_cuts_a_square_in_half() {
+        let sq: Vec<DVec3> = square(0.0, 1.0).iter().map(|p| p.extend(1.0)).collect();
+        let half = clip_polygon_3d(&sq, DVec3::X, -0.5).unwrap();
+        let area2: f64 = (1..half.len() - 1)
+            .map(|k| (half[k] - half[0]).cross(half[k + 1] - half[0]).z)
+            .sum();
+        assert!((0.5 * area2 - 0.5).abs() < 1e-15);
+        assert!(clip_polygon_3d(&sq, DVec3::X, -2.0).is_none());
+    }
+}

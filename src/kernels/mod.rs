@@ -1,0 +1,72 @@
+//! Collocation integrals `∫ G(P, Q) φ(Q) dS_Q` over (visible parts of) elements (paper sec. 4).
+//!
+//! All kernels work in an element's local frame: the element lies in the plane height = 0 with
+//! normal (0, 0, 1), the node P = (x, y, z) is above it (z > 0) with unit normal n_P = (i, j, k),
+//! so (paper (1.2), sec. 4.1)
+//!
+//! ```text
+//!     G(P, Q) = [(X - x) i + (Y - y) j - z k] z / ((X - x)² + (Y - y)² + z²)²,   Q = (X, Y, 0).
+//! ```
+//!
+//! Regions are given as closed loops of 2-D vertices, counter-clockwise for area and clockwise for
+//! holes; any set of loops whose winding number is the indicator of the region will do.
+//!
+//! - [`exact`]: the production kernel: closed forms in edge form for the constant weight, closed
+//!   forms plus one IMT quadrature per edge for affine weights (eqs. 4.5–4.9, 4.13).
+//! - [`lambert`]: Lambert's contour formula, an independent closed form for the constant weight.
+//! - [`paper_closed_form`]: the paper's own formulas over right triangles σ_ab, (4.5), (4.10), (4.11).
+//! - [`reference`]: adaptive quadrature of G φ itself, for tests.
+
+pub mod exact;
+pub mod lambert;
+mod moments;
+pub mod paper_closed_form;
+pub mod reference;
+
+pub use moments::Moments;
+
+use glam::{DVec2, DVec3};
+
+/// A collocation node seen from an element's frame: its local position (x, y, z) and unit normal
+/// (i, j, k).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observer {
+    /// Local position; `z` is the height above the element's plane.
+    pub position: DVec3,
+    /// Unit normal of the node's face, in local components.
+    pub normal: DVec3,
+}
+
+impl Observer {
+    /// The kernel G(P, Q) at an in-plane point Q (paper (1.2)).
+    pub fn kernel(&self, q: DVec2) -> f64 {
+        let d = q.extend(0.0) - self.position;
+        let r2 = d.length_squared();
+        d.dot(self.normal) * self.position.z / (r2 * r2)
+    }
+}
+
+/// An affine function `c0 + cx X + cy Y` of in-plane local coordinates: a basis function on an element.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Affine2 {
+    /// Constant term.
+    pub c0: f64,
+    /// Coefficient of X.
+    pub cx: f64,
+    /// Coefficient of Y.
+    pub cy: f64,
+}
+
+impl Affine2 {
+    /// The constant function 1 (the centroid method's basis function).
+    pub const ONE: Self = Self {
+        c0: 1.0,
+        cx: 0.0,
+        cy: 0.0,
+    };
+
+    /// Value at `q`.
+    pub fn eval(&self, q: DVec2) -> f64 {
+        self.c0 + self.cx * q.x + self.cy * q.y
+    }
+}

@@ -1,0 +1,177 @@
+//! Moments of the kernel's denominator over a polygon, in edge form (paper sec. 4.1).
+//!
+//! With coordinates (X, Y) centred at the projection O of P and D = X² + Y² + z², every collocation
+//! integral over a polygon is a combination of `M_ab = ∫ X^a Y^b / D² dA` (a + b <= 2) and
+//! `N_00 = ∫ 1 / D dA`. The paper evaluates them over right triangles (eqs. 4.5–4.10) and adds six
+//! of those per triangle (4.11); here the same closed forms appear as one term per edge:
+//!
+//! - fan from O over each edge, integrated radially: `z² M_00 = Σ_e (h_e / 2) A_e`, which is the
+//!   signed sum of (4.10) over the two right triangles at the foot of the perpendicular from O
+//!   (the decomposition (4.11));
+//! - divergence theorem, `∇(1/D) = -2 (X, Y)/D²`: `(M_10, M_01) = -(1/2) Σ_e ν_e A_e`, the
+//!   integrals (4.5);
+//! - `∂_X (X/D) = 1/D - 2X²/D²` and its twins: `M_20 = (N_00 - ∮ X ν_X / D)/2`,
+//!   `M_02 = (N_00 - ∮ Y ν_Y / D)/2`, `M_11 = -(1/2) ∮ X ν_Y / D`, the integrals (4.6), (4.8), (4.9);
+//! - `N_00` is not elementary; per edge it is the 1-D integral
+//!   `(h/2) ∫ ln(1 + (h² + t²)/z²) / (h² + t²) dt` (equivalent to the paper's (4.13)), evaluated by
+//!   the IMT rule after `t = S sinh w`, which removes the length scale `S = (h² + z²)^(1/2)` and
+//!   leaves an integrand analytic at unit scale.
+//!
+//! Edge quantities: unit tangent e, outward normal ν, signed distance `h = a·ν` of the edge's line
+//! from O (positive when O is on the inner side), tangential end coordinates t_a, t_b,
+//! `A_e = ∫ dt/(S² + t²) = [atan(t_b/S) - atan(t_a/S)]/S` (one atan2) and
+//! `B_e = ∫ t dt/(S² + t²) = ln(r_b/r_a)` (one log1p), r the distance from P to the end points.
+//!
+//! Every moment is returned multiplied by the power of z that the kernel G carries, so nothing is
+//! divided by z and the limit z -> 0 is harmless.
+
+use glam::DVec2;
+
+use crate::quadrature::ImtRule;
+
+/// Scaled moments of a polygon seen from P = (x, y, z): see the module documentation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Moments {
+    /// `z² M_00`.
+    pub m00: f64,
+    /// `z M_10`.
+    pub m10: f64,
+    /// `z M_01`.
+    pub m01: f64,
+    /// `z ∮ X ν_X / D ds`, the boundary part of `z M_20`.
+    pub bxx: f64,
+    /// `z ∮ X ν_Y / D ds`, so `z M_11 = -bxy / 2`.
+    pub bxy: f64,
+    /// `z ∮ Y ν_Y / D ds`, the boundary part of `z M_02`.
+    pub byy: f64,
+    /// `z N_00`, when it was asked for.
+    pub zn00: Option<f64>,
+}
+
+/// One polygon edge seen from O, with its closed-form line integrals.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EdgeTerms {
+    /// Signed distance of the edge's line from O along the outward normal.
+    pub h: f64,
+    /// Outward unit normal.
+    pub nu: DVec2,
+    /// Unit tangent.
+    pub e: DVec2,
+    /// Tangential coordinate of the start (from the foot of the perpendicular).
+    pub ta: f64,
+    /// Tangential coordinate of the end.
+    pub tb: f64,
+    /// `S² = h² + z²`.
+    pub s2: f64,
+    /// `∫ dt / (S² + t²)` over the edge.
+    pub a: f64,
+    /// `∫ t dt / (S² + t²)` over the edge.
+    pub b: f64,
+}
+
+impl EdgeTerms {
+    /// Terms of the edge from `p` to `q` (coordinates relative to O), or `None` for a zero-length edge.
+    pub fn new(p: DVec2, q: DVec2, z2: f64) -> Option<Self> {
+        let d = q - p;
+        let len = d.length();
+        if len == 0.0 {
+            return None;
+        }
+        let e = d / len;
+        let nu = DVec2::new(e.y, -e.x);
+        let h = 0.5 * (p + q).dot(nu);
+        let (ta, tb) = (p.dot(e), q.dot(e));
+        let s2 = h * h + z2;
+        let s = s2.sqrt();
+        // atan(tb/S) - atan(ta/S) as a single atan2: exact quadrant, no cancellation.
+        let a = (s * len).atan2(s2 + ta * tb) / s;
+        let b = half_log_ratio(s2, ta, tb, len);
+        Some(Self {
+            h,
+            nu,
+            e,
+            ta,
+            tb,
+            s2,
+            a,
+            b,
+        })
+    }
+
+    /// `∫ X / D dt` and `∫ Y / D dt` along the edge (X = h ν_X + t e_X on the edge).
+    pub fn first_boundary(&self) -> DVec2 {
+        self.nu * (self.h * self.a) + self.e * self.b
+    }
+}
+
+/// `ln(r_b / r_a) = (1/2) ln((S² + t_b²)/(S² + t_a²))`, accurate for every ratio: near 1 through
+/// log1p of the difference `r_b² - r_a² = len (t_a + t_b)` (no cancellation), otherwise as the log
+/// of the ratio (log1p of a difference near -1 would lose the digits of the small radius).
+pub(crate) fn half_log_ratio(s2: f64, ta: f64, tb: f64, len: f64) -> f64 {
+    let (ra2, rb2) = (s2 + ta * ta, s2 + tb * tb);
+    let ratio = rb2 / ra2;
+    if (0.5..=2.0).contains(&ratio) {
+        0.5 * (len * (ta + tb) / ra2).ln_1p()
+    } else {
+        0.5 * ratio.ln()
+    }
+}
+
+/// `z L_e`: this edge's share of `z N_00`, by the IMT rule in `w` with `t = S sinh w`.
+pub(crate) fn log_integral(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
+    if edge.h == 0.0 {
+        return 0.0;
+    }
+    let s = edge.s2.sqrt();
+    let z2 = z * z;
+    let h2 = edge.h * edge.h;
+    let (wa, wb) = ((edge.ta / s).asinh(), (edge.tb / s).asinh());
+    // Integrand in w: [ln(1 + q)/q] r / z² with q = (h² + t²)/z², r = (S² + t²)^(1/2) = dt/dw.
+    let integral = imt.integrate(wa, wb, |w| {
+        let t = s * w.sinh();
+        let q = (h2 + t * t) / z2;
+        let ratio = if q < 1e-8 {
+            1.0 - q * (0.5 - q / 3.0)
+        } else {
+            q.ln_1p() / q
+        };
+        ratio * (edge.s2 + t * t).sqrt()
+    });
+    0.5 * edge.h * integral / z
+}
+
+impl Moments {
+    /// Moments of the region bounded by `loops` seen from `P = (o, z)`, `z > 0` (`o` in the same
+    /// in-plane coordinates as the loops). `N_00` is computed only when `imt` is given.
+    pub fn new<'a>(
+        loops: impl IntoIterator<Item = &'a [DVec2]>,
+        o: DVec2,
+        z: f64,
+        imt: Option<&ImtRule>,
+    ) -> Self {
+        let z2 = z * z;
+        let mut m = Moments {
+            zn00: imt.map(|_| 0.0),
+            ..Default::default()
+        };
+        for poly in loops {
+            let n = poly.len();
+            for k in 0..n {
+                let Some(edge) = EdgeTerms::new(poly[k] - o, poly[(k + 1) % n] - o, z2) else {
+                    continue;
+                };
+                m.m00 += 0.5 * edge.h * edge.a;
+                m.m10 -= 0.5 * z * edge.nu.x * edge.a;
+                m.m01 -= 0.5 * z * edge.nu.y * edge.a;
+                let xy = edge.first_boundary();
+                m.bxx += z * edge.nu.x * xy.x;
+                m.bxy += z * edge.nu.y * xy.x;
+                m.byy += z * edge.nu.y * xy.y;
+                if let (Some(rule), Some(acc)) = (imt, m.zn00.as_mut()) {
+                    *acc += log_integral(&edge, z, rule);
+                }
+            }
+        }
+        m
+    }
+}
