@@ -1,6 +1,19 @@
 //! Collocation assembler and solver for the occluded radiosity equation on polyhedral surfaces.
 #![warn(missing_docs)]
 
+pub mod assembly;
+pub mod discretization;
+pub mod error;
 pub mod geometry;
 pub mod kernels;
+pub mod mesh;
+pub mod pipeline;
+pub mod problems;
 pub mod quadrature;
+pub mod report;
+pub mod scene;
+pub mod solve;
+pub mod study;
+pub mod visibility;
+
+pub use error::{Error, Result};

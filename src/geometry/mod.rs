@@ -10,7 +10,7 @@ mod polygon;
 pub use frame::PlaneFrame;
 pub use polygon::{
     HalfPlane, bounding_box, clip_convex, clip_polygon_3d, convex_contains, signed_area,
-    subtract_convex,
+    subtract_convex, triangulate,
 };
 
 /// Vectors used throughout: glam's f64 vectors.

@@ -292,3 +292,49 @@ mod tests {
         assert!(clip_polygon_3d(&sq, DVec3::X, -2.0).is_none());
     }
 }
+
+/// Triangulates a simple polygon (convex or not) by ear clipping (the `earcut` crate); triangles are
+/// returned as vertex indices, counter-clockwise. `None` if the polygon cannot be triangulated.
+pub fn triangulate(poly: &[DVec2]) -> Option<Vec<[usize; 3]>> {
+    let mut earcut = earcut::Earcut::new();
+    let mut indices: Vec<u32> = Vec::new();
+    earcut.earcut(poly.iter().map(|p| [p.x, p.y]), &[], &mut indices);
+    if indices.is_empty() {
+        return None;
+    }
+    Some(
+        indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+                if (poly[b] - poly[a]).perp_dot(poly[c] - poly[a]) >= 0.0 {
+                    [a, b, c]
+                } else {
+                    [a, c, b]
+                }
+            })
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod triangulation_tests {
+    use super::*;
+
+    #[test]
+    fn an_l_shape_triangulates_into_four_ccw_triangles_of_total_area_three() {
+        let l = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(2.0, 0.0),
+            DVec2::new(2.0, 1.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(1.0, 2.0),
+            DVec2::new(0.0, 2.0),
+        ];
+        let tris = triangulate(&l).unwrap();
+        assert_eq!(tris.len(), 4);
+        let area: f64 = tris.iter().map(|t| signed_area(&t.map(|k| l[k]))).sum();
+        assert!((area - 3.0).abs() < 1e-14);
+        assert!(tris.iter().all(|t| signed_area(&t.map(|k| l[k])) > 0.0));
+    }
+}

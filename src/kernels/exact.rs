@@ -4,7 +4,7 @@
 
 use glam::DVec2;
 
-use super::{Affine2, Moments, Observer};
+use super::{Affine2, Moments, Observer, Quadratic2, ThirdOrderMoments};
 use crate::quadrature::ImtRule;
 
 /// `∫_region G(P, Q) dS_Q` in closed form (eqs. 4.5 and 4.7 in edge form).
@@ -40,6 +40,27 @@ pub fn affine_weights<'a, const L: usize>(
             + (i * w.cy + j * w.cx) * zm11
             + j * w.cy * zm02
     })
+}
+
+/// `∫_region G(P, Q) u(Q) dS_Q` for a quadratic u (moments up to third order; one IMT quadrature
+/// per edge). Used for the emissivity of polynomial true solutions such as (3.2).
+pub fn quadratic_weight<'a>(
+    obs: &Observer,
+    loops: impl IntoIterator<Item = &'a [DVec2]>,
+    u: &Quadratic2,
+    imt: &ImtRule,
+) -> f64 {
+    let (o, z) = (obs.position.truncate(), obs.position.z);
+    let (i, j, k) = (obs.normal.x, obs.normal.y, obs.normal.z);
+    let m = ThirdOrderMoments::new(loops, o, z, imt);
+    let q = u.shifted(o);
+    let mut total = 0.0;
+    for a in 0..3 {
+        for b in 0..3 - a {
+            total += q.c[a][b] * (i * m.zm[a + 1][b] + j * m.zm[a][b + 1] - k * m.z2m(a, b));
+        }
+    }
+    total
 }
 
 #[cfg(test)]
@@ -228,6 +249,80 @@ mod tests {
                 1e-11,
                 1e-11,
                 &format!("inside, z = {z}"),
+            );
+        }
+    }
+
+    #[test]
+    fn quadratic_weights_match_adaptive_quadrature() {
+        let mut rng = StdRng::seed_from_u64(33);
+        let imt = ImtRule::new(ImtRule::PAPER_NODES);
+        let t = Tolerance {
+            relative: 2e-14,
+            ..Tolerance::default()
+        };
+        for n in 0..20 {
+            let tri = random_triangle(&mut rng);
+            let position = DVec3::new(
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+                if n < 4 {
+                    1e-3
+                } else {
+                    rng.random_range(0.05..1.5)
+                },
+            );
+            let obs = Observer {
+                position,
+                normal: random_unit(&mut rng),
+            };
+            let mut u = Quadratic2::default();
+            for a in 0..3 {
+                for b in 0..3 - a {
+                    u.c[a][b] = rng.random_range(-1.0..1.0);
+                }
+            }
+            let got = quadratic_weight(&obs, [&tri[..]], &u, &imt);
+            let want = reference::integral(&obs, &tri, |q| u.eval(q), t);
+            let scale = reference::integral_of(&tri, |q| (obs.kernel(q) * u.eval(q)).abs(), t);
+            let err = (got - want).abs() / scale;
+            assert!(
+                err < 1e-11,
+                "case {n}: got {got:e}, want {want:e}, rel err {err:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn third_order_moments_match_direct_quadrature() {
+        let tri = [
+            DVec2::new(-0.3, -0.2),
+            DVec2::new(0.9, 0.1),
+            DVec2::new(0.2, 0.8),
+        ];
+        let imt = ImtRule::new(ImtRule::PAPER_NODES);
+        let z = 0.4;
+        let m = ThirdOrderMoments::new([&tri[..]], DVec2::ZERO, z, &imt);
+        let t = Tolerance {
+            relative: 1e-14,
+            ..Tolerance::default()
+        };
+        let direct = |a: i32, b: i32| {
+            z * reference::integral_of(
+                &tri,
+                |q| {
+                    let d = q.length_squared() + z * z;
+                    q.x.powi(a) * q.y.powi(b) / (d * d)
+                },
+                t,
+            )
+        };
+        for (a, b) in [(3, 0), (2, 1), (1, 2), (0, 3), (2, 0), (1, 1), (0, 2)] {
+            let want = direct(a as i32, b as i32);
+            assert!(
+                (m.zm[a][b] - want).abs() < 1e-13,
+                "zM_{a}{b}: {} vs {want}",
+                m.zm[a][b]
             );
         }
     }

@@ -23,7 +23,7 @@ mod moments;
 pub mod paper_closed_form;
 pub mod reference;
 
-pub use moments::Moments;
+pub use moments::{Moments, ThirdOrderMoments};
 
 use glam::{DVec2, DVec3};
 
@@ -68,5 +68,39 @@ impl Affine2 {
     /// Value at `q`.
     pub fn eval(&self, q: DVec2) -> f64 {
         self.c0 + self.cx * q.x + self.cy * q.y
+    }
+}
+
+/// A quadratic `Σ c[a][b] X^a Y^b` (a + b <= 2) of in-plane local coordinates: a polynomial true
+/// solution restricted to a face.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Quadratic2 {
+    /// Coefficients `c[a][b]` of `X^a Y^b`; entries with a + b > 2 are ignored.
+    pub c: [[f64; 3]; 3],
+}
+
+impl Quadratic2 {
+    /// Value at `q`.
+    pub fn eval(&self, q: DVec2) -> f64 {
+        let mut s = 0.0;
+        for a in 0..3 {
+            for b in 0..3 - a {
+                s += self.c[a][b] * q.x.powi(a as i32) * q.y.powi(b as i32);
+            }
+        }
+        s
+    }
+
+    /// The same polynomial in coordinates centred at `o`: `p(o + X')`.
+    pub fn shifted(&self, o: DVec2) -> Self {
+        let c = &self.c;
+        let mut s = [[0.0; 3]; 3];
+        s[0][0] = self.eval(o);
+        s[1][0] = c[1][0] + 2.0 * c[2][0] * o.x + c[1][1] * o.y;
+        s[0][1] = c[0][1] + c[1][1] * o.x + 2.0 * c[0][2] * o.y;
+        s[2][0] = c[2][0];
+        s[1][1] = c[1][1];
+        s[0][2] = c[0][2];
+        Self { c: s }
     }
 }

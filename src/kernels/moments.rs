@@ -175,3 +175,91 @@ impl Moments {
         m
     }
 }
+
+/// `z M_ab` for `a + b <= 3` (and `z² M_ab` through [`ThirdOrderMoments::z2m`]), for the integral of
+/// G against a quadratic (the emissivity of a polynomial true solution). Besides the relations in
+/// the module documentation this uses `∂_X (X^(a+1) Y^b / D) = (a+1) X^a Y^b / D - 2 X^(a+2) Y^b / D²`
+/// and `N_10 = (1/2) ∮ ln D ν_X` (from `∇ ln D = 2 (X, Y) / D`), elementary along each edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ThirdOrderMoments {
+    /// `z M_ab` at `[a][b]`, `a + b <= 3` (entries with a + b > 3 are zero).
+    pub zm: [[f64; 4]; 4],
+    /// `z² M_00`.
+    pub m00: f64,
+    /// Height z.
+    pub z: f64,
+}
+
+impl ThirdOrderMoments {
+    /// Moments of the region bounded by `loops` seen from `P = (o, z)`, `z > 0`.
+    pub fn new<'a>(
+        loops: impl IntoIterator<Item = &'a [DVec2]>,
+        o: DVec2,
+        z: f64,
+        imt: &ImtRule,
+    ) -> Self {
+        let z2 = z * z;
+        // Boundary integrals ∮ p ν_c / D ds for monomials p of degree <= 2, and ∮ ln D ν ds.
+        let (mut m00, mut zn00) = (0.0, 0.0);
+        let mut first = DVec2::ZERO; // Σ ν A
+        let mut xx = DVec2::ZERO; // ∮ X² ν / D
+        let mut xy = DVec2::ZERO; // ∮ X Y ν / D
+        let mut yy = DVec2::ZERO; // ∮ Y² ν / D
+        let mut x1 = DVec2::ZERO; // ∮ X ν / D
+        let mut y1 = DVec2::ZERO; // ∮ Y ν / D
+        let mut log = DVec2::ZERO; // ∮ ln D ν
+        for poly in loops {
+            let n = poly.len();
+            for k in 0..n {
+                let (p, q) = (poly[k] - o, poly[(k + 1) % n] - o);
+                let Some(edge) = EdgeTerms::new(p, q, z2) else {
+                    continue;
+                };
+                let len = (q - p).length();
+                let (h, nu, e) = (edge.h, edge.nu, edge.e);
+                let (i0, i1, i2) = (edge.a, edge.b, len - edge.s2 * edge.a);
+                m00 += 0.5 * h * i0;
+                zn00 += log_integral(&edge, z, imt);
+                first += nu * i0;
+                let fx = h * nu.x * i0 + e.x * i1;
+                let fy = h * nu.y * i0 + e.y * i1;
+                x1 += nu * fx;
+                y1 += nu * fy;
+                let quad = |ca: f64, cb: f64, da: f64, db: f64| {
+                    // ∫ (h ca + t da)(h cb + t db) / (S² + t²) dt
+                    h * h * ca * cb * i0 + h * (ca * db + cb * da) * i1 + da * db * i2
+                };
+                xx += nu * quad(nu.x, nu.x, e.x, e.x);
+                xy += nu * quad(nu.x, nu.y, e.x, e.y);
+                yy += nu * quad(nu.y, nu.y, e.y, e.y);
+                let (ra2, rb2) = (edge.s2 + edge.ta * edge.ta, edge.s2 + edge.tb * edge.tb);
+                let log_edge =
+                    edge.tb * rb2.ln() - edge.ta * ra2.ln() - 2.0 * len + 2.0 * edge.s2 * i0;
+                log += nu * log_edge;
+            }
+        }
+        let hz = 0.5 * z;
+        let (n10, n01) = (0.5 * log.x, 0.5 * log.y);
+        let mut zm = [[0.0; 4]; 4];
+        zm[0][0] = m00 / z;
+        zm[1][0] = -hz * first.x;
+        zm[0][1] = -hz * first.y;
+        zm[2][0] = hz * (zn00 / z - x1.x);
+        zm[0][2] = hz * (zn00 / z - y1.y);
+        zm[1][1] = -hz * x1.y;
+        zm[3][0] = hz * (2.0 * n10 - xx.x);
+        zm[2][1] = hz * (n01 - xy.x);
+        zm[1][2] = hz * (n10 - xy.y);
+        zm[0][3] = hz * (2.0 * n01 - yy.y);
+        Self { zm, m00, z }
+    }
+
+    /// `z² M_ab` for `a + b <= 2`.
+    pub fn z2m(&self, a: usize, b: usize) -> f64 {
+        if a == 0 && b == 0 {
+            self.m00
+        } else {
+            self.z * self.zm[a][b]
+        }
+    }
+}

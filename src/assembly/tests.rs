@@ -1,0 +1,60 @@
+//! Closed enclosures (Lemma 2.1): inside a closed surface, `∫_S G V dS = π` at every point, so every
+//! row of K/rho sums to 1 — with and without internal occluders, for both collocation methods (the
+//! linear basis functions of an element sum to 1).
+
+use super::*;
+use crate::discretization::Method;
+use crate::mesh::MeshKind;
+use crate::scene::{Scene, baffled_box, cube};
+
+fn row_sum_range(scene: &Scene, method: Method, refine: u32) -> (f64, f64, PairStats) {
+    let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();
+    let disc = Discretization::new(scene, &mesh, method).unwrap();
+    let planner = PairPlanner::new(scene);
+    let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &|_| {}).unwrap();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, node) in disc.nodes.iter().enumerate() {
+        let s: f64 = a.matrix.row(i).iter().sum::<f64>() / node.rho;
+        lo = lo.min(s);
+        hi = hi.max(s);
+    }
+    (lo, hi, a.stats)
+}
+
+#[test]
+fn cube_rows_sum_to_one() {
+    for (method, refine) in [
+        (Method::Centroid, 2),
+        (Method::linear(1.0 / 6.0).unwrap(), 1),
+    ] {
+        let (lo, hi, stats) = row_sum_range(&cube().unwrap(), method, refine);
+        assert!(
+            (lo - 1.0).abs() < 1e-12 && (hi - 1.0).abs() < 1e-12,
+            "{method}: [{lo}, {hi}]"
+        );
+        assert_eq!(
+            stats.hidden + stats.partial,
+            0,
+            "no occlusion in a cube: {stats:?}"
+        );
+    }
+}
+
+#[test]
+fn baffled_box_rows_sum_to_one_with_exact_visibility() {
+    for (method, refine) in [
+        (Method::Centroid, 2),
+        (Method::linear(1.0 / 6.0).unwrap(), 1),
+    ] {
+        let (lo, hi, stats) = row_sum_range(&baffled_box().unwrap(), method, refine);
+        assert!(
+            (lo - 1.0).abs() < 1e-11 && (hi - 1.0).abs() < 1e-11,
+            "{method}: [{lo}, {hi}]"
+        );
+        assert!(stats.partial > 0 && stats.hidden > 0, "{stats:?}");
+        assert_eq!(
+            stats.total,
+            stats.same_plane + stats.facing_away + stats.hidden + stats.full + stats.partial
+        );
+    }
+}

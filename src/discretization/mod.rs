@@ -1,0 +1,247 @@
+//! Collocation schemes (paper sec. 2.1 and 2.7): the nodes, and each element's basis functions as
+//! affine functions of the point in the element's local frame.
+//!
+//! - Centroid method: one node per element at its centroid (2.5), basis 1 on the element.
+//! - Piecewise linear collocation with parameter α (2.9)–(2.12): node k of an element is
+//!   `α (v1 + v2 + v3) + (1 - 3α) v_k`, the image of the paper's nodes q_i under m_k, and its basis
+//!   function is `(λ_k - α) / (1 - 3α)` with λ_k the barycentric coordinate of vertex k.
+
+use std::fmt;
+
+use glam::{DVec2, DVec3};
+
+use crate::error::{Error, Result};
+use crate::geometry::PlaneFrame;
+use crate::kernels::Affine2;
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+
+/// The collocation method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Piecewise constant, nodes at the centroids (sec. 2.4).
+    Centroid,
+    /// Piecewise linear with interpolation parameter α in [0, 1/3) (sec. 2.5).
+    Linear {
+        /// The parameter α of (2.9).
+        alpha: f64,
+    },
+}
+
+impl Method {
+    /// The paper's α = 1/6.
+    pub const PAPER_ALPHA: f64 = 1.0 / 6.0;
+
+    /// Piecewise linear collocation; α must lie in [0, 1/3).
+    pub fn linear(alpha: f64) -> Result<Self> {
+        if !(alpha.is_finite() && (0.0..1.0 / 3.0).contains(&alpha)) {
+            return Err(Error::InvalidAlpha { alpha });
+        }
+        Ok(Self::Linear { alpha })
+    }
+
+    /// Nodes (and basis functions) per element: 1 or 3.
+    pub fn nodes_per_element(&self) -> usize {
+        match self {
+            Self::Centroid => 1,
+            Self::Linear { .. } => 3,
+        }
+    }
+
+    /// Command-line name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Centroid => "centroid",
+            Self::Linear { .. } => "linear",
+        }
+    }
+
+    /// α for the linear method.
+    pub fn alpha(&self) -> Option<f64> {
+        match self {
+            Self::Centroid => None,
+            Self::Linear { alpha } => Some(*alpha),
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Centroid => f.write_str("centroid"),
+            Self::Linear { alpha } => write!(f, "linear (alpha = {alpha})"),
+        }
+    }
+}
+
+/// A collocation node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Node {
+    /// Position.
+    pub position: DVec3,
+    /// Unit normal of its face.
+    pub normal: DVec3,
+    /// Face it lies on.
+    pub face: usize,
+    /// Element it belongs to.
+    pub element: usize,
+    /// Reflectivity at the node.
+    pub rho: f64,
+}
+
+/// An element described in its own frame: origin at its centroid, axes of its face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ElementFrame {
+    /// Local frame (origin = centroid).
+    pub frame: PlaneFrame,
+    /// Face index.
+    pub face: usize,
+    /// Centroid in the face frame's 2-D coordinates.
+    pub centroid_in_face: DVec2,
+    /// Vertices in the local frame's 2-D coordinates (counter-clockwise).
+    pub local: [DVec2; 3],
+}
+
+impl ElementFrame {
+    /// Vertices in the face frame's 2-D coordinates.
+    pub fn in_face(&self) -> [DVec2; 3] {
+        self.local.map(|v| v + self.centroid_in_face)
+    }
+}
+
+/// Nodes and basis functions of a mesh under a collocation method.
+#[derive(Clone, Debug)]
+pub struct Discretization {
+    /// The method.
+    pub method: Method,
+    /// Nodes; for the linear method node `3j + l` belongs to basis function l of element j.
+    pub nodes: Vec<Node>,
+    /// Element frames, in mesh order.
+    pub elements: Vec<ElementFrame>,
+    /// Basis functions per element (one or three used), in the element's local frame.
+    pub bases: Vec<[Affine2; 3]>,
+}
+
+impl Discretization {
+    /// Nodes and bases of `mesh` (on `scene`) for `method`.
+    pub fn new(scene: &Scene, mesh: &Mesh, method: Method) -> Result<Self> {
+        if let Method::Linear { alpha } = method {
+            Method::linear(alpha)?;
+        }
+        let mut nodes = Vec::with_capacity(mesh.len() * method.nodes_per_element());
+        let mut elements = Vec::with_capacity(mesh.len());
+        let mut bases = Vec::with_capacity(mesh.len());
+        for (j, e) in mesh.elements().iter().enumerate() {
+            let face = &scene.faces[e.face];
+            let centroid = e.centroid();
+            let frame = face.frame.with_origin(centroid);
+            let local = e.vertices.map(|v| frame.to_plane(v));
+            elements.push(ElementFrame {
+                frame,
+                face: e.face,
+                centroid_in_face: face.frame.to_plane(centroid),
+                local,
+            });
+            let node = |position| Node {
+                position,
+                normal: face.frame.normal,
+                face: e.face,
+                element: j,
+                rho: face.rho,
+            };
+            match method {
+                Method::Centroid => {
+                    nodes.push(node(centroid));
+                    bases.push([Affine2::ONE, Affine2::default(), Affine2::default()]);
+                }
+                Method::Linear { alpha } => {
+                    let sum = e.vertices[0] + e.vertices[1] + e.vertices[2];
+                    for v in e.vertices {
+                        nodes.push(node(sum * alpha + v * (1.0 - 3.0 * alpha)));
+                    }
+                    bases.push(linear_basis(&local, alpha));
+                }
+            }
+        }
+        Ok(Self {
+            method,
+            nodes,
+            elements,
+            bases,
+        })
+    }
+
+    /// Number of unknowns d_n (n or 3n).
+    pub fn dof(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of elements n.
+    pub fn element_count(&self) -> usize {
+        self.elements.len()
+    }
+}
+
+/// `(λ_k - α) / (1 - 3α)`, k = 0, 1, 2, as affine functions on the triangle `v` (counter-clockwise).
+fn linear_basis(v: &[DVec2; 3], alpha: f64) -> [Affine2; 3] {
+    let twice_area = (v[1] - v[0]).perp_dot(v[2] - v[0]);
+    let scale = 1.0 / (1.0 - 3.0 * alpha);
+    [0, 1, 2].map(|k| {
+        // λ_k(X) = (q - p) × (X - p) / (2 area) over the opposite side p -> q.
+        let (p, q) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+        let d = q - p;
+        Affine2 {
+            c0: (d.perp_dot(-p) / twice_area - alpha) * scale,
+            cx: -d.y / twice_area * scale,
+            cy: d.x / twice_area * scale,
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::MeshKind;
+    use crate::scene::{SurfaceParameters, five_piece};
+
+    #[test]
+    fn linear_basis_functions_interpolate_at_their_nodes() {
+        let scene = five_piece(SurfaceParameters::default()).unwrap();
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        let d = Discretization::new(&scene, &mesh, Method::linear(1.0 / 6.0).unwrap()).unwrap();
+        assert_eq!(d.dof(), 3 * mesh.len());
+        for (j, e) in d.elements.iter().enumerate() {
+            for (l, basis) in d.bases[j].iter().enumerate() {
+                for m in 0..3 {
+                    let node = d.nodes[3 * j + m].position;
+                    let value = basis.eval(e.frame.to_plane(node));
+                    let want = if l == m { 1.0 } else { 0.0 };
+                    assert!(
+                        (value - want).abs() < 1e-13,
+                        "element {j} basis {l} node {m}: {value}"
+                    );
+                }
+            }
+            // The three basis functions sum to 1 (they interpolate constants).
+            let q = DVec2::new(0.1, -0.05);
+            let sum: f64 = d.bases[j].iter().map(|b| b.eval(q)).sum();
+            assert!((sum - 1.0).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn centroid_nodes_are_centroids_and_alpha_is_checked() {
+        let scene = five_piece(SurfaceParameters::default()).unwrap();
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
+        let d = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
+        for (node, e) in d.nodes.iter().zip(mesh.elements()) {
+            assert!((node.position - e.centroid()).length() < 1e-15);
+        }
+        for alpha in [-0.1, 1.0 / 3.0, f64::NAN] {
+            assert!(matches!(
+                Method::linear(alpha),
+                Err(Error::InvalidAlpha { .. })
+            ));
+        }
+    }
+}

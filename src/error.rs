@@ -1,0 +1,185 @@
+//! Errors of the library: each variant carries the values that explain it.
+
+use thiserror::Error;
+
+/// Everything that can go wrong in the library.
+#[derive(Debug, Error)]
+pub enum Error {
+    /// A vertex coordinate is NaN or infinite.
+    #[error("face '{face}': vertex {vertex} has a non-finite coordinate ({x}, {y}, {z})")]
+    NonFiniteVertex {
+        /// Face name.
+        face: String,
+        /// Vertex index within the face.
+        vertex: usize,
+        /// Coordinates as given.
+        x: f64,
+        /// Coordinates as given.
+        y: f64,
+        /// Coordinates as given.
+        z: f64,
+    },
+    /// A face has fewer than three vertices.
+    #[error("face '{face}': a face needs at least 3 vertices, got {count}")]
+    TooFewVertices {
+        /// Face name.
+        face: String,
+        /// Number of vertices given.
+        count: usize,
+    },
+    /// A face has (nearly) zero area.
+    #[error("face '{face}': degenerate polygon (area {area:e} against size {size:e})")]
+    DegenerateFace {
+        /// Face name.
+        face: String,
+        /// Area of the polygon.
+        area: f64,
+        /// Diameter of the polygon.
+        size: f64,
+    },
+    /// A face's vertices do not lie in one plane.
+    #[error(
+        "face '{face}': not planar: vertex {vertex} lies {distance:e} from the face's plane (tolerance {tolerance:e})"
+    )]
+    NonPlanarFace {
+        /// Face name.
+        face: String,
+        /// Offending vertex.
+        vertex: usize,
+        /// Its distance from the best plane.
+        distance: f64,
+        /// Allowed distance.
+        tolerance: f64,
+    },
+    /// A face's polygon crosses itself.
+    #[error("face '{face}': the polygon's edges {first} and {second} cross each other")]
+    SelfIntersectingFace {
+        /// Face name.
+        face: String,
+        /// One edge index.
+        first: usize,
+        /// The other edge index.
+        second: usize,
+    },
+    /// A given normal disagrees with the vertex order or is zero.
+    #[error(
+        "face '{face}': normal ({x}, {y}, {z}) is zero or not perpendicular to the face (vertex order gives the normal {expected:?})"
+    )]
+    InconsistentNormal {
+        /// Face name.
+        face: String,
+        /// Normal as given.
+        x: f64,
+        /// Normal as given.
+        y: f64,
+        /// Normal as given.
+        z: f64,
+        /// The normal implied by the vertex order.
+        expected: [f64; 3],
+    },
+    /// Reflectivity outside [0, 1] or not finite.
+    #[error("face '{face}': reflectivity rho = {rho} is outside [0, 1]")]
+    ReflectivityOutOfRange {
+        /// Face name.
+        face: String,
+        /// Value given.
+        rho: f64,
+    },
+    /// Emissivity not finite or negative.
+    #[error("face '{face}': emissivity E = {value} must be finite and non-negative")]
+    InvalidEmission {
+        /// Face name.
+        face: String,
+        /// Value given.
+        value: f64,
+    },
+    /// Parameters of the paper's surfaces that violate (3.1).
+    #[error(
+        "surface parameters (A, B, C) = ({a}, {b}, {c}) must be finite and positive with C < B and 2B < A (paper (3.1))"
+    )]
+    InvalidSurfaceParameters {
+        /// A.
+        a: f64,
+        /// B.
+        b: f64,
+        /// C.
+        c: f64,
+    },
+    /// Collocation parameter outside [0, 1/3).
+    #[error("alpha = {alpha} is outside [0, 1/3)")]
+    InvalidAlpha {
+        /// Value given.
+        alpha: f64,
+    },
+    /// A parameter out of its range.
+    #[error("{name} = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// Value given, as text.
+        value: String,
+        /// What is required.
+        reason: String,
+    },
+    /// An unknown name (scene, method, solution, study...).
+    #[error("unknown {kind} '{name}'; expected one of: {expected}")]
+    UnknownName {
+        /// What kind of name.
+        kind: &'static str,
+        /// The name given.
+        name: String,
+        /// The names accepted.
+        expected: String,
+    },
+    /// A true solution that is defined only on some scenes.
+    #[error(
+        "true solution '{solution}' is defined on the four-piece and five-piece surfaces, not on '{scene}'"
+    )]
+    SolutionNeedsPaperSurface {
+        /// Solution name.
+        solution: String,
+        /// Scene name.
+        scene: String,
+    },
+    /// A dense matrix that cannot fit in memory.
+    #[error(
+        "a dense {dof} x {dof} matrix needs {needed_gib:.1} GiB but only {available_gib:.1} GiB may be used; \
+         use a coarser mesh (smaller --refine) or the iterative solver without a stored matrix"
+    )]
+    TooLarge {
+        /// Unknowns.
+        dof: usize,
+        /// Memory the matrix needs.
+        needed_gib: f64,
+        /// Memory allowed.
+        available_gib: f64,
+    },
+    /// The linear system is singular or too ill-conditioned to solve.
+    #[error(
+        "the system I - K is singular or nearly singular (estimated condition number {condition:e}); \
+         a closed surface with rho = 1 has no unique solution"
+    )]
+    SingularSystem {
+        /// Estimated condition number (infinite when exactly singular).
+        condition: f64,
+    },
+    /// An iterative solver did not converge.
+    #[error(
+        "the iterative solver did not converge: residual {residual:e} after {iterations} iterations"
+    )]
+    NotConverged {
+        /// Final relative residual.
+        residual: f64,
+        /// Iterations done.
+        iterations: usize,
+    },
+    /// GPU backend failures.
+    #[error("GPU: {0}")]
+    Gpu(String),
+    /// Input/output.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+}
+
+/// Result alias of the library.
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,212 @@
+//! One solve from end to end (DESIGN.md sec. 2): scene -> mesh -> discretization -> pair plan ->
+//! assembly -> emissivity -> solve -> errors, with the time of each stage.
+
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use crate::assembly::{self, AssemblyOptions};
+use crate::discretization::{Discretization, Method};
+use crate::error::Result;
+use crate::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
+use crate::problems::{EmissionOptions, TrueSolution, emission_at_nodes};
+use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
+use crate::solve;
+use crate::visibility::{PairPlanner, PairStats};
+
+/// Which mesh to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MeshChoice {
+    /// Faces split by their diagonals, then refined.
+    Uniform,
+    /// The paper's discontinuity mesh (sec. 3.1).
+    Discontinuity,
+}
+
+impl MeshChoice {
+    /// Name used in reports and on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Uniform => "uniform",
+            Self::Discontinuity => "discontinuity",
+        }
+    }
+}
+
+/// Everything that defines one run.
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    /// The scene.
+    pub scene: BuiltinScene,
+    /// (A, B, C) for the paper's surfaces.
+    pub params: SurfaceParameters,
+    /// Mesh kind.
+    pub mesh: MeshChoice,
+    /// Refinement levels (n = n_0 4^refine).
+    pub refine: u32,
+    /// Collocation method.
+    pub method: Method,
+    /// A true solution (its E is computed), or `None` to use the faces' emissivities.
+    pub solution: Option<TrueSolution>,
+    /// Collocation-integral options.
+    pub assembly: AssemblyOptions,
+    /// Emissivity-integral options.
+    pub emission: EmissionOptions,
+    /// Show progress bars on stderr.
+    pub progress: bool,
+}
+
+impl RunConfig {
+    /// The paper's setup for a scene: uniform mesh, centroid method, u = x² + y².
+    pub fn paper(scene: BuiltinScene, refine: u32) -> Self {
+        Self {
+            scene,
+            params: SurfaceParameters::default(),
+            mesh: MeshChoice::Uniform,
+            refine,
+            method: Method::Centroid,
+            solution: Some(TrueSolution::X2Y2),
+            assembly: AssemblyOptions::default(),
+            emission: EmissionOptions::default(),
+            progress: false,
+        }
+    }
+}
+
+/// Results of one run.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    /// Scene name.
+    pub surface: String,
+    /// Mesh kind.
+    pub mesh: &'static str,
+    /// Method name.
+    pub method: &'static str,
+    /// α of the linear method.
+    pub alpha: Option<f64>,
+    /// Quadrature of the collocation integrals.
+    pub quadrature: &'static str,
+    /// Backend that assembled the matrix.
+    pub backend: &'static str,
+    /// Number of elements.
+    pub n: usize,
+    /// Number of unknowns.
+    pub dof: usize,
+    /// Max error at the nodes `max_i |u(P_i) - u_n(P_i)|`, when a true solution is known.
+    pub error: Option<f64>,
+    /// Time to plan and assemble the matrix.
+    pub setup_seconds: f64,
+    /// Time to compute the emissivity at the nodes.
+    pub emission_seconds: f64,
+    /// Time to solve the linear system.
+    pub solve_seconds: f64,
+    /// Relative residual of the solve.
+    pub residual: f64,
+    /// Pair classes.
+    pub pairs: PairStats,
+    /// Smallest, mean and largest nodal value of the solution.
+    pub solution_range: [f64; 3],
+    /// Nodal values of the computed solution.
+    #[serde(skip)]
+    pub u: Vec<f64>,
+}
+
+fn bar(enabled: bool, stage: &str, len: usize) -> ProgressBar {
+    if !enabled {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({elapsed}, eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(stage.to_string());
+    bar
+}
+
+/// The scene, mesh and discretization of a configuration.
+pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
+    let scene = config.scene.build(config.params)?;
+    let kind = match config.mesh {
+        MeshChoice::Uniform => MeshKind::Uniform,
+        MeshChoice::Discontinuity => {
+            MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &config.params)?)
+        }
+    };
+    let mesh = Mesh::new(&scene, &kind, config.refine)?;
+    let disc = Discretization::new(&scene, &mesh, config.method)?;
+    Ok((scene, mesh, disc))
+}
+
+/// Runs one configuration on the CPU.
+pub fn run(config: &RunConfig) -> Result<RunReport> {
+    let (scene, mesh, disc) = build(config)?;
+    let u_faces = match &config.solution {
+        Some(sol) => Some(sol.on_faces(&scene, &config.params)?),
+        None => None,
+    };
+    let started = Instant::now();
+    let planner = PairPlanner::new(&scene);
+    let progress = bar(config.progress, "assembly", disc.dof());
+    let assembled = assembly::assemble(&mesh, &disc, &planner, &config.assembly, &|k| {
+        progress.inc(k as u64)
+    })?;
+    progress.finish_and_clear();
+    let setup_seconds = started.elapsed().as_secs_f64();
+
+    let started = Instant::now();
+    let rhs: Vec<f64> = match &u_faces {
+        Some(u) => {
+            let progress = bar(config.progress, "emission", disc.dof());
+            let e = emission_at_nodes(&scene, &disc, &planner, u, &config.emission, &|k| {
+                progress.inc(k as u64)
+            });
+            progress.finish_and_clear();
+            e
+        }
+        None => disc
+            .nodes
+            .iter()
+            .map(|n| scene.faces[n.face].emission)
+            .collect(),
+    };
+    let emission_seconds = started.elapsed().as_secs_f64();
+
+    let started = Instant::now();
+    let u = solve::solve_lu(&assembled.matrix, &rhs)?;
+    let solve_seconds = started.elapsed().as_secs_f64();
+    let residual = solve::relative_residual(&assembled.matrix, &u, &rhs);
+
+    let error = u_faces.as_ref().map(|uf| {
+        disc.nodes
+            .iter()
+            .zip(&u)
+            .map(|(node, value)| (uf[node.face].eval(node.position) - value).abs())
+            .fold(0.0, f64::max)
+    });
+    let (lo, hi, sum) = u.iter().fold(
+        (f64::INFINITY, f64::NEG_INFINITY, 0.0),
+        |(lo, hi, s), &v| (lo.min(v), hi.max(v), s + v),
+    );
+    Ok(RunReport {
+        surface: scene.name.clone(),
+        mesh: config.mesh.name(),
+        method: config.method.name(),
+        alpha: config.method.alpha(),
+        quadrature: "exact",
+        backend: "cpu",
+        n: mesh.len(),
+        dof: disc.dof(),
+        error,
+        setup_seconds,
+        emission_seconds,
+        solve_seconds,
+        residual,
+        pairs: assembled.stats,
+        solution_range: [lo, sum / u.len() as f64, hi],
+        u,
+    })
+}

@@ -1,0 +1,292 @@
+//! A planar polygonal face: validated geometry, its frame, reflectivity and emissivity.
+
+use glam::{DVec2, DVec3};
+
+use crate::error::{Error, Result};
+use crate::geometry::PlaneFrame;
+
+/// Which diagonal splits a quadrilateral face into its two initial triangles (paper sec. 3.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Diagonal {
+    /// From vertex 0 to vertex 2.
+    #[default]
+    FromFirst,
+    /// From vertex 1 to vertex 3.
+    FromSecond,
+}
+
+/// A planar polygon whose vertices run counter-clockwise about its normal; the normal points to the
+/// side that radiates and receives (the paper's inner normal).
+#[derive(Clone, Debug)]
+pub struct Face {
+    /// Name, unique in its scene.
+    pub name: String,
+    /// Vertices, counter-clockwise about the normal.
+    pub vertices: Vec<DVec3>,
+    /// Frame of the face's plane: origin at vertex 0, first axis along the first edge.
+    pub frame: PlaneFrame,
+    /// Reflectivity rho in [0, 1].
+    pub rho: f64,
+    /// Emissivity E (constant over the face), for emission-driven scenes.
+    pub emission: f64,
+    /// The diagonal used when the face is a quadrilateral split into two triangles.
+    pub diagonal: Diagonal,
+}
+
+/// Relative tolerance (of the face's size) for planarity.
+const PLANARITY: f64 = 1e-9;
+
+impl Face {
+    /// A face from its vertices (counter-clockwise about the radiating side) and reflectivity.
+    /// Rejects non-finite coordinates, fewer than three vertices, zero area, non-planar or
+    /// self-intersecting polygons and rho outside [0, 1].
+    pub fn new(name: impl Into<String>, vertices: Vec<DVec3>, rho: f64) -> Result<Self> {
+        let name = name.into();
+        if vertices.len() < 3 {
+            return Err(Error::TooFewVertices {
+                face: name,
+                count: vertices.len(),
+            });
+        }
+        if let Some((k, v)) = vertices.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFiniteVertex {
+                face: name,
+                vertex: k,
+                x: v.x,
+                y: v.y,
+                z: v.z,
+            });
+        }
+        if !(0.0..=1.0).contains(&rho) {
+            return Err(Error::ReflectivityOutOfRange { face: name, rho });
+        }
+        let size = diameter(&vertices);
+        // Newell's method: twice the vector area, robust for non-convex polygons.
+        let centre = vertices.iter().sum::<DVec3>() / vertices.len() as f64;
+        let n = vertices.len();
+        let twice_area: DVec3 = (0..n)
+            .map(|k| (vertices[k] - centre).cross(vertices[(k + 1) % n] - centre))
+            .sum();
+        let area = 0.5 * twice_area.length();
+        if area.is_nan() || area <= 1e-12 * size * size {
+            return Err(Error::DegenerateFace {
+                face: name,
+                area,
+                size,
+            });
+        }
+        let normal = twice_area / (2.0 * area);
+        let tolerance = PLANARITY * size;
+        for (k, &v) in vertices.iter().enumerate() {
+            let distance = (v - centre).dot(normal).abs();
+            if distance > tolerance {
+                return Err(Error::NonPlanarFace {
+                    face: name,
+                    vertex: k,
+                    distance,
+                    tolerance,
+                });
+            }
+        }
+        let first_edge = (1..n)
+            .map(|k| vertices[k] - vertices[0])
+            .find(|d| d.length() > 1e-12 * size)
+            .ok_or(Error::DegenerateFace {
+                face: name.clone(),
+                area,
+                size,
+            })?;
+        let frame = PlaneFrame::new(vertices[0], normal, first_edge);
+        let face = Self {
+            name,
+            vertices,
+            frame,
+            rho,
+            emission: 0.0,
+            diagonal: Diagonal::default(),
+        };
+        face.check_simple()?;
+        Ok(face)
+    }
+
+    /// Sets the emissivity (finite, non-negative).
+    pub fn with_emission(mut self, emission: f64) -> Result<Self> {
+        if !(emission.is_finite() && emission >= 0.0) {
+            return Err(Error::InvalidEmission {
+                face: self.name,
+                value: emission,
+            });
+        }
+        self.emission = emission;
+        Ok(self)
+    }
+
+    /// Sets the diagonal of a quadrilateral.
+    pub fn with_diagonal(mut self, diagonal: Diagonal) -> Self {
+        self.diagonal = diagonal;
+        self
+    }
+
+    /// Checks a normal given alongside the vertices: it must be non-zero and agree with the
+    /// normal implied by the vertex order.
+    pub fn check_normal(&self, given: DVec3) -> Result<()> {
+        let unit = given.normalize_or_zero();
+        if !given.is_finite() || unit == DVec3::ZERO || unit.dot(self.frame.normal) < 1.0 - 1e-6 {
+            let e = self.frame.normal;
+            return Err(Error::InconsistentNormal {
+                face: self.name.clone(),
+                x: given.x,
+                y: given.y,
+                z: given.z,
+                expected: [e.x, e.y, e.z],
+            });
+        }
+        Ok(())
+    }
+
+    /// Vertices in the face frame's 2-D coordinates (counter-clockwise).
+    pub fn local_polygon(&self) -> Vec<DVec2> {
+        self.vertices
+            .iter()
+            .map(|&v| self.frame.to_plane(v))
+            .collect()
+    }
+
+    /// Area.
+    pub fn area(&self) -> f64 {
+        crate::geometry::signed_area(&self.local_polygon())
+    }
+
+    /// Largest distance between two vertices.
+    pub fn size(&self) -> f64 {
+        diameter(&self.vertices)
+    }
+
+    /// Whether the polygon is convex.
+    pub fn is_convex(&self) -> bool {
+        let p = self.local_polygon();
+        let n = p.len();
+        (0..n).all(|k| {
+            let (a, b, c) = (p[k], p[(k + 1) % n], p[(k + 2) % n]);
+            (b - a).perp_dot(c - b) >= -1e-12 * self.size() * self.size()
+        })
+    }
+
+    fn check_simple(&self) -> Result<()> {
+        let p = self.local_polygon();
+        let n = p.len();
+        for i in 0..n {
+            for j in i + 1..n {
+                let adjacent = j == i + 1 || (i == 0 && j == n - 1);
+                if adjacent {
+                    continue;
+                }
+                if segments_cross(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]) {
+                    return Err(Error::SelfIntersectingFace {
+                        face: self.name.clone(),
+                        first: i,
+                        second: j,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn diameter(points: &[DVec3]) -> f64 {
+    let mut d: f64 = 0.0;
+    for (k, a) in points.iter().enumerate() {
+        for b in &points[k + 1..] {
+            d = d.max((*a - *b).length());
+        }
+    }
+    d
+}
+
+/// Whether closed segments ab and cd share a point.
+fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let orient = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2) = (orient(c, d, a), orient(c, d, b));
+    let (d3, d4) = (orient(a, b, c), orient(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |p: DVec2, q: DVec2, r: DVec2| {
+        orient(p, q, r) == 0.0 && r.cmpge(p.min(q)).all() && r.cmple(p.max(q)).all()
+    };
+    on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> Vec<DVec3> {
+        vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y]
+    }
+
+    #[test]
+    fn a_unit_square_has_normal_z_and_area_one() {
+        let f = Face::new("sq", square(), 0.5).unwrap();
+        assert!((f.frame.normal - DVec3::Z).length() < 1e-15);
+        assert!((f.area() - 1.0).abs() < 1e-15);
+        assert!(f.is_convex());
+    }
+
+    #[test]
+    fn bad_faces_are_rejected_with_the_culprit_named() {
+        let mut v = square();
+        v[2].y = f64::NAN;
+        let e = Face::new("bad", v, 0.5).unwrap_err().to_string();
+        assert!(e.contains("'bad'") && e.contains("vertex 2"), "{e}");
+
+        let mut v = square();
+        v[2].z = 0.1;
+        let e = Face::new("warped", v, 0.5).unwrap_err().to_string();
+        assert!(e.contains("not planar"), "{e}");
+
+        let v = vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0)];
+        assert!(matches!(
+            Face::new("line", v, 0.5),
+            Err(Error::DegenerateFace { .. })
+        ));
+
+        let e = Face::new("rho", square(), 1.5).unwrap_err().to_string();
+        assert!(e.contains("rho = 1.5"), "{e}");
+
+        let bowtie = vec![
+            DVec3::ZERO,
+            DVec3::new(3.0, 1.0, 0.0),
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ];
+        assert!(matches!(
+            Face::new("bowtie", bowtie, 0.5),
+            Err(Error::SelfIntersectingFace { .. })
+        ));
+
+        let f = Face::new("sq", square(), 0.5).unwrap();
+        assert!(f.check_normal(-DVec3::Z).is_err());
+        assert!(f.check_normal(DVec3::ZERO).is_err());
+        assert!(f.check_normal(DVec3::Z * 3.0).is_ok());
+        assert!(f.clone().with_emission(-1.0).is_err());
+    }
+
+    #[test]
+    fn non_convex_polygons_are_accepted_and_flagged() {
+        let l_shape = vec![
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(1.0, 2.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ];
+        let f = Face::new("L", l_shape, 0.5).unwrap();
+        assert!(!f.is_convex());
+        assert!((f.area() - 3.0).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,336 @@
+//! The pair plan (DESIGN.md sec. 2): for every (collocation node, element) pair, decide once what the
+//! collocation integral (4.1) needs: nothing, the whole element, or the exactly visible part.
+//!
+//! Work is organised per (node, face): the node's [`FaceView`] of a face holds the half-plane left
+//! by the node's tangent plane (when the face straddles it) and the shadows of the occluders that
+//! can lie between the node's face and this one, centrally projected from the node onto the face's
+//! plane. Each element of the face is then classified against the view ([`PairPlanner::visible`]):
+//! no clip and no shadow means every element is fully visible, without per-element work.
+//!
+//! Shadows are convex (occluders are split into convex pieces), and the visible part of an element
+//! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
+//! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates).
+//! Occluders are decided per pair of faces ([`PairPlanner::candidates`]), so a scene in which no face
+//! can come between two others never runs shadow code.
+
+mod occluders;
+mod stats;
+
+pub use occluders::Occluder;
+pub use stats::PairStats;
+
+use glam::{DVec2, DVec3};
+
+use crate::geometry::{
+    HalfPlane, bounding_box, clip_convex, clip_polygon_3d, signed_area, subtract_convex,
+};
+use crate::scene::Scene;
+
+/// Why a pair contributes nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SkipReason {
+    /// The node and the element lie in one plane: G = 0.
+    SamePlane,
+    /// The element is behind the node's tangent plane or the node behind the element: G <= 0.
+    FacingAway,
+    /// Occluders hide the whole element.
+    Hidden,
+}
+
+/// What a node sees of one face.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FaceView {
+    /// Nothing of the face.
+    Skip(SkipReason),
+    /// The face is in front of the node; parts may be clipped or shadowed.
+    Visible {
+        /// Half-plane (face coordinates) in front of the node's tangent plane, when the face
+        /// straddles that plane.
+        clip: Option<HalfPlane>,
+        /// Convex shadows (face coordinates, counter-clockwise) of the occluders.
+        shadows: Vec<Vec<DVec2>>,
+    },
+}
+
+impl FaceView {
+    /// Whether every element of the face is fully visible.
+    pub fn is_unobstructed(&self) -> bool {
+        matches!(self, Self::Visible { clip: None, shadows } if shadows.is_empty())
+    }
+}
+
+/// The visible part of a convex polygon (an element) under a [`FaceView`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Visibility {
+    /// Nothing is visible, for the given reason.
+    Skip(SkipReason),
+    /// All of it.
+    Full,
+    /// Disjoint convex pieces, counter-clockwise, in face coordinates.
+    Partial(Vec<Vec<DVec2>>),
+}
+
+/// Relative tolerance for "on the plane" decisions.
+const PLANE_TOLERANCE: f64 = 1e-12;
+
+/// Decides visibility for a scene; built once per scene.
+#[derive(Clone, Debug)]
+pub struct PairPlanner {
+    faces: Vec<PlannerFace>,
+    occluders: Vec<Occluder>,
+    /// For faces (a, b) at `a * n + b`: occluders that may block segments from a to b.
+    candidates: Vec<Vec<usize>>,
+    coplanar: Vec<bool>,
+}
+
+#[derive(Clone, Debug)]
+struct PlannerFace {
+    frame: crate::geometry::PlaneFrame,
+    polygon: Vec<DVec2>,
+    hull: Vec<DVec2>,
+    size: f64,
+}
+
+impl PairPlanner {
+    /// Prepares the occluders of `scene` and the candidates for every pair of faces.
+    pub fn new(scene: &Scene) -> Self {
+        let n = scene.faces.len();
+        let faces: Vec<PlannerFace> = scene
+            .faces
+            .iter()
+            .map(|f| {
+                let polygon = f.local_polygon();
+                PlannerFace {
+                    frame: f.frame,
+                    hull: convex_hull(&polygon),
+                    polygon,
+                    size: f.size(),
+                }
+            })
+            .collect();
+        let occluders = occluders::convex_pieces(scene);
+        let mut coplanar = vec![false; n * n];
+        let mut candidates = vec![Vec::new(); n * n];
+        for a in 0..n {
+            for b in 0..n {
+                coplanar[a * n + b] = a == b || scene.coplanar(a, b);
+                if !coplanar[a * n + b] {
+                    candidates[a * n + b] = occluders::candidates_between(scene, a, b, &occluders);
+                }
+            }
+        }
+        Self {
+            faces,
+            occluders,
+            candidates,
+            coplanar,
+        }
+    }
+
+    /// Whether any pair of faces can have an occluder between them.
+    pub fn has_occlusion(&self) -> bool {
+        self.candidates.iter().any(|c| !c.is_empty())
+    }
+
+    /// Occluders that may lie between faces `a` and `b`.
+    pub fn candidates(&self, a: usize, b: usize) -> &[usize] {
+        &self.candidates[a * self.faces.len() + b]
+    }
+
+    /// The convex occluder pieces of the scene.
+    pub fn occluders(&self) -> &[Occluder] {
+        &self.occluders
+    }
+
+    /// What the point `p` with unit normal `normal`, on face `own_face`, sees of face `face`.
+    pub fn face_view(&self, p: DVec3, normal: DVec3, own_face: usize, face: usize) -> FaceView {
+        let n = self.faces.len();
+        if self.coplanar[own_face * n + face] {
+            return FaceView::Skip(SkipReason::SamePlane);
+        }
+        let f = &self.faces[face];
+        let z = f.frame.height(p);
+        if z <= PLANE_TOLERANCE * f.size {
+            return FaceView::Skip(SkipReason::FacingAway);
+        }
+        // The node's tangent plane n·(Q - P) >= 0 restricted to the face's plane.
+        let hp = HalfPlane {
+            normal: DVec2::new(normal.dot(f.frame.e1), normal.dot(f.frame.e2)),
+            offset: normal.dot(f.frame.origin - p),
+        };
+        let values: Vec<f64> = f.polygon.iter().map(|&q| hp.eval(q)).collect();
+        let eps = PLANE_TOLERANCE * f.size;
+        if values.iter().all(|&v| v <= eps) {
+            return FaceView::Skip(SkipReason::FacingAway);
+        }
+        let clip = values.iter().any(|&v| v < -eps).then_some(hp);
+        let window = match &clip {
+            Some(hp) => match clip_convex(&f.hull, hp) {
+                Some(w) => w,
+                None => return FaceView::Skip(SkipReason::FacingAway),
+            },
+            None => f.hull.clone(),
+        };
+        let shadows = self
+            .candidates(own_face, face)
+            .iter()
+            .filter_map(|&o| shadow(p, z, f, &window, &self.occluders[o].polygon))
+            .collect();
+        FaceView::Visible { clip, shadows }
+    }
+
+    /// The visible part of a convex counter-clockwise polygon `poly` (face coordinates) under `view`.
+    pub fn visible(&self, view: &FaceView, poly: &[DVec2]) -> Visibility {
+        let (clip, shadows) = match view {
+            FaceView::Skip(reason) => return Visibility::Skip(*reason),
+            FaceView::Visible { clip, shadows } => (clip, shadows),
+        };
+        let mut changed = false;
+        let mut pieces = vec![poly.to_vec()];
+        if let Some(hp) = clip {
+            let scale = polygon_scale(poly);
+            let values: Vec<f64> = poly.iter().map(|&q| hp.eval(q)).collect();
+            let eps = PLANE_TOLERANCE * scale * hp.normal.length();
+            if values.iter().all(|&v| v <= eps) {
+                return Visibility::Skip(SkipReason::FacingAway);
+            }
+            if values.iter().any(|&v| v < -eps) {
+                match clip_convex(poly, hp) {
+                    Some(c) => pieces = vec![c],
+                    None => return Visibility::Skip(SkipReason::FacingAway),
+                }
+                changed = true;
+            }
+        }
+        for s in shadows {
+            let (slo, shi) = bounding_box(s);
+            let mut next = Vec::with_capacity(pieces.len());
+            for piece in pieces {
+                let (plo, phi) = bounding_box(&piece);
+                if phi.x <= slo.x || shi.x <= plo.x || phi.y <= slo.y || shi.y <= plo.y {
+                    next.push(piece);
+                    continue;
+                }
+                let parts = subtract_convex(&piece, s);
+                if parts.len() != 1 || parts[0] != piece {
+                    changed = true;
+                }
+                next.extend(parts);
+            }
+            pieces = next;
+            if pieces.is_empty() {
+                return Visibility::Skip(SkipReason::Hidden);
+            }
+        }
+        if changed {
+            Visibility::Partial(pieces)
+        } else {
+            Visibility::Full
+        }
+    }
+
+    /// The visible part of the whole face `face` under `view` (for the emissivity integrals):
+    /// convex pieces in face coordinates, or an empty list.
+    pub fn visible_part_of_face(&self, view: &FaceView, face: usize) -> Vec<Vec<DVec2>> {
+        let f = &self.faces[face];
+        let convex_parts: Vec<Vec<DVec2>> = if f.hull.len() == f.polygon.len() {
+            vec![f.polygon.clone()]
+        } else {
+            crate::geometry::triangulate(&f.polygon)
+                .unwrap_or_default()
+                .into_iter()
+                .map(|t| t.map(|k| f.polygon[k]).to_vec())
+                .collect()
+        };
+        convex_parts
+            .into_iter()
+            .flat_map(|part| match self.visible(view, &part) {
+                Visibility::Skip(_) => vec![],
+                Visibility::Full => vec![part],
+                Visibility::Partial(pieces) => pieces,
+            })
+            .collect()
+    }
+}
+
+fn polygon_scale(poly: &[DVec2]) -> f64 {
+    let (lo, hi) = bounding_box(poly);
+    (hi - lo).length()
+}
+
+/// The shadow on face `f` (at height `z` below `p`) of a convex occluder polygon, as seen from `p`
+/// through the convex `window` of the face: the occluder clipped to the pyramid with apex `p` over
+/// the window, centrally projected onto the face's plane.
+fn shadow(
+    p: DVec3,
+    z: f64,
+    f: &PlannerFace,
+    window: &[DVec2],
+    occluder: &[DVec3],
+) -> Option<Vec<DVec2>> {
+    let normal = f.frame.normal;
+    // In front of the face's plane.
+    let mut poly = clip_polygon_3d(occluder, normal, -normal.dot(f.frame.origin))?;
+    // Inside the pyramid: for each window edge, the plane through p and the edge.
+    let corners: Vec<DVec3> = window.iter().map(|&w| f.frame.to_global(w)).collect();
+    let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+    let m = corners.len();
+    for k in 0..m {
+        let (a, b) = (corners[k], corners[(k + 1) % m]);
+        let mut side = (a - p).cross(b - p);
+        if side.dot(centre - p) < 0.0 {
+            side = -side;
+        }
+        poly = clip_polygon_3d(&poly, side, -side.dot(p))?;
+    }
+    // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
+    let mut projected: Vec<DVec2> = poly
+        .iter()
+        .map(|&x| {
+            let t = z / (z - f.frame.height(x));
+            f.frame.to_plane(p + (x - p) * t)
+        })
+        .collect();
+    let area = signed_area(&projected);
+    let scale = polygon_scale(window);
+    if area.abs() <= 1e-14 * scale * scale || !area.is_finite() {
+        return None;
+    }
+    if area < 0.0 {
+        projected.reverse();
+    }
+    Some(projected)
+}
+
+/// Convex hull (counter-clockwise) of a polygon's vertices, by Andrew's monotone chain.
+fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+    let mut pts = points.to_vec();
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &q in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,187 @@
+//! Visibility against brute-force ray casting on random occluder configurations.
+
+use glam::{DVec2, DVec3};
+use rand::{Rng, SeedableRng, rngs::StdRng};
+
+use super::*;
+use crate::geometry::{PlaneFrame, triangulate};
+use crate::mesh::{Mesh, MeshKind};
+use crate::scene::{Face, Scene};
+
+/// Whether the open segment from p to q crosses the (possibly non-convex) planar polygon.
+fn segment_hits(p: DVec3, q: DVec3, polygon: &[DVec3]) -> bool {
+    let e1 = polygon[1] - polygon[0];
+    let n: DVec3 = (0..polygon.len())
+        .map(|k| (polygon[k] - polygon[0]).cross(polygon[(k + 1) % polygon.len()] - polygon[0]))
+        .sum::<DVec3>()
+        .normalize();
+    let frame = PlaneFrame::new(polygon[0], n, e1);
+    let (hp, hq) = (frame.height(p), frame.height(q));
+    if hp * hq >= 0.0 {
+        return false;
+    }
+    let s = hp / (hp - hq);
+    let x = frame.to_plane(p + (q - p) * s);
+    let local: Vec<DVec2> = polygon.iter().map(|&v| frame.to_plane(v)).collect();
+    triangulate(&local).unwrap().iter().any(|t| {
+        let t = t.map(|k| local[k]);
+        (0..3).all(|k| (t[(k + 1) % 3] - t[k]).perp_dot(x - t[k]) > 0.0)
+    })
+}
+
+fn inside_any(pieces: &[Vec<DVec2>], x: DVec2) -> bool {
+    pieces.iter().any(|p| {
+        let n = p.len();
+        (0..n).all(|k| (p[(k + 1) % n] - p[k]).perp_dot(x - p[k]) > 0.0)
+    })
+}
+
+/// A random polygon in the plane through `centre` with normal `n`: convex (regular-ish) or a
+/// non-convex star.
+fn random_polygon(rng: &mut StdRng, centre: DVec3, n: DVec3, convex: bool) -> Vec<DVec3> {
+    let frame = PlaneFrame::new(centre, n, DVec3::new(0.3, 0.7, 0.1));
+    let m = rng.random_range(3..8);
+    let phase: f64 = rng.random_range(0.0..1.0);
+    (0..m)
+        .map(|k| {
+            let angle = std::f64::consts::TAU * (k as f64 + phase) / m as f64;
+            let r = if convex || k % 2 == 0 { 0.35 } else { 0.12 };
+            frame.to_global(DVec2::new(angle.cos(), angle.sin()) * r * rng.random_range(0.8..1.2))
+        })
+        .collect()
+}
+
+#[test]
+fn visible_pieces_agree_with_ray_casting() {
+    let mut rng = StdRng::seed_from_u64(7);
+    let mut checked = 0;
+    for case in 0..12 {
+        let receiver = Face::new(
+            "receiver",
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            0.5,
+        )
+        .unwrap();
+        let source = Face::new(
+            "source",
+            vec![
+                DVec3::new(0.2, 0.2, 1.5),
+                DVec3::new(0.2, 0.8, 1.5),
+                DVec3::new(0.8, 0.8, 1.5),
+                DVec3::new(0.8, 0.2, 1.5),
+            ],
+            0.5,
+        )
+        .unwrap();
+        let mut faces = vec![receiver, source];
+        for k in 0..3 {
+            let centre = DVec3::new(
+                rng.random_range(0.2..0.8),
+                rng.random_range(0.2..0.8),
+                rng.random_range(0.3..1.2),
+            );
+            let tilt = DVec3::new(
+                rng.random_range(-0.5..0.5),
+                rng.random_range(-0.5..0.5),
+                1.0,
+            );
+            let convex = (case + k) % 2 == 0;
+            let poly = random_polygon(&mut rng, centre, tilt.normalize(), convex);
+            faces.push(Face::new(format!("occluder{k}"), poly, 0.5).unwrap());
+        }
+        let scene = Scene::new("random", faces).unwrap();
+        let planner = PairPlanner::new(&scene);
+        assert!(planner.has_occlusion());
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
+        let frame = scene.faces[0].frame;
+        for _ in 0..4 {
+            let p = DVec3::new(
+                rng.random_range(0.25..0.75),
+                rng.random_range(0.25..0.75),
+                1.5,
+            );
+            // A tilted normal makes the node's tangent plane cut the receiver in some cases.
+            let normal = DVec3::new(rng.random_range(-1.0..1.0), 0.0, -1.0).normalize();
+            let view = planner.face_view(p, normal, 1, 0);
+            for e in &mesh.elements()[mesh.face_range(0)] {
+                let tri: Vec<DVec2> = e.vertices.iter().map(|&v| frame.to_plane(v)).collect();
+                let vis = planner.visible(&view, &tri);
+                for _ in 0..40 {
+                    let (a, b): (f64, f64) =
+                        (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+                    let (a, b) = if a + b > 1.0 {
+                        (1.0 - a, 1.0 - b)
+                    } else {
+                        (a, b)
+                    };
+                    let x = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
+                    let q = frame.to_global(x);
+                    let in_front = normal.dot(q - p) > 0.0;
+                    let blocked = scene.faces[2..]
+                        .iter()
+                        .any(|f| segment_hits(p, q, &f.vertices));
+                    let truth = in_front && !blocked;
+                    let planned = match &vis {
+                        Visibility::Skip(_) => false,
+                        Visibility::Full => true,
+                        Visibility::Partial(pieces) => inside_any(pieces, x),
+                    };
+                    assert_eq!(planned, truth, "case {case}, p {p}, q {q}: {vis:?}");
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 10_000);
+}
+
+#[test]
+fn the_paper_surfaces_need_occlusion_only_between_s1_or_s5_and_s4() {
+    use crate::scene::{SurfaceParameters, five_piece, four_piece};
+    let s = five_piece(SurfaceParameters::default()).unwrap();
+    let planner = PairPlanner::new(&s);
+    for a in 0..5 {
+        for b in 0..5 {
+            let expect = matches!((a, b), (0, 3) | (3, 0) | (4, 3) | (3, 4));
+            assert_eq!(
+                !planner.candidates(a, b).is_empty(),
+                expect,
+                "S{} -> S{}",
+                a + 1,
+                b + 1
+            );
+        }
+    }
+    // S2 and S3 are one occluder.
+    assert_eq!(planner.occluders().len(), 4);
+    let four = PairPlanner::new(&four_piece(SurfaceParameters::default()).unwrap());
+    assert!(four.has_occlusion());
+    let cube = PairPlanner::new(&crate::scene::cube().unwrap());
+    assert!(!cube.has_occlusion(), "a convex enclosure has no occluders");
+}
+
+#[test]
+fn shadow_of_the_square_from_a_corner_of_s4_is_exact() {
+    use crate::scene::{SurfaceParameters, four_piece};
+    let s = four_piece(SurfaceParameters::default()).unwrap();
+    let planner = PairPlanner::new(&s);
+    // From P = (px, py, 2) the square [0,2]² at z = 1 casts [0, 4 - px] x [0, 4 - py] on S1.
+    let p = DVec3::new(0.25, 0.75, 2.0);
+    let view = planner.face_view(p, -DVec3::Z, 3, 0);
+    let FaceView::Visible {
+        clip: None,
+        shadows,
+    } = &view
+    else {
+        panic!("{view:?}")
+    };
+    assert_eq!(shadows.len(), 1);
+    let area = signed_area(&shadows[0]);
+    assert!((area - 3.75 * 3.25).abs() < 1e-12, "{area}");
+    let visible: f64 = planner
+        .visible_part_of_face(&view, 0)
+        .iter()
+        .map(|p| signed_area(p))
+        .sum();
+    assert!((visible - (25.0 - 3.75 * 3.25)).abs() < 1e-12);
+}
