@@ -2,9 +2,11 @@
 #![warn(missing_docs)]
 
 pub mod assembly;
+pub mod bench;
 pub mod discretization;
 pub mod error;
 pub mod geometry;
+pub mod gpu;
 pub mod kernels;
 pub mod mesh;
 pub mod pipeline;

@@ -8,12 +8,14 @@ use serde::Serialize;
 use radiosity::assembly::AssemblyOptions;
 use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
-use radiosity::pipeline::{self, MeshChoice, RunConfig, RunReport};
+use radiosity::gpu::Precision;
+use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport};
 use radiosity::problems::{EmissionOptions, TrueSolution};
-use radiosity::report;
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
+use radiosity::solve::SolverChoice;
 use radiosity::study::{self, StudyOptions};
 use radiosity::visibility::PairPlanner;
+use radiosity::{bench, report};
 
 #[derive(Parser)]
 #[command(
@@ -35,17 +37,20 @@ enum Command {
         /// Largest number of elements n to run (default: the paper's largest)
         #[arg(long)]
         max_n: Option<usize>,
-        /// Where the collocation matrix is assembled
-        #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
-        backend: BackendArg,
+        #[command(flatten)]
+        device: DeviceArgs,
         /// Write JSON to PATH (`-` for standard output) instead of the text table
         #[arg(long, value_name = "PATH")]
         json: Option<String>,
     },
     /// Solve one problem and report its error and timings
-    Solve(ProblemArgs),
+    Solve(SolveArgs),
     /// Matrix statistics: row sums of K/rho and pair-class counts
-    Inspect(ProblemArgs),
+    Inspect(SolveArgs),
+    /// Assemble the same matrix on several backends: timings, pairs per second, differences
+    Bench(BenchArgs),
+    /// Assemble the collocation matrix K and write it as a NumPy .npy file
+    Assemble(AssembleArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -63,6 +68,20 @@ enum MeshArg {
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum BackendArg {
     Cpu,
+    Gpu,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum PrecisionArg {
+    F64,
+    F32,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SolverArg {
+    Auto,
+    Lu,
+    Iterative,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -70,8 +89,9 @@ enum QuadratureArg {
     Exact,
 }
 
+/// The scene, its mesh and the collocation method.
 #[derive(Args)]
-struct ProblemArgs {
+struct GeometryArgs {
     /// Scene: four-piece, five-piece, cube, baffled-box
     #[arg(long)]
     scene: String,
@@ -87,15 +107,6 @@ struct ProblemArgs {
     /// Refinement levels: n = n0 * 4^refine
     #[arg(long, default_value_t = 2)]
     refine: u32,
-    /// True solution (x2y2, shadow, edge, none); default x2y2 on the paper's surfaces, none elsewhere
-    #[arg(long)]
-    solution: Option<String>,
-    /// beta of the shadow (3.3) or edge (3.4) solution
-    #[arg(long)]
-    beta: Option<f64>,
-    /// gamma of the shadow solution (3.3)
-    #[arg(long)]
-    gamma: Option<f64>,
     /// Surface parameters A,B,C of the paper's surfaces
     #[arg(long, value_name = "A,B,C", default_value = "5,2,1")]
     params: String,
@@ -105,53 +116,109 @@ struct ProblemArgs {
     /// IMT subintervals for the linear method's 1-D integrals
     #[arg(long, default_value_t = 128)]
     imt_nodes: usize,
+    /// Use the paper's closed forms for every pair, also far from the node (slower, and less
+    /// accurate in the far field, where the closed forms cancel)
+    #[arg(long)]
+    no_far_field: bool,
+}
+
+/// Where the matrix is assembled.
+#[derive(Args)]
+struct DeviceArgs {
     /// Where the collocation matrix is assembled
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     backend: BackendArg,
+    /// Precision of the GPU kernels
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    precision: PrecisionArg,
+}
+
+#[derive(Args)]
+struct SolveArgs {
+    #[command(flatten)]
+    geometry: GeometryArgs,
+    #[command(flatten)]
+    device: DeviceArgs,
+    /// True solution (x2y2, shadow, edge, none); default x2y2 on the paper's surfaces, none elsewhere
+    #[arg(long)]
+    solution: Option<String>,
+    /// beta of the shadow (3.3) or edge (3.4) solution
+    #[arg(long)]
+    beta: Option<f64>,
+    /// gamma of the shadow solution (3.3)
+    #[arg(long)]
+    gamma: Option<f64>,
+    /// Linear solver: LU up to 6000 unknowns and BiCGSTAB beyond (auto), or forced
+    #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
+    solver: SolverArg,
     /// Write JSON to PATH (`-` for standard output) instead of text
     #[arg(long, value_name = "PATH")]
     json: Option<String>,
 }
 
+#[derive(Args)]
+struct BenchArgs {
+    #[command(flatten)]
+    geometry: GeometryArgs,
+    /// Backends to run, comma separated
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu,gpu")]
+    backends: Vec<BackendArg>,
+    /// Precision of the GPU kernels
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    precision: PrecisionArg,
+    /// Repetitions per backend (the best time counts)
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
+    /// Write JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    json: Option<String>,
+}
+
+#[derive(Args)]
+struct AssembleArgs {
+    #[command(flatten)]
+    geometry: GeometryArgs,
+    #[command(flatten)]
+    device: DeviceArgs,
+    /// Output file (NumPy .npy, float64, row-major dof x dof)
+    #[arg(long, value_name = "FILE.npy")]
+    output: String,
+}
+
 fn parse_params(text: &str) -> Result<SurfaceParameters> {
+    let bad = || Error::InvalidParameter {
+        name: "params",
+        value: text.into(),
+        reason: "expected three numbers A,B,C".into(),
+    };
     let values: Vec<f64> = text
         .split(',')
         .map(|s| s.trim().parse::<f64>())
         .collect::<std::result::Result<_, _>>()
-        .map_err(|_| Error::InvalidParameter {
-            name: "params",
-            value: text.into(),
-            reason: "expected three numbers A,B,C".into(),
-        })?;
-    let [a, b, c] = values[..] else {
-        return Err(Error::InvalidParameter {
-            name: "params",
-            value: text.into(),
-            reason: "expected three numbers A,B,C".into(),
-        });
-    };
+        .map_err(|_| bad())?;
+    let [a, b, c] = values[..] else { return Err(bad()) };
     let p = SurfaceParameters { a, b, c };
     p.validate()?;
     Ok(p)
 }
 
-impl ProblemArgs {
+fn backend(b: BackendArg, p: PrecisionArg) -> Backend {
+    match b {
+        BackendArg::Cpu => Backend::Cpu,
+        BackendArg::Gpu => Backend::Gpu(match p {
+            PrecisionArg::F64 => Precision::F64,
+            PrecisionArg::F32 => Precision::F32,
+        }),
+    }
+}
+
+impl GeometryArgs {
+    /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere.
     fn config(&self) -> Result<RunConfig> {
         let scene: BuiltinScene = self.scene.parse()?;
         let method = match self.method {
             MethodArg::Centroid => Method::Centroid,
             MethodArg::Linear => Method::linear(self.alpha)?,
-        };
-        let default_solution = if scene.is_paper_surface() {
-            "x2y2"
-        } else {
-            "none"
-        };
-        let name = self.solution.as_deref().unwrap_or(default_solution);
-        let solution = if name == "none" {
-            None
-        } else {
-            Some(TrueSolution::parse(name, self.beta, self.gamma)?)
         };
         if self.imt_nodes < 2 {
             return Err(Error::InvalidParameter {
@@ -169,13 +236,41 @@ impl ProblemArgs {
             },
             refine: self.refine,
             method,
-            solution,
-            assembly: AssemblyOptions {
-                imt_nodes: self.imt_nodes,
-            },
+            solution: scene.is_paper_surface().then_some(TrueSolution::X2Y2),
+            assembly: AssemblyOptions { imt_nodes: self.imt_nodes, far_field: !self.no_far_field },
             emission: EmissionOptions::default(),
+            backend: Backend::Cpu,
+            solver: SolverChoice::Auto,
             progress: true,
         })
+    }
+}
+
+impl SolveArgs {
+    fn config(&self) -> Result<RunConfig> {
+        let mut config = self.geometry.config()?;
+        if let Some(name) = &self.solution {
+            config.solution = if name == "none" {
+                None
+            } else {
+                Some(TrueSolution::parse(name, self.beta, self.gamma)?)
+            };
+        } else if let Some(TrueSolution::X2Y2) = config.solution {
+            if self.beta.is_some() || self.gamma.is_some() {
+                return Err(Error::InvalidParameter {
+                    name: "beta/gamma",
+                    value: "given".into(),
+                    reason: "beta and gamma belong to --solution shadow or edge".into(),
+                });
+            }
+        }
+        config.backend = backend(self.device.backend, self.device.precision);
+        config.solver = match self.solver {
+            SolverArg::Auto => SolverChoice::Auto,
+            SolverArg::Lu => SolverChoice::Lu,
+            SolverArg::Iterative => SolverChoice::Iterative,
+        };
+        Ok(config)
     }
 }
 
@@ -186,6 +281,7 @@ struct Inspection {
     mesh: &'static str,
     method: &'static str,
     alpha: Option<f64>,
+    backend: &'static str,
     n: usize,
     dof: usize,
     row_sum_min: f64,
@@ -201,13 +297,20 @@ struct Inspection {
     setup_seconds: f64,
 }
 
-fn inspect(args: &ProblemArgs) -> Result<()> {
+fn inspect(args: &SolveArgs) -> Result<()> {
     let config = args.config()?;
     let (scene, mesh, disc) = pipeline::build(&config)?;
     let started = std::time::Instant::now();
     let planner = PairPlanner::new(&scene);
-    let assembled =
-        radiosity::assembly::assemble(&mesh, &disc, &planner, &config.assembly, &|_| {})?;
+    let (assembled, _) = pipeline::assemble_on(
+        config.backend,
+        &scene,
+        &mesh,
+        &disc,
+        &planner,
+        &config.assembly,
+        &|_| {},
+    )?;
     let setup_seconds = started.elapsed().as_secs_f64();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, node) in disc.nodes.iter().enumerate() {
@@ -223,6 +326,7 @@ fn inspect(args: &ProblemArgs) -> Result<()> {
         mesh: config.mesh.name(),
         method: config.method.name(),
         alpha: config.method.alpha(),
+        backend: config.backend.name(),
         n: mesh.len(),
         dof: disc.dof(),
         row_sum_min: lo,
@@ -237,45 +341,37 @@ fn inspect(args: &ProblemArgs) -> Result<()> {
         occluders_possible: planner.has_occlusion(),
         setup_seconds,
     };
-    match &args.json {
-        Some(target) => report::write_json(&out, target),
-        None => {
-            println!(
-                "{} ({} mesh, {} method): n = {}, dof = {}",
-                out.surface, out.mesh, out.method, out.n, out.dof
-            );
-            println!(
-                "row sums of K/rho: min {:.15}, max {:.15}",
-                out.row_sum_min, out.row_sum_max
-            );
-            println!(
-                "pairs: {} total, {} skipped ({} same plane, {} facing away, {} hidden), {} full, {} partial",
-                out.pairs_total,
-                out.pairs_skipped,
-                out.pairs_same_plane,
-                out.pairs_facing_away,
-                out.pairs_hidden,
-                out.pairs_full,
-                out.pairs_partial
-            );
-            println!("setup {:.3} s", out.setup_seconds);
-            Ok(())
-        }
+    if let Some(target) = &args.json {
+        return report::write_json(&out, target);
     }
+    println!(
+        "{} ({} mesh, {} method): n = {}, dof = {}",
+        out.surface, out.mesh, out.method, out.n, out.dof
+    );
+    println!("row sums of K/rho: min {:.15}, max {:.15}", out.row_sum_min, out.row_sum_max);
+    println!(
+        "pairs: {} total, {} skipped ({} same plane, {} facing away, {} hidden), {} full, {} partial",
+        out.pairs_total,
+        out.pairs_skipped,
+        out.pairs_same_plane,
+        out.pairs_facing_away,
+        out.pairs_hidden,
+        out.pairs_full,
+        out.pairs_partial
+    );
+    println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);
+    Ok(())
 }
 
 fn print_run(r: &RunReport) {
+    let alpha = r.alpha.map(|a| format!(", alpha = {a}")).unwrap_or_default();
     println!(
-        "{} ({} mesh, {} method{}): n = {}, dof = {}",
-        r.surface,
-        r.mesh,
-        r.method,
-        r.alpha
-            .map(|a| format!(", alpha = {a}"))
-            .unwrap_or_default(),
-        r.n,
-        r.dof
+        "{} ({} mesh, {} method{alpha}): n = {}, dof = {}",
+        r.surface, r.mesh, r.method, r.n, r.dof
     );
+    if let Some(device) = &r.device {
+        println!("assembled on {device} in {}", r.precision);
+    }
     if let Some(e) = r.error {
         println!("max error at the nodes E_n = {e:.6e}");
     }
@@ -283,9 +379,11 @@ fn print_run(r: &RunReport) {
         "solution at the nodes: min {:.6}, mean {:.6}, max {:.6}",
         r.solution_range[0], r.solution_range[1], r.solution_range[2]
     );
+    let iterations =
+        if r.iterations > 0 { format!(", {} iterations", r.iterations) } else { String::new() };
     println!(
-        "setup {:.3} s, emissivity {:.3} s, solve {:.3} s (relative residual {:.1e})",
-        r.setup_seconds, r.emission_seconds, r.solve_seconds, r.residual
+        "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",
+        r.setup_seconds, r.emission_seconds, r.solve_seconds, r.solver, r.residual
     );
     let p = &r.pairs;
     println!(
@@ -297,21 +395,87 @@ fn print_run(r: &RunReport) {
     );
 }
 
+fn run_bench(args: &BenchArgs) -> Result<()> {
+    let mut config = args.geometry.config()?;
+    config.progress = false;
+    let mut backends: Vec<Backend> = Vec::new();
+    for &b in &args.backends {
+        let b = backend(b, args.precision);
+        if backends.iter().any(|x| x.name() == b.name()) {
+            return Err(Error::InvalidParameter {
+                name: "backends",
+                value: b.name().into(),
+                reason: "each backend may be named once".into(),
+            });
+        }
+        backends.push(b);
+    }
+    let r = bench::run(&config, &backends, args.repeats)?;
+    if let Some(target) = &args.json {
+        return report::write_json(&r, target);
+    }
+    println!(
+        "{} ({} mesh, {} method): n = {}, dof = {}, {} pairs ({} evaluated)",
+        r.scene, r.mesh, r.method, r.n, r.dof, r.pairs, r.pairs_evaluated
+    );
+    for (name, t) in [("cpu", &r.cpu), ("gpu", &r.gpu)] {
+        if let Some(t) = t {
+            println!(
+                "{name} ({}): setup {:.3} s, {:.3e} pairs/s (preparation {:.3} s, best of {})",
+                t.precision, t.setup_seconds, t.pairs_per_second, t.preparation_seconds, r.repeats
+            );
+            if let Some(b) = &t.breakdown {
+                println!(
+                    "    {} tiles: host planning {:.3} s, waiting for the device {:.3} s, read-back {:.3} s",
+                    b.tiles, b.planning_seconds, b.device_wait_seconds, b.readback_seconds
+                );
+            }
+        }
+    }
+    if let Some(d) = &r.device {
+        println!("device: {d}");
+    }
+    if let (Some(s), Some(a), Some(rel)) = (r.speedup, r.max_abs_diff, r.max_rel_diff) {
+        println!(
+            "speedup (cpu time / gpu time): {s:.2}; max |difference| {a:.2e}, row-relative {rel:.2e}"
+        );
+    }
+    Ok(())
+}
+
+fn run_assemble(args: &AssembleArgs) -> Result<()> {
+    let mut config = args.geometry.config()?;
+    config.backend = backend(args.device.backend, args.device.precision);
+    let (scene, mesh, disc) = pipeline::build(&config)?;
+    let planner = PairPlanner::new(&scene);
+    let (a, _) = pipeline::assemble_on(
+        config.backend,
+        &scene,
+        &mesh,
+        &disc,
+        &planner,
+        &config.assembly,
+        &|_| {},
+    )?;
+    radiosity::report::write_npy(&args.output, &a.matrix)?;
+    eprintln!(
+        "wrote K ({} x {}, float64, rho/pi included) to {}",
+        a.matrix.dof(),
+        a.matrix.dof(),
+        args.output
+    );
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Study {
-            id,
-            max_n,
-            backend: _,
-            json,
-        } => {
-            let result = study::run_study(
-                &id,
-                &StudyOptions {
-                    max_n,
-                    progress: true,
-                },
-            )?;
+        Command::Study { id, max_n, device, json } => {
+            let options = StudyOptions {
+                max_n,
+                backend: backend(device.backend, device.precision),
+                progress: true,
+            };
+            let result = study::run_study(&id, &options)?;
             match json {
                 Some(target) => report::write_json(&result, &target),
                 None => {
@@ -321,8 +485,7 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Solve(args) => {
-            let config = args.config()?;
-            let r = pipeline::run(&config)?;
+            let r = pipeline::run(&args.config()?)?;
             match &args.json {
                 Some(target) => report::write_json(&r, target),
                 None => {
@@ -332,6 +495,8 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Inspect(args) => inspect(&args),
+        Command::Bench(args) => run_bench(&args),
+        Command::Assemble(args) => run_assemble(&args),
     }
 }
 

@@ -6,13 +6,14 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use crate::assembly::{self, AssemblyOptions};
+use crate::assembly::{self, Assembly, AssemblyOptions};
 use crate::discretization::{Discretization, Method};
 use crate::error::Result;
+use crate::gpu::{self, GpuAssembler, Precision};
 use crate::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
 use crate::problems::{EmissionOptions, TrueSolution, emission_at_nodes};
 use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
-use crate::solve;
+use crate::solve::{self, SolverChoice};
 use crate::visibility::{PairPlanner, PairStats};
 
 /// Which mesh to build.
@@ -31,6 +32,54 @@ impl MeshChoice {
         match self {
             Self::Uniform => "uniform",
             Self::Discontinuity => "discontinuity",
+        }
+    }
+}
+
+/// Where the collocation matrix is assembled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// Plain Rust on all cores (the reference path).
+    Cpu,
+    /// WGSL compute shaders through wgpu, in the given precision.
+    Gpu(Precision),
+}
+
+impl Backend {
+    /// `cpu` or `gpu`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Cpu => "cpu",
+            Self::Gpu(_) => "gpu",
+        }
+    }
+
+    /// Precision of the matrix entries (`f64` on the CPU).
+    pub fn precision(&self) -> Precision {
+        match self {
+            Self::Cpu => Precision::F64,
+            Self::Gpu(p) => *p,
+        }
+    }
+}
+
+/// Assembles K on `backend`; returns the device's name for the GPU.
+pub fn assemble_on(
+    backend: Backend,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+    options: &AssemblyOptions,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(Assembly, Option<String>)> {
+    match backend {
+        Backend::Cpu => Ok((assembly::assemble(mesh, disc, planner, options, progress)?, None)),
+        Backend::Gpu(precision) => {
+            let ctx = gpu::shared_context()?;
+            let assembler = GpuAssembler::new(ctx, precision, disc.method)?;
+            let a = assembler.assemble(scene, mesh, disc, planner, options, progress)?;
+            Ok((a, Some(format!("{} ({})", ctx.adapter.name, ctx.adapter.backend))))
         }
     }
 }
@@ -54,6 +103,10 @@ pub struct RunConfig {
     pub assembly: AssemblyOptions,
     /// Emissivity-integral options.
     pub emission: EmissionOptions,
+    /// Where the matrix is assembled.
+    pub backend: Backend,
+    /// Linear solver.
+    pub solver: SolverChoice,
     /// Show progress bars on stderr.
     pub progress: bool,
 }
@@ -70,6 +123,8 @@ impl RunConfig {
             solution: Some(TrueSolution::X2Y2),
             assembly: AssemblyOptions::default(),
             emission: EmissionOptions::default(),
+            backend: Backend::Cpu,
+            solver: SolverChoice::Auto,
             progress: false,
         }
     }
@@ -90,6 +145,14 @@ pub struct RunReport {
     pub quadrature: &'static str,
     /// Backend that assembled the matrix.
     pub backend: &'static str,
+    /// Precision of the matrix entries.
+    pub precision: &'static str,
+    /// The GPU adapter, when the GPU assembled the matrix.
+    pub device: Option<String>,
+    /// Linear solver used (`lu` or `bicgstab`).
+    pub solver: &'static str,
+    /// Iterations of the iterative solver.
+    pub iterations: usize,
     /// Number of elements.
     pub n: usize,
     /// Number of unknowns.
@@ -141,7 +204,7 @@ pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
     Ok((scene, mesh, disc))
 }
 
-/// Runs one configuration on the CPU.
+/// Runs one configuration.
 pub fn run(config: &RunConfig) -> Result<RunReport> {
     let (scene, mesh, disc) = build(config)?;
     let u_faces = match &config.solution {
@@ -151,9 +214,10 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
     let started = Instant::now();
     let planner = PairPlanner::new(&scene);
     let progress = bar(config.progress, "assembly", disc.dof());
-    let assembled = assembly::assemble(&mesh, &disc, &planner, &config.assembly, &|k| {
-        progress.inc(k as u64)
-    })?;
+    let (assembled, device) =
+        assemble_on(config.backend, &scene, &mesh, &disc, &planner, &config.assembly, &|k| {
+            progress.inc(k as u64)
+        })?;
     progress.finish_and_clear();
     let setup_seconds = started.elapsed().as_secs_f64();
 
@@ -167,18 +231,14 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
             progress.finish_and_clear();
             e
         }
-        None => disc
-            .nodes
-            .iter()
-            .map(|n| scene.faces[n.face].emission)
-            .collect(),
+        None => disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(),
     };
     let emission_seconds = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let u = solve::solve_lu(&assembled.matrix, &rhs)?;
+    let outcome = solve::solve(&assembled.matrix, &rhs, config.solver)?;
     let solve_seconds = started.elapsed().as_secs_f64();
-    let residual = solve::relative_residual(&assembled.matrix, &u, &rhs);
+    let u = outcome.u;
 
     let error = u_faces.as_ref().map(|uf| {
         disc.nodes
@@ -187,24 +247,28 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
             .map(|(node, value)| (uf[node.face].eval(node.position) - value).abs())
             .fold(0.0, f64::max)
     });
-    let (lo, hi, sum) = u.iter().fold(
-        (f64::INFINITY, f64::NEG_INFINITY, 0.0),
-        |(lo, hi, s), &v| (lo.min(v), hi.max(v), s + v),
-    );
+    let (lo, hi, sum) =
+        u.iter().fold((f64::INFINITY, f64::NEG_INFINITY, 0.0), |(lo, hi, s), &v| {
+            (lo.min(v), hi.max(v), s + v)
+        });
     Ok(RunReport {
         surface: scene.name.clone(),
         mesh: config.mesh.name(),
         method: config.method.name(),
         alpha: config.method.alpha(),
         quadrature: "exact",
-        backend: "cpu",
+        backend: config.backend.name(),
+        precision: config.backend.precision().name(),
+        device,
+        solver: outcome.solver,
+        iterations: outcome.iterations,
         n: mesh.len(),
         dof: disc.dof(),
         error,
         setup_seconds,
         emission_seconds,
         solve_seconds,
-        residual,
+        residual: outcome.residual,
         pairs: assembled.stats,
         solution_range: [lo, sum / u.len() as f64, hi],
         u,

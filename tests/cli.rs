@@ -6,7 +6,8 @@ use std::process::Command;
 use serde_json::Value;
 
 fn radiosity(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_radiosity")).args(args).output().expect("binary runs");
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_radiosity")).args(args).output().expect("binary runs");
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -17,7 +18,8 @@ fn radiosity(args: &[&str]) -> (bool, String, String) {
 fn json(args: &[&str]) -> Value {
     let (ok, stdout, stderr) = radiosity(args);
     assert!(ok, "radiosity {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("bad JSON from {args:?}: {e}\n{stdout}"))
+    serde_json::from_str(&stdout)
+        .unwrap_or_else(|e| panic!("bad JSON from {args:?}: {e}\n{stdout}"))
 }
 
 #[test]
@@ -54,13 +56,16 @@ fn table_3_4_up_to_n_160_matches_the_paper_within_2_percent() {
 #[test]
 fn closed_enclosures_have_unit_row_sums_and_report_pair_classes() {
     for scene in ["cube", "baffled-box"] {
-        let v = json(&["inspect", "--scene", scene, "--method", "centroid", "--refine", "2", "--json", "-"]);
+        let v = json(&[
+            "inspect", "--scene", scene, "--method", "centroid", "--refine", "2", "--json", "-",
+        ]);
         for key in ["row_sum_min", "row_sum_max"] {
             let s = v[key].as_f64().unwrap();
             assert!((s - 1.0).abs() < 1e-10, "{scene}: {key} = {s}");
         }
         let total = v["pairs_total"].as_u64().unwrap();
-        let parts = ["pairs_skipped", "pairs_full", "pairs_partial"].map(|k| v[k].as_u64().unwrap());
+        let parts =
+            ["pairs_skipped", "pairs_full", "pairs_partial"].map(|k| v[k].as_u64().unwrap());
         assert_eq!(parts.iter().sum::<u64>(), total, "{scene}: {v}");
         assert_eq!(total, v["dof"].as_u64().unwrap() * v["n"].as_u64().unwrap());
     }
@@ -68,7 +73,17 @@ fn closed_enclosures_have_unit_row_sums_and_report_pair_classes() {
 
 #[test]
 fn solve_reports_the_error_and_times_as_json() {
-    let v = json(&["solve", "--scene", "five-piece", "--refine", "1", "--method", "linear", "--json", "-"]);
+    let v = json(&[
+        "solve",
+        "--scene",
+        "five-piece",
+        "--refine",
+        "1",
+        "--method",
+        "linear",
+        "--json",
+        "-",
+    ]);
     assert_eq!(v["dof"], 120);
     let e = v["error"].as_f64().unwrap();
     assert!((e - 0.317).abs() < 0.02 * 0.317, "{e}");

@@ -37,19 +37,12 @@ impl CollocationMatrix {
                 });
             }
         }
-        Ok(Self {
-            dof,
-            data: vec![0.0; dof * dof],
-        })
+        Ok(Self { dof, data: vec![0.0; dof * dof] })
     }
 
     /// Wraps row-major data.
     pub fn from_rows(dof: usize, data: Vec<f64>) -> Self {
-        assert_eq!(
-            data.len(),
-            dof * dof,
-            "CollocationMatrix::from_rows: wrong length"
-        );
+        assert_eq!(data.len(), dof * dof, "CollocationMatrix::from_rows: wrong length");
         Self { dof, data }
     }
 
@@ -76,6 +69,11 @@ impl CollocationMatrix {
     /// Parallel iterator over mutable rows.
     pub fn rows_mut(&mut self) -> rayon::slice::ChunksExactMut<'_, f64> {
         self.data.par_chunks_exact_mut(self.dof.max(1))
+    }
+
+    /// Rows `rows` as one mutable slice.
+    pub fn rows_slice_mut(&mut self, rows: std::ops::Range<usize>) -> &mut [f64] {
+        &mut self.data[rows.start * self.dof..rows.end * self.dof]
     }
 
     /// `K x`.

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use crate::discretization::{Discretization, ElementFrame, Method};
 use crate::error::Result;
+use crate::kernels::far_field::{self, FarFieldRule};
 use crate::kernels::{Affine2, Observer, exact};
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
@@ -25,14 +26,15 @@ use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
 pub struct AssemblyOptions {
     /// Subintervals of the IMT rule for the one non-elementary moment (paper: 128).
     pub imt_nodes: usize,
+    /// Use the far-field rule ([`FarFieldRule::standard`]) for elements (and visible pieces) far from
+    /// the node in the linear method. Off: the paper's exact method everywhere.
+    pub far_field: bool,
 }
 
 impl Default for AssemblyOptions {
-    /// The paper's exact method with 128 IMT nodes.
+    /// The exact method with 128 IMT nodes, and the far-field rule for the linear method.
     fn default() -> Self {
-        Self {
-            imt_nodes: ImtRule::PAPER_NODES,
-        }
+        Self { imt_nodes: ImtRule::PAPER_NODES, far_field: true }
     }
 }
 
@@ -40,15 +42,15 @@ impl Default for AssemblyOptions {
 pub struct PairIntegrator {
     method: Method,
     imt: ImtRule,
+    far_field: Option<FarFieldRule>,
 }
 
 impl PairIntegrator {
     /// An integrator for `method`.
     pub fn new(method: Method, options: &AssemblyOptions) -> Self {
-        Self {
-            method,
-            imt: ImtRule::new(options.imt_nodes.max(2)),
-        }
+        let far_field =
+            (options.far_field && method.nodes_per_element() == 3).then(FarFieldRule::standard);
+        Self { method, imt: ImtRule::new(options.imt_nodes.max(2)), far_field }
     }
 
     /// `∫ G φ_l` over the visible part of element `el` for each of its basis functions, seen from a
@@ -61,10 +63,29 @@ impl PairIntegrator {
         normal: glam::DVec3,
         visibility: &Visibility,
     ) -> [f64; 3] {
-        let obs = Observer {
-            position: el.frame.to_local(p),
-            normal: el.frame.dir_to_local(normal),
-        };
+        let obs =
+            Observer { position: el.frame.to_local(p), normal: el.frame.dir_to_local(normal) };
+        if let Some(rule) = &self.far_field {
+            if let Some(band) = rule.band(&obs, far_field::radius(&el.local)) {
+                return match visibility {
+                    Visibility::Skip(_) => [0.0; 3],
+                    Visibility::Full => FarFieldRule::integrate(band, &obs, &el.local, basis),
+                    Visibility::Partial(pieces) => {
+                        let mut sum = [0.0; 3];
+                        for piece in pieces {
+                            let local: Vec<DVec2> =
+                                piece.iter().map(|&q| q - el.centroid_in_face).collect();
+                            for k in 1..local.len() - 1 {
+                                let tri = [local[0], local[k], local[k + 1]];
+                                let part = FarFieldRule::integrate(band, &obs, &tri, basis);
+                                sum.iter_mut().zip(part).for_each(|(s, p)| *s += p);
+                            }
+                        }
+                        sum
+                    }
+                };
+            }
+        }
         let shifted: Vec<Vec<DVec2>>;
         let loops: Vec<&[DVec2]> = match visibility {
             Visibility::Skip(_) => return [0.0; 3],
@@ -143,11 +164,8 @@ fn assemble_row(
         let unobstructed = view.is_unobstructed();
         for j in range {
             let el = &disc.elements[j];
-            let vis = if unobstructed {
-                Visibility::Full
-            } else {
-                planner.visible(&view, &el.in_face())
-            };
+            let vis =
+                if unobstructed { Visibility::Full } else { planner.visible(&view, &el.in_face()) };
             stats.record(&vis, 1);
             if matches!(vis, Visibility::Skip(_)) {
                 continue;

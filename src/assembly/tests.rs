@@ -23,34 +23,18 @@ fn row_sum_range(scene: &Scene, method: Method, refine: u32) -> (f64, f64, PairS
 
 #[test]
 fn cube_rows_sum_to_one() {
-    for (method, refine) in [
-        (Method::Centroid, 2),
-        (Method::linear(1.0 / 6.0).unwrap(), 1),
-    ] {
+    for (method, refine) in [(Method::Centroid, 2), (Method::linear(1.0 / 6.0).unwrap(), 1)] {
         let (lo, hi, stats) = row_sum_range(&cube().unwrap(), method, refine);
-        assert!(
-            (lo - 1.0).abs() < 1e-12 && (hi - 1.0).abs() < 1e-12,
-            "{method}: [{lo}, {hi}]"
-        );
-        assert_eq!(
-            stats.hidden + stats.partial,
-            0,
-            "no occlusion in a cube: {stats:?}"
-        );
+        assert!((lo - 1.0).abs() < 1e-12 && (hi - 1.0).abs() < 1e-12, "{method}: [{lo}, {hi}]");
+        assert_eq!(stats.hidden + stats.partial, 0, "no occlusion in a cube: {stats:?}");
     }
 }
 
 #[test]
 fn baffled_box_rows_sum_to_one_with_exact_visibility() {
-    for (method, refine) in [
-        (Method::Centroid, 2),
-        (Method::linear(1.0 / 6.0).unwrap(), 1),
-    ] {
+    for (method, refine) in [(Method::Centroid, 2), (Method::linear(1.0 / 6.0).unwrap(), 1)] {
         let (lo, hi, stats) = row_sum_range(&baffled_box().unwrap(), method, refine);
-        assert!(
-            (lo - 1.0).abs() < 1e-11 && (hi - 1.0).abs() < 1e-11,
-            "{method}: [{lo}, {hi}]"
-        );
+        assert!((lo - 1.0).abs() < 1e-11 && (hi - 1.0).abs() < 1e-11, "{method}: [{lo}, {hi}]");
         assert!(stats.partial > 0 && stats.hidden > 0, "{stats:?}");
         assert_eq!(
             stats.total,

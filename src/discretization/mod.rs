@@ -163,12 +163,7 @@ impl Discretization {
                 }
             }
         }
-        Ok(Self {
-            method,
-            nodes,
-            elements,
-            bases,
-        })
+        Ok(Self { method, nodes, elements, bases })
     }
 
     /// Number of unknowns d_n (n or 3n).
@@ -238,10 +233,7 @@ mod tests {
             assert!((node.position - e.centroid()).length() < 1e-15);
         }
         for alpha in [-0.1, 1.0 / 3.0, f64::NAN] {
-            assert!(matches!(
-                Method::linear(alpha),
-                Err(Error::InvalidAlpha { .. })
-            ));
+            assert!(matches!(Method::linear(alpha), Err(Error::InvalidAlpha { .. })));
         }
     }
 }

@@ -24,17 +24,9 @@ impl PlaneFrame {
     /// fixes the first axis. Panics if the direction is parallel to the normal (a programmer error).
     pub fn new(origin: DVec3, normal: DVec3, e1_hint: DVec3) -> Self {
         let e1 = (e1_hint - normal * e1_hint.dot(normal)).normalize();
-        assert!(
-            e1.is_finite(),
-            "PlaneFrame::new: axis hint parallel to the normal"
-        );
+        assert!(e1.is_finite(), "PlaneFrame::new: axis hint parallel to the normal");
         let e2 = normal.cross(e1);
-        Self {
-            origin,
-            e1,
-            e2,
-            normal,
-        }
+        Self { origin, e1, e2, normal }
     }
 
     /// The same plane and axes with another origin.

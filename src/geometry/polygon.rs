@@ -24,18 +24,12 @@ impl HalfPlane {
     pub fn left_of(p: DVec2, q: DVec2) -> Self {
         let d = q - p;
         let normal = DVec2::new(-d.y, d.x);
-        Self {
-            normal,
-            offset: -normal.dot(p),
-        }
+        Self { normal, offset: -normal.dot(p) }
     }
 
     /// The complementary closed half-plane.
     pub fn flipped(&self) -> Self {
-        Self {
-            normal: -self.normal,
-            offset: -self.offset,
-        }
+        Self { normal: -self.normal, offset: -self.offset }
     }
 
     /// Signed value `normal·x + offset` (positive inside).
@@ -58,10 +52,11 @@ pub fn signed_area(poly: &[DVec2]) -> f64 {
 
 /// Axis-aligned bounding box `(min, max)` of a non-empty point set.
 pub fn bounding_box(points: &[DVec2]) -> (DVec2, DVec2) {
-    points.iter().fold(
-        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    )
+    points
+        .iter()
+        .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        })
 }
 
 fn scale_of(poly: &[DVec2]) -> f64 {
@@ -157,10 +152,11 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
 /// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`.
 /// For a convex polygon the result is convex; returns `None` when nothing with area is left.
 pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec<DVec3>> {
-    let (lo, hi) = poly.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) = poly
+        .iter()
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
     let scale = (hi - lo).length();
     let eps = ON_LINE * scale * normal.length();
     let d: Vec<f64> = poly
@@ -204,12 +200,7 @@ mod tests {
     use super::*;
 
     fn square(lo: f64, hi: f64) -> Vec<DVec2> {
-        vec![
-            DVec2::new(lo, lo),
-            DVec2::new(hi, lo),
-            DVec2::new(hi, hi),
-            DVec2::new(lo, hi),
-        ]
+        vec![DVec2::new(lo, lo), DVec2::new(hi, lo), DVec2::new(hi, hi), DVec2::new(lo, hi)]
     }
 
     #[test]
@@ -218,31 +209,20 @@ mod tests {
         let hp = HalfPlane::left_of(DVec2::new(0.0, 0.0), DVec2::new(2.0, 2.0));
         let part = clip_convex(&sq, &hp).unwrap();
         assert!((signed_area(&part) - 2.0).abs() < 1e-15);
-        assert_eq!(
-            part.len(),
-            3,
-            "a vertex on the line must not double: {part:?}"
-        );
+        assert_eq!(part.len(), 3, "a vertex on the line must not double: {part:?}");
     }
 
     #[test]
     fn clipping_away_everything_or_nothing() {
         let sq = square(0.0, 1.0);
-        let keep_all = HalfPlane {
-            normal: DVec2::X,
-            offset: 0.0,
-        };
+        let keep_all = HalfPlane { normal: DVec2::X, offset: 0.0 };
         assert_eq!(clip_convex(&sq, &keep_all).unwrap().len(), 4);
         assert!(clip_convex(&sq, &keep_all.flipped()).is_none());
     }
 
     #[test]
     fn subtraction_conserves_area_and_keeps_pieces_disjoint() {
-        let piece = vec![
-            DVec2::new(0.0, 0.0),
-            DVec2::new(4.0, 0.0),
-            DVec2::new(0.0, 3.0),
-        ];
+        let piece = vec![DVec2::new(0.0, 0.0), DVec2::new(4.0, 0.0), DVec2::new(0.0, 3.0)];
         let hole = square(0.5, 1.5);
         let parts = subtract_convex(&piece, &hole);
         let total: f64 = parts.iter().map(|p| signed_area(p)).sum();
@@ -267,10 +247,7 @@ mod tests {
     fn subtracting_a_covering_hole_leaves_nothing() {
         let piece = square(0.2, 0.8);
         assert!(subtract_convex(&piece, &square(0.0, 1.0)).is_empty());
-        assert_eq!(
-            subtract_convex(&piece, &square(2.0, 3.0)),
-            vec![piece.clone()]
-        );
+        assert_eq!(subtract_convex(&piece, &square(2.0, 3.0)), vec![piece.clone()]);
     }
 
     #[test]
@@ -285,9 +262,8 @@ mod tests {
     fn clipping_in_3d_cuts_a_square_in_half() {
         let sq: Vec<DVec3> = square(0.0, 1.0).iter().map(|p| p.extend(1.0)).collect();
         let half = clip_polygon_3d(&sq, DVec3::X, -0.5).unwrap();
-        let area2: f64 = (1..half.len() - 1)
-            .map(|k| (half[k] - half[0]).cross(half[k + 1] - half[0]).z)
-            .sum();
+        let area2: f64 =
+            (1..half.len() - 1).map(|k| (half[k] - half[0]).cross(half[k + 1] - half[0]).z).sum();
         assert!((0.5 * area2 - 0.5).abs() < 1e-15);
         assert!(clip_polygon_3d(&sq, DVec3::X, -2.0).is_none());
     }

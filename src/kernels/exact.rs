@@ -10,7 +10,7 @@ use crate::quadrature::ImtRule;
 /// `∫_region G(P, Q) dS_Q` in closed form (eqs. 4.5 and 4.7 in edge form).
 pub fn constant_weight<'a>(obs: &Observer, loops: impl IntoIterator<Item = &'a [DVec2]>) -> f64 {
     let o = obs.position.truncate();
-    let m = Moments::new(loops, o, obs.position.z, None);
+    let m = Moments::new(loops, o, obs.position.z, false, None);
     let n = obs.normal;
     -n.z * m.m00 + n.x * m.m10 + n.y * m.m01
 }
@@ -28,7 +28,7 @@ pub fn affine_weights<'a, const L: usize>(
     let (o, z) = (obs.position.truncate(), obs.position.z);
     let (i, j, k) = (obs.normal.x, obs.normal.y, obs.normal.z);
     let needs_log = weights.iter().any(|w| i * w.cx + j * w.cy != 0.0);
-    let m = Moments::new(loops, o, z, needs_log.then_some(imt));
+    let m = Moments::new(loops, o, z, true, needs_log.then_some(imt));
     let zn00 = m.zn00.unwrap_or(0.0);
     let (zm20, zm11, zm02) = (0.5 * (zn00 - m.bxx), -0.5 * m.bxy, 0.5 * (zn00 - m.byy));
     weights.map(|w| {
@@ -103,11 +103,7 @@ mod tests {
             let (p, q) = (t[(k + 1) % 3], t[(k + 2) % 3]);
             // Barycentric λ_k(X) = (q - p) × (X - p) / (2 area).
             let d = q - p;
-            let lam = Affine2 {
-                c0: d.perp_dot(-p) / area2,
-                cx: -d.y / area2,
-                cy: d.x / area2,
-            };
+            let lam = Affine2 { c0: d.perp_dot(-p) / area2, cx: -d.y / area2, cy: d.x / area2 };
             Affine2 {
                 c0: (lam.c0 - alpha) / (1.0 - 3.0 * alpha),
                 cx: lam.cx / (1.0 - 3.0 * alpha),
@@ -129,32 +125,19 @@ mod tests {
     fn check(case: &Case, tol: f64, paper_tol: f64, label: &str) {
         let imt = ImtRule::new(ImtRule::PAPER_NODES);
         let loops = [&case.tri[..]];
-        let t = Tolerance {
-            relative: 2e-14,
-            ..Tolerance::default()
-        };
+        let t = Tolerance { relative: 2e-14, ..Tolerance::default() };
         // Errors are measured relative to ∫ |G| (the integral itself may cancel to near zero).
         let scale = reference::integral_of(&case.tri, |q| case.obs.kernel(q).abs(), t);
         let want = reference::integral(&case.obs, &case.tri, |_| 1.0, t);
         let constant = [
             ("edge form", constant_weight(&case.obs, loops)),
             ("Lambert", lambert::constant_weight(&case.obs, loops)),
-            (
-                "paper (4.5)+(4.11)",
-                paper_closed_form::constant_weight(&case.obs, &case.tri),
-            ),
+            ("paper (4.5)+(4.11)", paper_closed_form::constant_weight(&case.obs, &case.tri)),
         ];
         for (name, got) in constant {
             let err = (got - want).abs() / scale;
-            let tol = if name.starts_with("paper") {
-                paper_tol
-            } else {
-                tol
-            };
-            assert!(
-                err < tol,
-                "{label}: {name}: got {got:e}, want {want:e}, rel err {err:e}"
-            );
+            let tol = if name.starts_with("paper") { paper_tol } else { tol };
+            assert!(err < tol, "{label}: {name}: got {got:e}, want {want:e}, rel err {err:e}");
         }
         let phi = basis(&case.tri);
         let got = affine_weights(&case.obs, loops, &phi, &imt);
@@ -179,13 +162,7 @@ mod tests {
                 rng.random_range(-2.0..2.0),
                 rng.random_range(0.05..2.0),
             );
-            let case = Case {
-                obs: Observer {
-                    position,
-                    normal: random_unit(&mut rng),
-                },
-                tri,
-            };
+            let case = Case { obs: Observer { position, normal: random_unit(&mut rng) }, tri };
             check(&case, 1e-11, 1e-11, &format!("random case {n}"));
         }
     }
@@ -194,24 +171,12 @@ mod tests {
     fn closed_forms_match_adaptive_quadrature_near_a_shared_edge() {
         // A node on a perpendicular neighbouring face, a distance δ from the element's edge on the
         // line Y = 0 (paper Fig. 4.1 in miniature), and just beyond the edge's ends.
-        let tri = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(1.0, 0.0),
-            DVec2::new(0.2, 0.9),
-        ];
+        let tri = [DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(0.2, 0.9)];
         for delta in [1e-2, 1e-4, 1e-6] {
             for x in [0.3, 0.0, 1.0 + 1e-3, -0.5] {
-                let obs = Observer {
-                    position: DVec3::new(x, 0.0, delta),
-                    normal: DVec3::Y,
-                };
+                let obs = Observer { position: DVec3::new(x, 0.0, delta), normal: DVec3::Y };
                 let paper_tol = 1e-11f64.max(1e-16 / delta);
-                check(
-                    &Case { obs, tri },
-                    1e-11,
-                    paper_tol,
-                    &format!("δ = {delta:e}, x = {x}"),
-                );
+                check(&Case { obs, tri }, 1e-11, paper_tol, &format!("δ = {delta:e}, x = {x}"));
             }
         }
     }
@@ -220,36 +185,20 @@ mod tests {
     fn closed_forms_match_the_paper_figure_4_1_configuration() {
         // Paper Fig. 4.1: P = (4.7917, 5.0, 0.0208) on S5 (normal -y), the element of S1 with vertices
         // (4.375, 5), (5, 4.375), (5, 5); max G ≈ 750.
-        let tri = [
-            DVec2::new(4.375, 5.0),
-            DVec2::new(5.0, 4.375),
-            DVec2::new(5.0, 5.0),
-        ];
-        let obs = Observer {
-            position: DVec3::new(4.7917, 5.0, 0.0208),
-            normal: -DVec3::Y,
-        };
+        let tri = [DVec2::new(4.375, 5.0), DVec2::new(5.0, 4.375), DVec2::new(5.0, 5.0)];
+        let obs = Observer { position: DVec3::new(4.7917, 5.0, 0.0208), normal: -DVec3::Y };
         check(&Case { obs, tri }, 1e-11, 1e-11, "Fig. 4.1");
     }
 
     #[test]
     fn projection_inside_the_element_and_very_close_to_its_plane() {
-        let tri = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(1.0, 0.0),
-            DVec2::new(0.0, 1.0),
-        ];
+        let tri = [DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(0.0, 1.0)];
         for z in [1e-1, 1e-3] {
             let obs = Observer {
                 position: DVec3::new(0.25, 0.3, z),
                 normal: DVec3::new(0.3, -0.2, -1.0).normalize(),
             };
-            check(
-                &Case { obs, tri },
-                1e-11,
-                1e-11,
-                &format!("inside, z = {z}"),
-            );
+            check(&Case { obs, tri }, 1e-11, 1e-11, &format!("inside, z = {z}"));
         }
     }
 
@@ -257,25 +206,15 @@ mod tests {
     fn quadratic_weights_match_adaptive_quadrature() {
         let mut rng = StdRng::seed_from_u64(33);
         let imt = ImtRule::new(ImtRule::PAPER_NODES);
-        let t = Tolerance {
-            relative: 2e-14,
-            ..Tolerance::default()
-        };
+        let t = Tolerance { relative: 2e-14, ..Tolerance::default() };
         for n in 0..20 {
             let tri = random_triangle(&mut rng);
             let position = DVec3::new(
                 rng.random_range(-1.5..1.5),
                 rng.random_range(-1.5..1.5),
-                if n < 4 {
-                    1e-3
-                } else {
-                    rng.random_range(0.05..1.5)
-                },
+                if n < 4 { 1e-3 } else { rng.random_range(0.05..1.5) },
             );
-            let obs = Observer {
-                position,
-                normal: random_unit(&mut rng),
-            };
+            let obs = Observer { position, normal: random_unit(&mut rng) };
             let mut u = Quadratic2::default();
             for a in 0..3 {
                 for b in 0..3 - a {
@@ -286,27 +225,17 @@ mod tests {
             let want = reference::integral(&obs, &tri, |q| u.eval(q), t);
             let scale = reference::integral_of(&tri, |q| (obs.kernel(q) * u.eval(q)).abs(), t);
             let err = (got - want).abs() / scale;
-            assert!(
-                err < 1e-11,
-                "case {n}: got {got:e}, want {want:e}, rel err {err:e}"
-            );
+            assert!(err < 1e-11, "case {n}: got {got:e}, want {want:e}, rel err {err:e}");
         }
     }
 
     #[test]
     fn third_order_moments_match_direct_quadrature() {
-        let tri = [
-            DVec2::new(-0.3, -0.2),
-            DVec2::new(0.9, 0.1),
-            DVec2::new(0.2, 0.8),
-        ];
+        let tri = [DVec2::new(-0.3, -0.2), DVec2::new(0.9, 0.1), DVec2::new(0.2, 0.8)];
         let imt = ImtRule::new(ImtRule::PAPER_NODES);
         let z = 0.4;
         let m = ThirdOrderMoments::new([&tri[..]], DVec2::ZERO, z, &imt);
-        let t = Tolerance {
-            relative: 1e-14,
-            ..Tolerance::default()
-        };
+        let t = Tolerance { relative: 1e-14, ..Tolerance::default() };
         let direct = |a: i32, b: i32| {
             z * reference::integral_of(
                 &tri,
@@ -319,11 +248,7 @@ mod tests {
         };
         for (a, b) in [(3, 0), (2, 1), (1, 2), (0, 3), (2, 0), (1, 1), (0, 2)] {
             let want = direct(a as i32, b as i32);
-            assert!(
-                (m.zm[a][b] - want).abs() < 1e-13,
-                "zM_{a}{b}: {} vs {want}",
-                m.zm[a][b]
-            );
+            assert!((m.zm[a][b] - want).abs() < 1e-13, "zM_{a}{b}: {} vs {want}", m.zm[a][b]);
         }
     }
 
@@ -336,10 +261,7 @@ mod tests {
             DVec2::new(1.0, 1.0),
             DVec2::new(0.0, 1.0),
         ];
-        let obs = Observer {
-            position: DVec3::new(0.0, 0.0, 1.0),
-            normal: -DVec3::Z,
-        };
+        let obs = Observer { position: DVec3::new(0.0, 0.0, 1.0), normal: -DVec3::Z };
         let want = 0.138_531_605_994_892_98;
         let edge = constant_weight(&obs, [&square[..]]) / std::f64::consts::PI;
         let lam = lambert::constant_weight(&obs, [&square[..]]) / std::f64::consts::PI;
@@ -356,21 +278,12 @@ mod tests {
             ((3.0, 0.5, 2.0), 0.006_842_703_753_210_53),
         ] {
             // Rectangle frame: normal -y (towards the element), e1 = +x, e2 = normal × e1 = +z.
-            let rect = [
-                DVec2::new(0.0, 0.0),
-                DVec2::new(w, 0.0),
-                DVec2::new(w, h),
-                DVec2::new(0.0, h),
-            ];
-            let obs = Observer {
-                position: DVec3::new(0.0, 0.0, d),
-                normal: DVec3::new(0.0, 1.0, 0.0),
-            };
+            let rect =
+                [DVec2::new(0.0, 0.0), DVec2::new(w, 0.0), DVec2::new(w, h), DVec2::new(0.0, h)];
+            let obs =
+                Observer { position: DVec3::new(0.0, 0.0, d), normal: DVec3::new(0.0, 1.0, 0.0) };
             let got = constant_weight(&obs, [&rect[..]]) / std::f64::consts::PI;
-            assert!(
-                (got - want).abs() < 1e-14,
-                "B-4 ({w}, {h}, {d}): {got} vs {want}"
-            );
+            assert!((got - want).abs() < 1e-14, "B-4 ({w}, {h}, {d}): {got} vs {want}");
         }
     }
 }

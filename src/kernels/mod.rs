@@ -13,11 +13,13 @@
 //!
 //! - [`exact`]: the production kernel: closed forms in edge form for the constant weight, closed
 //!   forms plus one IMT quadrature per edge for affine weights (eqs. 4.5–4.9, 4.13).
+//! - [`far_field`]: a collapsed Gauss rule for elements far from the node (linear method).
 //! - [`lambert`]: Lambert's contour formula, an independent closed form for the constant weight.
 //! - [`paper_closed_form`]: the paper's own formulas over right triangles σ_ab, (4.5), (4.10), (4.11).
 //! - [`reference`]: adaptive quadrature of G φ itself, for tests.
 
 pub mod exact;
+pub mod far_field;
 pub mod lambert;
 mod moments;
 pub mod paper_closed_form;
@@ -59,11 +61,7 @@ pub struct Affine2 {
 
 impl Affine2 {
     /// The constant function 1 (the centroid method's basis function).
-    pub const ONE: Self = Self {
-        c0: 1.0,
-        cx: 0.0,
-        cy: 0.0,
-    };
+    pub const ONE: Self = Self { c0: 1.0, cx: 0.0, cy: 0.0 };
 
     /// Value at `q`.
     pub fn eval(&self, q: DVec2) -> f64 {

@@ -65,13 +65,14 @@ pub(crate) struct EdgeTerms {
     pub s2: f64,
     /// `∫ dt / (S² + t²)` over the edge.
     pub a: f64,
-    /// `∫ t dt / (S² + t²)` over the edge.
+    /// `∫ t dt / (S² + t²)` over the edge (zero unless asked for: the constant weight needs no log).
     pub b: f64,
 }
 
 impl EdgeTerms {
-    /// Terms of the edge from `p` to `q` (coordinates relative to O), or `None` for a zero-length edge.
-    pub fn new(p: DVec2, q: DVec2, z2: f64) -> Option<Self> {
+    /// Terms of the edge from `p` to `q` (coordinates relative to O), or `None` for a zero-length
+    /// edge; `b` only when `with_log`.
+    pub fn new(p: DVec2, q: DVec2, z2: f64, with_log: bool) -> Option<Self> {
         let d = q - p;
         let len = d.length();
         if len == 0.0 {
@@ -85,17 +86,8 @@ impl EdgeTerms {
         let s = s2.sqrt();
         // atan(tb/S) - atan(ta/S) as a single atan2: exact quadrant, no cancellation.
         let a = (s * len).atan2(s2 + ta * tb) / s;
-        let b = half_log_ratio(s2, ta, tb, len);
-        Some(Self {
-            h,
-            nu,
-            e,
-            ta,
-            tb,
-            s2,
-            a,
-            b,
-        })
+        let b = if with_log { half_log_ratio(s2, ta, tb, len) } else { 0.0 };
+        Some(Self { h, nu, e, ta, tb, s2, a, b })
     }
 
     /// `∫ X / D dt` and `∫ Y / D dt` along the edge (X = h ν_X + t e_X on the edge).
@@ -130,11 +122,7 @@ pub(crate) fn log_integral(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
     let integral = imt.integrate(wa, wb, |w| {
         let t = s * w.sinh();
         let q = (h2 + t * t) / z2;
-        let ratio = if q < 1e-8 {
-            1.0 - q * (0.5 - q / 3.0)
-        } else {
-            q.ln_1p() / q
-        };
+        let ratio = if q < 1e-8 { 1.0 - q * (0.5 - q / 3.0) } else { q.ln_1p() / q };
         ratio * (edge.s2 + t * t).sqrt()
     });
     0.5 * edge.h * integral / z
@@ -142,27 +130,31 @@ pub(crate) fn log_integral(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
 
 impl Moments {
     /// Moments of the region bounded by `loops` seen from `P = (o, z)`, `z > 0` (`o` in the same
-    /// in-plane coordinates as the loops). `N_00` is computed only when `imt` is given.
+    /// in-plane coordinates as the loops). Only `m00`, `m10`, `m01` unless `second_order`; `N_00`
+    /// only when `imt` is given.
     pub fn new<'a>(
         loops: impl IntoIterator<Item = &'a [DVec2]>,
         o: DVec2,
         z: f64,
+        second_order: bool,
         imt: Option<&ImtRule>,
     ) -> Self {
         let z2 = z * z;
-        let mut m = Moments {
-            zn00: imt.map(|_| 0.0),
-            ..Default::default()
-        };
+        let mut m = Moments { zn00: imt.map(|_| 0.0), ..Default::default() };
         for poly in loops {
             let n = poly.len();
             for k in 0..n {
-                let Some(edge) = EdgeTerms::new(poly[k] - o, poly[(k + 1) % n] - o, z2) else {
+                let Some(edge) =
+                    EdgeTerms::new(poly[k] - o, poly[(k + 1) % n] - o, z2, second_order)
+                else {
                     continue;
                 };
                 m.m00 += 0.5 * edge.h * edge.a;
                 m.m10 -= 0.5 * z * edge.nu.x * edge.a;
                 m.m01 -= 0.5 * z * edge.nu.y * edge.a;
+                if !second_order {
+                    continue;
+                }
                 let xy = edge.first_boundary();
                 m.bxx += z * edge.nu.x * xy.x;
                 m.bxy += z * edge.nu.y * xy.x;
@@ -212,7 +204,7 @@ impl ThirdOrderMoments {
             let n = poly.len();
             for k in 0..n {
                 let (p, q) = (poly[k] - o, poly[(k + 1) % n] - o);
-                let Some(edge) = EdgeTerms::new(p, q, z2) else {
+                let Some(edge) = EdgeTerms::new(p, q, z2, true) else {
                     continue;
                 };
                 let len = (q - p).length();
@@ -256,10 +248,6 @@ impl ThirdOrderMoments {
 
     /// `z² M_ab` for `a + b <= 2`.
     pub fn z2m(&self, a: usize, b: usize) -> f64 {
-        if a == 0 && b == 0 {
-            self.m00
-        } else {
-            self.z * self.zm[a][b]
-        }
+        if a == 0 && b == 0 { self.m00 } else { self.z * self.zm[a][b] }
     }
 }

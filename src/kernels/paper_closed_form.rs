@@ -15,10 +15,7 @@ use super::Observer;
 
 /// `∫_T G(P, Q) dS_Q` for a counter-clockwise triangle T, by the paper's formulas.
 pub fn constant_weight(obs: &Observer, tri: &[DVec2; 3]) -> f64 {
-    right_triangles(tri)
-        .iter()
-        .map(|rt| right_triangle(obs, rt))
-        .sum()
+    right_triangles(tri).iter().map(|rt| right_triangle(obs, rt)).sum()
 }
 
 /// Two counter-clockwise right triangles `(v1, v2, v3)`, right angle at v1, that tile `tri`: the

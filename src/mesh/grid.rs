@@ -28,11 +28,7 @@ pub fn paper_discontinuity_cuts(scene: &Scene, p: &SurfaceParameters) -> Result<
         name: "S1".into(),
         expected: "the paper's surfaces (four-piece, five-piece)".into(),
     })?;
-    let mut cuts = vec![GridCuts {
-        face: s1,
-        u: lines.to_vec(),
-        v: lines.to_vec(),
-    }];
+    let mut cuts = vec![GridCuts { face: s1, u: lines.to_vec(), v: lines.to_vec() }];
     if let Some(s5) = scene.face_index("S5") {
         // S5 runs from x = A (v = 0) to x = 0 (v = 1).
         cuts.push(GridCuts {
@@ -62,10 +58,7 @@ pub(crate) fn cut_quadrilateral(face: &Face, cuts: &GridCuts) -> Result<Vec<[DVe
         let mut b = vec![0.0];
         for &t in c {
             if !(t > *b.last().expect("non-empty") && t < 1.0) {
-                return Err(bad(
-                    &format!("cut {t}"),
-                    "cuts must increase strictly inside (0, 1)",
-                ));
+                return Err(bad(&format!("cut {t}"), "cuts must increase strictly inside (0, 1)"));
             }
             b.push(t);
         }
@@ -114,11 +107,7 @@ mod tests {
         let scene = five_piece(p).unwrap();
         let cuts = paper_discontinuity_cuts(&scene, &p).unwrap();
         let mesh = Mesh::new(&scene, &MeshKind::Discontinuity(cuts), 2).unwrap();
-        for e in mesh
-            .elements()
-            .iter()
-            .filter(|e| e.face == 0 || e.face == 4)
-        {
+        for e in mesh.elements().iter().filter(|e| e.face == 0 || e.face == 4) {
             for line in [3.0, 4.0] {
                 let xs = e.vertices.map(|v| v.x - line);
                 assert!(!(xs.iter().any(|&d| d < -1e-12) && xs.iter().any(|&d| d > 1e-12)));

@@ -88,11 +88,7 @@ impl Mesh {
                 Some(c) => grid::cut_quadrilateral(face, c)?,
                 None => initial_triangles(face)?,
             };
-            per_face.push(
-                tris.into_iter()
-                    .map(|vertices| Element { face: k, vertices })
-                    .collect(),
-            );
+            per_face.push(tris.into_iter().map(|vertices| Element { face: k, vertices }).collect());
         }
         for _ in 0..refine {
             for tris in &mut per_face {
@@ -106,10 +102,7 @@ impl Mesh {
             elements.extend(tris);
             face_ranges.push(start..elements.len());
         }
-        Ok(Self {
-            elements,
-            face_ranges,
-        })
+        Ok(Self { elements, face_ranges })
     }
 
     /// All elements, face by face.
@@ -139,10 +132,7 @@ impl Mesh {
 
     /// Largest element diameter h.
     pub fn mesh_size(&self) -> f64 {
-        self.elements
-            .iter()
-            .map(Element::diameter)
-            .fold(0.0, f64::max)
+        self.elements.iter().map(Element::diameter).fold(0.0, f64::max)
     }
 }
 
@@ -165,10 +155,7 @@ fn initial_triangles(face: &crate::scene::Face) -> Result<Vec<[DVec3; 3]>> {
         area: face.area(),
         size: face.size(),
     })?;
-    Ok(tris
-        .into_iter()
-        .map(|[a, b, c]| [v[a], v[b], v[c]])
-        .collect())
+    Ok(tris.into_iter().map(|[a, b, c]| [v[a], v[b], v[c]]).collect())
 }
 
 #[cfg(test)]
@@ -181,15 +168,11 @@ mod tests {
         let p = SurfaceParameters::default();
         for (refine, n4, n5) in [(0, 8, 10), (1, 32, 40), (2, 128, 160), (4, 2048, 2560)] {
             assert_eq!(
-                Mesh::new(&four_piece(p).unwrap(), &MeshKind::Uniform, refine)
-                    .unwrap()
-                    .len(),
+                Mesh::new(&four_piece(p).unwrap(), &MeshKind::Uniform, refine).unwrap().len(),
                 n4
             );
             assert_eq!(
-                Mesh::new(&five_piece(p).unwrap(), &MeshKind::Uniform, refine)
-                    .unwrap()
-                    .len(),
+                Mesh::new(&five_piece(p).unwrap(), &MeshKind::Uniform, refine).unwrap().len(),
                 n5
             );
         }
@@ -200,10 +183,7 @@ mod tests {
         let scene = five_piece(SurfaceParameters::default()).unwrap();
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 3).unwrap();
         for f in 0..scene.faces.len() {
-            let area: f64 = mesh.elements()[mesh.face_range(f)]
-                .iter()
-                .map(Element::area)
-                .sum();
+            let area: f64 = mesh.elements()[mesh.face_range(f)].iter().map(Element::area).sum();
             assert!((area - scene.faces[f].area()).abs() < 1e-12, "face {f}");
             for e in &mesh.elements()[mesh.face_range(f)] {
                 let [a, b, c] = e.vertices;

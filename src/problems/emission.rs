@@ -29,10 +29,7 @@ pub struct EmissionOptions {
 
 impl Default for EmissionOptions {
     fn default() -> Self {
-        Self {
-            imt_nodes: ImtRule::PAPER_NODES,
-            relative_tolerance: 1e-12,
-        }
+        Self { imt_nodes: ImtRule::PAPER_NODES, relative_tolerance: 1e-12 }
     }
 }
 
@@ -85,11 +82,7 @@ fn face_integral(
             let q = restrict(frame, a, *b, *c);
             exact::quadratic_weight(obs, pieces.iter().map(Vec::as_slice), &q, imt)
         }
-        FaceFunction::General {
-            f,
-            kinks,
-            magnitude,
-        } => {
+        FaceFunction::General { f, kinks, magnitude } => {
             let mut parts: Vec<Vec<DVec2>> = pieces.to_vec();
             for &(m, offset) in kinks {
                 let hp = HalfPlane {
@@ -177,11 +170,7 @@ mod tests {
             let e2 = emission_at_nodes(&scene, &disc, &planner, &general_u, &opts, &|_| {});
             for (i, (a, b)) in e1.iter().zip(&e2).enumerate() {
                 let scale = disc.nodes[i].position.truncate().length_squared().max(1.0);
-                assert!(
-                    (a - b).abs() < 1e-10 * scale,
-                    "{} node {i}: {a} vs {b}",
-                    scene.name
-                );
+                assert!((a - b).abs() < 1e-10 * scale, "{} node {i}: {a} vs {b}", scene.name);
             }
         }
     }
@@ -191,29 +180,16 @@ mod tests {
         let p = SurfaceParameters::default();
         let scene = five_piece(p).unwrap();
         let (disc, planner) = setup(&scene, 1);
-        for sol in [
-            TrueSolution::Shadow {
-                beta: 0.5,
-                gamma: 1.5,
-            },
-            TrueSolution::Edge { beta: 0.5 },
-        ] {
+        for sol in
+            [TrueSolution::Shadow { beta: 0.5, gamma: 1.5 }, TrueSolution::Edge { beta: 0.5 }]
+        {
             let u = sol.on_faces(&scene, &p).unwrap();
-            let loose = EmissionOptions {
-                relative_tolerance: 1e-10,
-                ..Default::default()
-            };
-            let tight = EmissionOptions {
-                relative_tolerance: 1e-13,
-                ..Default::default()
-            };
+            let loose = EmissionOptions { relative_tolerance: 1e-10, ..Default::default() };
+            let tight = EmissionOptions { relative_tolerance: 1e-13, ..Default::default() };
             let a = emission_at_nodes(&scene, &disc, &planner, &u, &loose, &|_| {});
             let b = emission_at_nodes(&scene, &disc, &planner, &u, &tight, &|_| {});
             for (i, (x, y)) in a.iter().zip(&b).enumerate() {
-                assert!(
-                    (x - y).abs() < 1e-10 * y.abs().max(1.0),
-                    "{sol}: node {i}: {x} vs {y}"
-                );
+                assert!((x - y).abs() < 1e-10 * y.abs().max(1.0), "{sol}: node {i}: {x} vs {y}");
             }
         }
     }
@@ -221,10 +197,7 @@ mod tests {
     #[test]
     fn solutions_3_3_and_3_4_need_the_paper_surfaces() {
         let e = TrueSolution::Edge { beta: 0.5 }
-            .on_faces(
-                &crate::scene::cube().unwrap(),
-                &SurfaceParameters::default(),
-            )
+            .on_faces(&crate::scene::cube().unwrap(), &SurfaceParameters::default())
             .unwrap_err();
         assert!(e.to_string().contains("cube"), "{e}");
         assert!(TrueSolution::parse("parabola", None, None).is_err());

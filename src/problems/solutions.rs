@@ -56,9 +56,7 @@ impl fmt::Debug for FaceFunction {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Quadratic { a, b, c } => write!(f, "Quadratic {{ a: {a:?}, b: {b}, c: {c} }}"),
-            Self::General {
-                kinks, magnitude, ..
-            } => {
+            Self::General { kinks, magnitude, .. } => {
                 write!(f, "General {{ kinks: {kinks:?}, magnitude: {magnitude} }}")
             }
         }
@@ -68,11 +66,7 @@ impl fmt::Debug for FaceFunction {
 impl FaceFunction {
     /// The constant function.
     pub fn constant(c: f64) -> Self {
-        Self::Quadratic {
-            a: [[0.0; 3]; 3],
-            b: DVec3::ZERO,
-            c,
-        }
+        Self::Quadratic { a: [[0.0; 3]; 3], b: DVec3::ZERO, c }
     }
 
     /// Value at a point of the face.
@@ -105,13 +99,8 @@ impl TrueSolution {
     pub fn parse(name: &str, beta: Option<f64>, gamma: Option<f64>) -> Result<Self> {
         let sol = match name {
             "x2y2" => Self::X2Y2,
-            "shadow" => Self::Shadow {
-                beta: beta.unwrap_or(1.0),
-                gamma: gamma.unwrap_or(1.5),
-            },
-            "edge" => Self::Edge {
-                beta: beta.unwrap_or(0.5),
-            },
+            "shadow" => Self::Shadow { beta: beta.unwrap_or(1.0), gamma: gamma.unwrap_or(1.5) },
+            "edge" => Self::Edge { beta: beta.unwrap_or(0.5) },
             _ => {
                 return Err(Error::UnknownName {
                     kind: "true solution",
@@ -126,11 +115,7 @@ impl TrueSolution {
 
     fn validate(&self) -> Result<()> {
         let bad = |name: &'static str, value: f64, reason: &str| {
-            Err(Error::InvalidParameter {
-                name,
-                value: value.to_string(),
-                reason: reason.into(),
-            })
+            Err(Error::InvalidParameter { name, value: value.to_string(), reason: reason.into() })
         };
         match *self {
             Self::X2Y2 => Ok(()),
@@ -159,18 +144,12 @@ impl TrueSolution {
             return Ok(scene
                 .faces
                 .iter()
-                .map(|_| FaceFunction::Quadratic {
-                    a,
-                    b: DVec3::ZERO,
-                    c: 0.0,
-                })
+                .map(|_| FaceFunction::Quadratic { a, b: DVec3::ZERO, c: 0.0 })
                 .collect());
         }
-        let paper = scene
-            .faces
-            .iter()
-            .all(|f| matches!(f.name.as_str(), "S1" | "S2" | "S3" | "S4" | "S5"))
-            && scene.face_index("S1").is_some();
+        let paper =
+            scene.faces.iter().all(|f| matches!(f.name.as_str(), "S1" | "S2" | "S3" | "S4" | "S5"))
+                && scene.face_index("S1").is_some();
         if !paper {
             return Err(Error::SolutionNeedsPaperSurface {
                 solution: self.name().into(),

@@ -52,11 +52,7 @@ pub struct Tolerance {
 impl Default for Tolerance {
     /// Near full double precision: relative 1e-14, absolute 1e-300, at most 2000 subintervals.
     fn default() -> Self {
-        Self {
-            absolute: 1e-300,
-            relative: 1e-14,
-            max_intervals: 2000,
-        }
+        Self { absolute: 1e-300, relative: 1e-14, max_intervals: 2000 }
     }
 }
 
@@ -98,12 +94,7 @@ fn gauss_kronrod_15(f: &mut impl FnMut(f64) -> f64, a: f64, b: f64) -> Interval 
             gauss += WG[j / 2] * pair;
         }
     }
-    Interval {
-        a,
-        b,
-        value: kronrod * half,
-        error: ((kronrod - gauss) * half).abs(),
-    }
+    Interval { a, b, value: kronrod * half, error: ((kronrod - gauss) * half).abs() }
 }
 
 /// Adaptive integral of `f` over `[a, b]`; returns `(value, estimated error)`.
@@ -151,10 +142,7 @@ pub fn integrate_triangle(f: impl Fn(DVec2) -> f64, tri: [DVec2; 3], tol: Tolera
         ..tol
     };
     let outer = |s: f64| integrate_adaptive(|t| f(v0 + d1 * s + d2 * t), 0.0, 1.0 - s, inner_tol).0;
-    let outer_tol = Tolerance {
-        absolute: tol.absolute / jacobian.max(f64::MIN_POSITIVE),
-        ..tol
-    };
+    let outer_tol = Tolerance { absolute: tol.absolute / jacobian.max(f64::MIN_POSITIVE), ..tol };
     jacobian * integrate_adaptive(outer, 0.0, 1.0, outer_tol).0
 }
 
@@ -180,12 +168,8 @@ mod tests {
         let (v, _) = integrate_adaptive(|x| x.sqrt(), 0.0, 1.0, Tolerance::default());
         assert!((v - 2.0 / 3.0).abs() < 1e-14, "{v}");
         let eps: f64 = 1e-6;
-        let (v, _) = integrate_adaptive(
-            |x| eps / (x * x + eps * eps),
-            -1.0,
-            2.0,
-            Tolerance::default(),
-        );
+        let (v, _) =
+            integrate_adaptive(|x| eps / (x * x + eps * eps), -1.0, 2.0, Tolerance::default());
         let want = (2.0 / eps).atan() + (1.0 / eps).atan();
         assert!((v - want).abs() < 1e-13 * want, "{v} vs {want}");
     }

@@ -90,10 +90,7 @@ mod tests {
             for deg in 0..(2 * n) {
                 let got = rule.integrate(0.0, 1.0, |x| x.powi(deg as i32));
                 let want = 1.0 / (deg as f64 + 1.0);
-                assert!(
-                    (got - want).abs() < 2e-15,
-                    "n={n} deg={deg}: {got} vs {want}"
-                );
+                assert!((got - want).abs() < 2e-15, "n={n} deg={deg}: {got} vs {want}");
             }
         }
     }

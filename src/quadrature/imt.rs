@@ -15,11 +15,7 @@ pub struct ImtRule {
 }
 
 fn imt_density(s: f64) -> f64 {
-    if s <= 0.0 || s >= 1.0 {
-        0.0
-    } else {
-        (-1.0 / s - 1.0 / (1.0 - s)).exp()
-    }
+    if s <= 0.0 || s >= 1.0 { 0.0 } else { (-1.0 / s - 1.0 / (1.0 - s)).exp() }
 }
 
 impl ImtRule {
@@ -41,11 +37,7 @@ impl ImtRule {
             let a = k as f64 * h;
             let term = gl.integrate(a, a + h, imt_density);
             let t = sum + term;
-            carry += if sum.abs() >= term.abs() {
-                (sum - t) + term
-            } else {
-                (term - t) + sum
-            };
+            carry += if sum.abs() >= term.abs() { (sum - t) + term } else { (term - t) + sum };
             sum = t;
             cumulative[k + 1] = sum + carry;
         }
@@ -54,11 +46,7 @@ impl ImtRule {
         let mut weights = Vec::with_capacity(n - 1);
         for (k, &c) in cumulative.iter().enumerate().take(n).skip(1) {
             // Use the symmetry φ(1-τ) = 1 - φ(τ) so both halves are equally accurate.
-            let x = if 2 * k <= n {
-                c / q
-            } else {
-                1.0 - cumulative[n - k] / q
-            };
+            let x = if 2 * k <= n { c / q } else { 1.0 - cumulative[n - k] / q };
             nodes.push(x);
             weights.push(imt_density(k as f64 * h) / q * h);
         }
@@ -83,12 +71,7 @@ impl ImtRule {
     /// Integral of `f` over `[a, b]`.
     pub fn integrate(&self, a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
         let len = b - a;
-        len * self
-            .nodes
-            .iter()
-            .zip(&self.weights)
-            .map(|(&x, &w)| w * f(a + len * x))
-            .sum::<f64>()
+        len * self.nodes.iter().zip(&self.weights).map(|(&x, &w)| w * f(a + len * x)).sum::<f64>()
     }
 }
 

@@ -22,8 +22,7 @@ pub fn write_json<T: Serialize>(value: &T, target: &str) -> Result<()> {
 }
 
 fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map(|x| format!("{x:.digits$}"))
-        .unwrap_or_else(|| "-".into())
+    v.map(|x| format!("{x:.digits$}")).unwrap_or_else(|| "-".into())
 }
 
 fn sci(v: f64) -> String {
@@ -72,4 +71,16 @@ pub fn study_table(study: &StudyResult) -> String {
         );
     }
     s
+}
+
+/// Writes K as a NumPy .npy file (float64, C order, dof × dof).
+pub fn write_npy(path: &str, matrix: &crate::assembly::CollocationMatrix) -> Result<()> {
+    use npyz::WriterBuilder;
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let n = matrix.dof() as u64;
+    let mut writer =
+        npyz::WriteOptions::<f64>::new().default_dtype().shape(&[n, n]).writer(file).begin_nd()?;
+    writer.extend(matrix.as_slice().iter().copied())?;
+    writer.finish()?;
+    Ok(())
 }

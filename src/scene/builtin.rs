@@ -23,11 +23,7 @@ pub struct SurfaceParameters {
 impl Default for SurfaceParameters {
     /// The paper's (A, B, C) = (5, 2, 1).
     fn default() -> Self {
-        Self {
-            a: 5.0,
-            b: 2.0,
-            c: 1.0,
-        }
+        Self { a: 5.0, b: 2.0, c: 1.0 }
     }
 }
 
@@ -58,12 +54,7 @@ pub enum BuiltinScene {
 
 impl BuiltinScene {
     /// All built-in scenes.
-    pub const ALL: [Self; 4] = [
-        Self::FourPiece,
-        Self::FivePiece,
-        Self::Cube,
-        Self::BaffledBox,
-    ];
+    pub const ALL: [Self; 4] = [Self::FourPiece, Self::FivePiece, Self::Cube, Self::BaffledBox];
 
     /// Command-line name.
     pub fn name(&self) -> &'static str {
@@ -100,24 +91,17 @@ impl fmt::Display for BuiltinScene {
 impl FromStr for BuiltinScene {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|b| b.name() == s)
-            .ok_or_else(|| Error::UnknownName {
-                kind: "scene",
-                name: s.to_string(),
-                expected: Self::ALL.map(|b| b.name()).join(", "),
-            })
+        Self::ALL.into_iter().find(|b| b.name() == s).ok_or_else(|| Error::UnknownName {
+            kind: "scene",
+            name: s.to_string(),
+            expected: Self::ALL.map(|b| b.name()).join(", "),
+        })
     }
 }
 
 /// The parallelogram `origin, origin + u, origin + u + v, origin + v`; its normal is along u × v.
 fn parallelogram(name: &str, origin: DVec3, u: DVec3, v: DVec3, rho: f64) -> Result<Face> {
-    Face::new(
-        name,
-        vec![origin, origin + u, origin + u + v, origin + v],
-        rho,
-    )
+    Face::new(name, vec![origin, origin + u, origin + u + v, origin + v], rho)
 }
 
 fn paper_faces(p: SurfaceParameters) -> Result<Vec<Face>> {
@@ -126,27 +110,9 @@ fn paper_faces(p: SurfaceParameters) -> Result<Vec<Face>> {
     // rho = 1 on every face (paper sec. 3.2). Vertex 0 of each square is its (0, 0) corner, so the
     // default diagonal runs from (0, 0) to the opposite corner, as in sec. 3.1.
     Ok(vec![
-        parallelogram(
-            "S1",
-            DVec3::ZERO,
-            DVec3::new(a, 0.0, 0.0),
-            DVec3::new(0.0, a, 0.0),
-            1.0,
-        )?,
-        parallelogram(
-            "S2",
-            DVec3::Z,
-            DVec3::new(0.0, b, 0.0),
-            DVec3::new(b, 0.0, 0.0),
-            1.0,
-        )?,
-        parallelogram(
-            "S3",
-            DVec3::Z,
-            DVec3::new(b, 0.0, 0.0),
-            DVec3::new(0.0, b, 0.0),
-            1.0,
-        )?,
+        parallelogram("S1", DVec3::ZERO, DVec3::new(a, 0.0, 0.0), DVec3::new(0.0, a, 0.0), 1.0)?,
+        parallelogram("S2", DVec3::Z, DVec3::new(0.0, b, 0.0), DVec3::new(b, 0.0, 0.0), 1.0)?,
+        parallelogram("S3", DVec3::Z, DVec3::new(b, 0.0, 0.0), DVec3::new(0.0, b, 0.0), 1.0)?,
         parallelogram(
             "S4",
             DVec3::new(0.0, 0.0, 2.0),
@@ -182,11 +148,8 @@ pub fn five_piece(p: SurfaceParameters) -> Result<Scene> {
 /// The six inward-facing faces of the box [lo, hi].
 fn box_faces(lo: DVec3, hi: DVec3, rho: f64) -> Result<Vec<Face>> {
     let d = hi - lo;
-    let (x, y, z) = (
-        DVec3::new(d.x, 0.0, 0.0),
-        DVec3::new(0.0, d.y, 0.0),
-        DVec3::new(0.0, 0.0, d.z),
-    );
+    let (x, y, z) =
+        (DVec3::new(d.x, 0.0, 0.0), DVec3::new(0.0, d.y, 0.0), DVec3::new(0.0, 0.0, d.z));
     Ok(vec![
         parallelogram("bottom", lo, x, y, rho)?,
         parallelogram("top", lo + z, y, x, rho)?,
@@ -235,12 +198,8 @@ mod tests {
 
     #[test]
     fn parameters_violating_3_1_are_rejected() {
-        for (a, b, c) in [
-            (5.0, 2.0, 2.0),
-            (4.0, 2.0, 1.0),
-            (5.0, 2.0, -1.0),
-            (f64::NAN, 2.0, 1.0),
-        ] {
+        for (a, b, c) in [(5.0, 2.0, 2.0), (4.0, 2.0, 1.0), (5.0, 2.0, -1.0), (f64::NAN, 2.0, 1.0)]
+        {
             let e = four_piece(SurfaceParameters { a, b, c }).unwrap_err();
             assert!(matches!(e, Error::InvalidSurfaceParameters { .. }), "{e}");
         }
@@ -254,10 +213,7 @@ mod tests {
                 assert!(f.frame.height(centre) > 0.0, "{} faces outwards", f.name);
             }
         }
-        assert_eq!(
-            "baffled-box".parse::<BuiltinScene>().unwrap(),
-            BuiltinScene::BaffledBox
-        );
+        assert_eq!("baffled-box".parse::<BuiltinScene>().unwrap(), BuiltinScene::BaffledBox);
         let e = "sphere".parse::<BuiltinScene>().unwrap_err().to_string();
         assert!(e.contains("'sphere'") && e.contains("four-piece"), "{e}");
     }

@@ -43,19 +43,10 @@ impl Face {
     pub fn new(name: impl Into<String>, vertices: Vec<DVec3>, rho: f64) -> Result<Self> {
         let name = name.into();
         if vertices.len() < 3 {
-            return Err(Error::TooFewVertices {
-                face: name,
-                count: vertices.len(),
-            });
+            return Err(Error::TooFewVertices { face: name, count: vertices.len() });
         }
         if let Some((k, v)) = vertices.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFiniteVertex {
-                face: name,
-                vertex: k,
-                x: v.x,
-                y: v.y,
-                z: v.z,
-            });
+            return Err(Error::NonFiniteVertex { face: name, vertex: k, x: v.x, y: v.y, z: v.z });
         }
         if !(0.0..=1.0).contains(&rho) {
             return Err(Error::ReflectivityOutOfRange { face: name, rho });
@@ -64,47 +55,27 @@ impl Face {
         // Newell's method: twice the vector area, robust for non-convex polygons.
         let centre = vertices.iter().sum::<DVec3>() / vertices.len() as f64;
         let n = vertices.len();
-        let twice_area: DVec3 = (0..n)
-            .map(|k| (vertices[k] - centre).cross(vertices[(k + 1) % n] - centre))
-            .sum();
+        let twice_area: DVec3 =
+            (0..n).map(|k| (vertices[k] - centre).cross(vertices[(k + 1) % n] - centre)).sum();
         let area = 0.5 * twice_area.length();
         if area.is_nan() || area <= 1e-12 * size * size {
-            return Err(Error::DegenerateFace {
-                face: name,
-                area,
-                size,
-            });
+            return Err(Error::DegenerateFace { face: name, area, size });
         }
         let normal = twice_area / (2.0 * area);
         let tolerance = PLANARITY * size;
         for (k, &v) in vertices.iter().enumerate() {
             let distance = (v - centre).dot(normal).abs();
             if distance > tolerance {
-                return Err(Error::NonPlanarFace {
-                    face: name,
-                    vertex: k,
-                    distance,
-                    tolerance,
-                });
+                return Err(Error::NonPlanarFace { face: name, vertex: k, distance, tolerance });
             }
         }
         let first_edge = (1..n)
             .map(|k| vertices[k] - vertices[0])
             .find(|d| d.length() > 1e-12 * size)
-            .ok_or(Error::DegenerateFace {
-                face: name.clone(),
-                area,
-                size,
-            })?;
+            .ok_or(Error::DegenerateFace { face: name.clone(), area, size })?;
         let frame = PlaneFrame::new(vertices[0], normal, first_edge);
-        let face = Self {
-            name,
-            vertices,
-            frame,
-            rho,
-            emission: 0.0,
-            diagonal: Diagonal::default(),
-        };
+        let face =
+            Self { name, vertices, frame, rho, emission: 0.0, diagonal: Diagonal::default() };
         face.check_simple()?;
         Ok(face)
     }
@@ -112,10 +83,7 @@ impl Face {
     /// Sets the emissivity (finite, non-negative).
     pub fn with_emission(mut self, emission: f64) -> Result<Self> {
         if !(emission.is_finite() && emission >= 0.0) {
-            return Err(Error::InvalidEmission {
-                face: self.name,
-                value: emission,
-            });
+            return Err(Error::InvalidEmission { face: self.name, value: emission });
         }
         self.emission = emission;
         Ok(self)
@@ -146,10 +114,7 @@ impl Face {
 
     /// Vertices in the face frame's 2-D coordinates (counter-clockwise).
     pub fn local_polygon(&self) -> Vec<DVec2> {
-        self.vertices
-            .iter()
-            .map(|&v| self.frame.to_plane(v))
-            .collect()
+        self.vertices.iter().map(|&v| self.frame.to_plane(v)).collect()
     }
 
     /// Area.
@@ -249,10 +214,7 @@ mod tests {
         assert!(e.contains("not planar"), "{e}");
 
         let v = vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0)];
-        assert!(matches!(
-            Face::new("line", v, 0.5),
-            Err(Error::DegenerateFace { .. })
-        ));
+        assert!(matches!(Face::new("line", v, 0.5), Err(Error::DegenerateFace { .. })));
 
         let e = Face::new("rho", square(), 1.5).unwrap_err().to_string();
         assert!(e.contains("rho = 1.5"), "{e}");

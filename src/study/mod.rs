@@ -15,6 +15,8 @@ use crate::pipeline::{self, RunConfig};
 pub struct StudyOptions {
     /// Largest n to run (default: the paper's largest for the study).
     pub max_n: Option<usize>,
+    /// Where the matrices are assembled.
+    pub backend: crate::pipeline::Backend,
     /// Show progress on stderr.
     pub progress: bool,
 }
@@ -84,6 +86,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             config.method = spec.method;
             config.solution = Some(spec.solution);
             config.progress = options.progress;
+            config.backend = options.backend;
             let (_, mesh, _) = pipeline::build(&config)?;
             if mesh.len() > max_n {
                 break;
@@ -99,11 +102,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             }
             let report = pipeline::run(&config)?;
             let error = report.error.expect("a true solution is set");
-            let paper_error = column
-                .paper
-                .iter()
-                .find(|(n, _)| *n == report.n)
-                .map(|(_, e)| *e);
+            let paper_error = column.paper.iter().find(|(n, _)| *n == report.n).map(|(_, e)| *e);
             let ratio = previous.map(|(e, _)| e / error);
             let paper_ratio = match (previous, paper_error) {
                 (Some((_, Some(p))), Some(q)) => Some(p / q),
@@ -130,9 +129,5 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             previous = Some((error, paper_error));
         }
     }
-    Ok(StudyResult {
-        study: spec.id.into(),
-        title: spec.title.into(),
-        rows,
-    })
+    Ok(StudyResult { study: spec.id.into(), title: spec.title.into(), rows })
 }

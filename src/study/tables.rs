@@ -33,9 +33,7 @@ pub struct StudySpec {
     pub paper_max_n: usize,
 }
 
-const LINEAR: Method = Method::Linear {
-    alpha: Method::PAPER_ALPHA,
-};
+const LINEAR: Method = Method::Linear { alpha: Method::PAPER_ALPHA };
 
 impl StudySpec {
     /// All studies.
@@ -61,13 +59,7 @@ impl StudySpec {
                     TableColumn {
                         scene: BuiltinScene::FivePiece,
                         mesh: MeshChoice::Uniform,
-                        paper: &[
-                            (10, 6.58),
-                            (40, 3.28),
-                            (160, 1.86),
-                            (640, 0.991),
-                            (2560, 0.511),
-                        ],
+                        paper: &[(10, 6.58), (40, 3.28), (160, 1.86), (640, 0.991), (2560, 0.511)],
                     },
                 ],
                 paper_max_n: 2560,

@@ -100,12 +100,7 @@ impl PairPlanner {
             .iter()
             .map(|f| {
                 let polygon = f.local_polygon();
-                PlannerFace {
-                    frame: f.frame,
-                    hull: convex_hull(&polygon),
-                    polygon,
-                    size: f.size(),
-                }
+                PlannerFace { frame: f.frame, hull: convex_hull(&polygon), polygon, size: f.size() }
             })
             .collect();
         let occluders = occluders::convex_pieces(scene);
@@ -119,12 +114,7 @@ impl PairPlanner {
                 }
             }
         }
-        Self {
-            faces,
-            occluders,
-            candidates,
-            coplanar,
-        }
+        Self { faces, occluders, candidates, coplanar }
     }
 
     /// Whether any pair of faces can have an occluder between them.
@@ -222,11 +212,7 @@ impl PairPlanner {
                 return Visibility::Skip(SkipReason::Hidden);
             }
         }
-        if changed {
-            Visibility::Partial(pieces)
-        } else {
-            Visibility::Full
-        }
+        if changed { Visibility::Partial(pieces) } else { Visibility::Full }
     }
 
     /// The visible part of the whole face `face` under `view` (for the emissivity integrals):
@@ -314,11 +300,8 @@ fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
     let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
+        let iter: Box<dyn Iterator<Item = &DVec2>> =
+            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
         for &q in iter {
             while hull.len() >= start + 2
                 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0

@@ -31,9 +31,8 @@ pub(super) fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
         };
         for polygon in polygons {
             let tol = 1e-12 * face.size();
-            if let Some(same) = pieces
-                .iter_mut()
-                .find(|o| same_vertex_set(&o.polygon, &polygon, tol))
+            if let Some(same) =
+                pieces.iter_mut().find(|o| same_vertex_set(&o.polygon, &polygon, tol))
             {
                 same.faces.push(k);
                 continue;
@@ -42,21 +41,14 @@ pub(super) fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
                 (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
                 |(lo, hi), &p| (lo.min(p), hi.max(p)),
             );
-            pieces.push(Occluder {
-                faces: vec![k],
-                polygon,
-                lo,
-                hi,
-            });
+            pieces.push(Occluder { faces: vec![k], polygon, lo, hi });
         }
     }
     pieces
 }
 
 fn same_vertex_set(a: &[DVec3], b: &[DVec3], tol: f64) -> bool {
-    a.len() == b.len()
-        && a.iter()
-            .all(|p| b.iter().any(|q| (*p - *q).length() <= tol))
+    a.len() == b.len() && a.iter().all(|p| b.iter().any(|q| (*p - *q).length() <= tol))
 }
 
 /// Occluders that may block some segment from a point of face `a` to a point of face `b` (both in
@@ -71,10 +63,11 @@ pub(super) fn candidates_between(
     let (fa, fb) = (&scene.faces[a], &scene.faces[b]);
     let size = fa.size().max(fb.size());
     let tol = 1e-12 * size;
-    let (lo, hi) = fa.vertices.iter().chain(&fb.vertices).fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) =
+        fa.vertices.iter().chain(&fb.vertices).fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
     occluders
         .iter()
         .enumerate()

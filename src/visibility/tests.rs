@@ -80,11 +80,7 @@ fn visible_pieces_agree_with_ray_casting() {
                 rng.random_range(0.2..0.8),
                 rng.random_range(0.3..1.2),
             );
-            let tilt = DVec3::new(
-                rng.random_range(-0.5..0.5),
-                rng.random_range(-0.5..0.5),
-                1.0,
-            );
+            let tilt = DVec3::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5), 1.0);
             let convex = (case + k) % 2 == 0;
             let poly = random_polygon(&mut rng, centre, tilt.normalize(), convex);
             faces.push(Face::new(format!("occluder{k}"), poly, 0.5).unwrap());
@@ -95,11 +91,7 @@ fn visible_pieces_agree_with_ray_casting() {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
         let frame = scene.faces[0].frame;
         for _ in 0..4 {
-            let p = DVec3::new(
-                rng.random_range(0.25..0.75),
-                rng.random_range(0.25..0.75),
-                1.5,
-            );
+            let p = DVec3::new(rng.random_range(0.25..0.75), rng.random_range(0.25..0.75), 1.5);
             // A tilted normal makes the node's tangent plane cut the receiver in some cases.
             let normal = DVec3::new(rng.random_range(-1.0..1.0), 0.0, -1.0).normalize();
             let view = planner.face_view(p, normal, 1, 0);
@@ -109,17 +101,11 @@ fn visible_pieces_agree_with_ray_casting() {
                 for _ in 0..40 {
                     let (a, b): (f64, f64) =
                         (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
-                    let (a, b) = if a + b > 1.0 {
-                        (1.0 - a, 1.0 - b)
-                    } else {
-                        (a, b)
-                    };
+                    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
                     let x = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
                     let q = frame.to_global(x);
                     let in_front = normal.dot(q - p) > 0.0;
-                    let blocked = scene.faces[2..]
-                        .iter()
-                        .any(|f| segment_hits(p, q, &f.vertices));
+                    let blocked = scene.faces[2..].iter().any(|f| segment_hits(p, q, &f.vertices));
                     let truth = in_front && !blocked;
                     let planned = match &vis {
                         Visibility::Skip(_) => false,
@@ -143,13 +129,7 @@ fn the_paper_surfaces_need_occlusion_only_between_s1_or_s5_and_s4() {
     for a in 0..5 {
         for b in 0..5 {
             let expect = matches!((a, b), (0, 3) | (3, 0) | (4, 3) | (3, 4));
-            assert_eq!(
-                !planner.candidates(a, b).is_empty(),
-                expect,
-                "S{} -> S{}",
-                a + 1,
-                b + 1
-            );
+            assert_eq!(!planner.candidates(a, b).is_empty(), expect, "S{} -> S{}", a + 1, b + 1);
         }
     }
     // S2 and S3 are one occluder.
@@ -168,20 +148,10 @@ fn shadow_of_the_square_from_a_corner_of_s4_is_exact() {
     // From P = (px, py, 2) the square [0,2]² at z = 1 casts [0, 4 - px] x [0, 4 - py] on S1.
     let p = DVec3::new(0.25, 0.75, 2.0);
     let view = planner.face_view(p, -DVec3::Z, 3, 0);
-    let FaceView::Visible {
-        clip: None,
-        shadows,
-    } = &view
-    else {
-        panic!("{view:?}")
-    };
+    let FaceView::Visible { clip: None, shadows } = &view else { panic!("{view:?}") };
     assert_eq!(shadows.len(), 1);
     let area = signed_area(&shadows[0]);
     assert!((area - 3.75 * 3.25).abs() < 1e-12, "{area}");
-    let visible: f64 = planner
-        .visible_part_of_face(&view, 0)
-        .iter()
-        .map(|p| signed_area(p))
-        .sum();
+    let visible: f64 = planner.visible_part_of_face(&view, 0).iter().map(|p| signed_area(p)).sum();
     assert!((visible - (25.0 - 3.75 * 3.25)).abs() < 1e-12);
 }

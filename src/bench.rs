@@ -1,0 +1,156 @@
+//! `radiosity bench`: the same matrix assembled on each backend, timed in one run, and compared
+//! entry by entry. Timings exclude one-time costs (device creation, shader compilation), which are
+//! reported apart, and are the best of several repetitions.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::assembly::{AssemblyOptions, CollocationMatrix};
+use crate::error::Result;
+use crate::gpu::{self, GpuAssembler, GpuTimings};
+use crate::pipeline::{self, Backend, RunConfig};
+use crate::visibility::PairPlanner;
+
+/// One backend's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct BackendTiming {
+    /// `f64` or `f32`.
+    pub precision: &'static str,
+    /// Best assembly time over the repetitions (plan, kernels, transfers).
+    pub setup_seconds: f64,
+    /// All (node, element) pairs divided by `setup_seconds`.
+    pub pairs_per_second: f64,
+    /// One-time cost before the first assembly (GPU: device and shader compilation).
+    pub preparation_seconds: f64,
+    /// GPU: where the best assembly's time went.
+    pub breakdown: Option<GpuTimings>,
+}
+
+/// The bench result.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// Scene.
+    pub scene: String,
+    /// Mesh kind.
+    pub mesh: &'static str,
+    /// Method.
+    pub method: &'static str,
+    /// Elements.
+    pub n: usize,
+    /// Unknowns.
+    pub dof: usize,
+    /// All (node, element) pairs.
+    pub pairs: u64,
+    /// Pairs that needed a collocation integral (fully or partly visible).
+    pub pairs_evaluated: u64,
+    /// The GPU adapter, when the GPU ran.
+    pub device: Option<String>,
+    /// The CPU backend's figures.
+    pub cpu: Option<BackendTiming>,
+    /// The GPU backend's figures.
+    pub gpu: Option<BackendTiming>,
+    /// CPU time / GPU time, when both ran.
+    pub speedup: Option<f64>,
+    /// Largest |K_cpu - K_gpu|, when both ran.
+    pub max_abs_diff: Option<f64>,
+    /// Largest |K_cpu - K_gpu| relative to the largest |K_cpu| entry of its row, when both ran.
+    pub max_rel_diff: Option<f64>,
+    /// Repetitions per backend.
+    pub repeats: usize,
+}
+
+/// Largest absolute and row-relative differences between two matrices of one size.
+pub fn matrix_differences(a: &CollocationMatrix, b: &CollocationMatrix) -> (f64, f64) {
+    let (mut abs, mut rel) = (0.0f64, 0.0f64);
+    for i in 0..a.dof() {
+        let scale = a.row(i).iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (x, y) in a.row(i).iter().zip(b.row(i)) {
+            let d = (x - y).abs();
+            abs = abs.max(d);
+            if scale > 0.0 {
+                rel = rel.max(d / scale);
+            }
+        }
+    }
+    (abs, rel)
+}
+
+/// Assembles the matrix of `config` on each of `backends`, `repeats` times each.
+pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<BenchReport> {
+    let (scene, mesh, disc) = pipeline::build(config)?;
+    let planner = PairPlanner::new(&scene);
+    let options: &AssemblyOptions = &config.assembly;
+    let repeats = repeats.max(1);
+    let mut report = BenchReport {
+        scene: scene.name.clone(),
+        mesh: config.mesh.name(),
+        method: config.method.name(),
+        n: mesh.len(),
+        dof: disc.dof(),
+        pairs: (disc.dof() * mesh.len()) as u64,
+        pairs_evaluated: 0,
+        device: None,
+        cpu: None,
+        gpu: None,
+        speedup: None,
+        max_abs_diff: None,
+        max_rel_diff: None,
+        repeats,
+    };
+    let mut matrices: Vec<CollocationMatrix> = Vec::new();
+    for &backend in backends {
+        let started = Instant::now();
+        let gpu_assembler = match backend {
+            Backend::Cpu => None,
+            Backend::Gpu(precision) => {
+                let ctx = gpu::shared_context()?;
+                report.device = Some(format!(
+                    "{} ({}, {})",
+                    ctx.adapter.name, ctx.adapter.backend, ctx.adapter.device_type
+                ));
+                Some(GpuAssembler::new(ctx, precision, disc.method)?)
+            }
+        };
+        let preparation_seconds = started.elapsed().as_secs_f64();
+        let mut best = f64::INFINITY;
+        let mut breakdown = None;
+        let mut last = None;
+        for _ in 0..repeats {
+            let started = Instant::now();
+            let a = match &gpu_assembler {
+                None => crate::assembly::assemble(&mesh, &disc, &planner, options, &|_| {})?,
+                Some(g) => g.assemble(&scene, &mesh, &disc, &planner, options, &|_| {})?,
+            };
+            let elapsed = started.elapsed().as_secs_f64();
+            if elapsed < best {
+                best = elapsed;
+                breakdown = gpu_assembler.as_ref().map(GpuAssembler::last_timings);
+            }
+            last = Some(a);
+        }
+        let a = last.expect("at least one repetition");
+        report.pairs_evaluated = a.stats.full + a.stats.partial;
+        let timing = BackendTiming {
+            precision: backend.precision().name(),
+            setup_seconds: best,
+            pairs_per_second: report.pairs as f64 / best,
+            preparation_seconds,
+            breakdown,
+        };
+        match backend {
+            Backend::Cpu => report.cpu = Some(timing),
+            Backend::Gpu(_) => report.gpu = Some(timing),
+        }
+        matrices.push(a.matrix);
+    }
+    if let (Some(c), Some(g)) = (&report.cpu, &report.gpu) {
+        report.speedup = Some(c.setup_seconds / g.setup_seconds);
+        let cpu_index = backends.iter().position(|b| *b == Backend::Cpu).expect("cpu ran");
+        let gpu_index = 1 - cpu_index;
+        let (abs, rel) = matrix_differences(&matrices[cpu_index], &matrices[gpu_index]);
+        report.max_abs_diff = Some(abs);
+        report.max_rel_diff = Some(rel);
+    }
+    Ok(report)
+}

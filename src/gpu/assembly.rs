@@ -1,0 +1,389 @@
+//! Assembly of the collocation matrix on the GPU, in row tiles.
+//!
+//! Per tile the host computes, for every (node, face), whether the node sees the face and the
+//! node's coordinates in the face's frame; for faces where visibility varies (clipped or shadowed)
+//! it lists the elements that are not fully visible: hidden ones, and partial ones with their exact
+//! visible pieces, from the same pair plan as the CPU path. Fully visible and skipped pairs need no
+//! list: the first pass evaluates every element of every face the node sees, the second overwrites
+//! the exceptions. Tiles are sized so no binding exceeds the device's limits, and the next tile is
+//! planned while the device works on the current one.
+
+use std::ops::Range;
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::GpuContext;
+use super::compute;
+use super::layout::{self, Params, VIEW_STRIDE};
+use super::shaders::{self, Precision};
+use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix};
+use crate::discretization::{Discretization, Method};
+use crate::error::{Error, Result};
+use crate::kernels::far_field::FarFieldRule;
+use crate::mesh::Mesh;
+use crate::quadrature::ImtRule;
+use crate::scene::Scene;
+use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
+
+/// Where the time of the last GPU assembly went (wall clock).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct GpuTimings {
+    /// Host: pair plan of the tiles (visibility, exception lists).
+    pub planning_seconds: f64,
+    /// Waiting for the device to finish a tile (kernels, and the copy to the staging buffer).
+    pub device_wait_seconds: f64,
+    /// Copying results out of mapped staging buffers into the matrix.
+    pub readback_seconds: f64,
+    /// Tiles.
+    pub tiles: usize,
+}
+
+/// Compiled pipelines for one precision and collocation method.
+pub struct GpuAssembler<'a> {
+    ctx: &'a GpuContext,
+    precision: Precision,
+    method: Method,
+    layout: wgpu::BindGroupLayout,
+    full: wgpu::ComputePipeline,
+    pieces: wgpu::ComputePipeline,
+    timings: std::sync::Mutex<GpuTimings>,
+}
+
+/// The host's plan of one tile of rows.
+struct TilePlan {
+    rows: Range<usize>,
+    /// VIEW_STRIDE reals per (row, face).
+    views: Vec<f64>,
+    /// (row in tile, element, first piece, piece count), then (first vertex, count) per piece.
+    exceptions: Vec<u32>,
+    exception_count: u32,
+    piece_offset: u32,
+    /// Piece vertices relative to their element's centroid.
+    vertices: Vec<f64>,
+    stats: PairStats,
+}
+
+struct RowPlan {
+    views: Vec<f64>,
+    exceptions: Vec<(u32, Vec<Vec<DVec2>>)>,
+    stats: PairStats,
+}
+
+fn plan_row(
+    i: usize,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+) -> RowPlan {
+    let node = &disc.nodes[i];
+    let faces = mesh.face_count();
+    let mut plan = RowPlan {
+        views: vec![0.0; faces * VIEW_STRIDE],
+        exceptions: Vec::new(),
+        stats: PairStats::default(),
+    };
+    for face in 0..faces {
+        let range = mesh.face_range(face);
+        let view = planner.face_view(node.position, node.normal, node.face, face);
+        if let FaceView::Skip(reason) = view {
+            plan.stats.record(&Visibility::Skip(reason), range.len() as u64);
+            continue;
+        }
+        let frame = &scene.faces[face].frame;
+        let (p, n) = (frame.to_local(node.position), frame.dir_to_local(node.normal));
+        let scale = node.rho / std::f64::consts::PI;
+        plan.views[face * VIEW_STRIDE..face * VIEW_STRIDE + 7]
+            .copy_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, scale]);
+        if view.is_unobstructed() {
+            plan.stats.record(&Visibility::Full, range.len() as u64);
+            continue;
+        }
+        for j in range {
+            let vis = planner.visible(&view, &disc.elements[j].in_face());
+            plan.stats.record(&vis, 1);
+            match vis {
+                Visibility::Full => {}
+                Visibility::Skip(_) => plan.exceptions.push((j as u32, Vec::new())),
+                Visibility::Partial(pieces) => {
+                    let c = disc.elements[j].centroid_in_face;
+                    let local = pieces
+                        .into_iter()
+                        .map(|p| p.into_iter().map(|q| q - c).collect())
+                        .collect();
+                    plan.exceptions.push((j as u32, local));
+                }
+            }
+        }
+    }
+    plan
+}
+
+fn plan_tile(
+    rows: Range<usize>,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+) -> TilePlan {
+    let row_plans: Vec<RowPlan> =
+        rows.clone().into_par_iter().map(|i| plan_row(i, scene, mesh, disc, planner)).collect();
+    let mut views = Vec::with_capacity(rows.len() * mesh.face_count() * VIEW_STRIDE);
+    let mut records = Vec::new();
+    let mut piece_records = Vec::new();
+    let mut vertices = Vec::new();
+    let mut stats = PairStats::default();
+    for (r, plan) in row_plans.into_iter().enumerate() {
+        views.extend_from_slice(&plan.views);
+        stats += plan.stats;
+        for (el, pieces) in plan.exceptions {
+            records.extend_from_slice(&[
+                r as u32,
+                el,
+                (piece_records.len() / 2) as u32,
+                pieces.len() as u32,
+            ]);
+            for piece in pieces {
+                piece_records.extend_from_slice(&[(vertices.len() / 2) as u32, piece.len() as u32]);
+                vertices.extend(piece.iter().flat_map(|q| [q.x, q.y]));
+            }
+        }
+    }
+    let exception_count = (records.len() / 4) as u32;
+    let piece_offset = records.len() as u32;
+    records.extend(piece_records);
+    TilePlan { rows, views, exceptions: records, exception_count, piece_offset, vertices, stats }
+}
+
+/// Where the rules array's parts start and how long they are.
+#[derive(Clone, Copy)]
+struct RuleCounts {
+    imt: usize,
+    rule_offset: usize,
+    bands: usize,
+}
+
+struct InFlight {
+    rows: Range<usize>,
+    staging: wgpu::Buffer,
+    size: u64,
+    _buffers: Vec<wgpu::Buffer>,
+}
+
+impl<'a> GpuAssembler<'a> {
+    /// Compiles the kernels for `method`; f64 needs an adapter with `SHADER_F64`.
+    pub fn new(ctx: &'a GpuContext, precision: Precision, method: Method) -> Result<Self> {
+        if precision == Precision::F64 && !ctx.adapter.f64 {
+            return Err(Error::Gpu(format!(
+                "adapter '{}' has no SHADER_F64; use --precision f32 or another adapter",
+                ctx.adapter.name
+            )));
+        }
+        let source = shaders::collocation(precision, method.nodes_per_element() as u32);
+        let (layout, mut p) =
+            compute::pipeline(ctx, &source, &["assemble_full", "assemble_pieces"], 7, &[6])?;
+        let pieces = p.pop().expect("two pipelines");
+        let full = p.pop().expect("two pipelines");
+        Ok(Self { ctx, precision, method, layout, full, pieces, timings: Default::default() })
+    }
+
+    /// Precision of the kernels.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Where the time of the last [`Self::assemble`] went.
+    pub fn last_timings(&self) -> GpuTimings {
+        *self.timings.lock().expect("timings lock")
+    }
+
+    /// Assembles K like [`crate::assembly::assemble`]. `progress` receives rows finished.
+    pub fn assemble(
+        &self,
+        scene: &Scene,
+        mesh: &Mesh,
+        disc: &Discretization,
+        planner: &PairPlanner,
+        options: &AssemblyOptions,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Assembly> {
+        if disc.method.nodes_per_element() != self.method.nodes_per_element() {
+            return Err(Error::Gpu(format!(
+                "kernels compiled for the {} method cannot assemble the {} method",
+                self.method.name(),
+                disc.method.name()
+            )));
+        }
+        let ctx = self.ctx;
+        let dof = disc.dof();
+        let mut matrix = CollocationMatrix::zeros(dof)?;
+        let p = self.precision;
+        let elements = compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc), p));
+        // The rules array: IMT pairs, then the far-field factor and points (linear method only).
+        let imt_rule = ImtRule::new(options.imt_nodes.max(2));
+        let mut table: Vec<f64> =
+            imt_rule.nodes().iter().zip(imt_rule.weights()).flat_map(|(&x, &w)| [x, w]).collect();
+        let rule_offset = table.len();
+        let mut band_count = 0;
+        if options.far_field && self.method.nodes_per_element() == 3 {
+            let rule = FarFieldRule::standard();
+            band_count = rule.bands.len();
+            let mut first = rule_offset + 3 * band_count;
+            for band in &rule.bands {
+                table.extend([(band.ratio + 1.0).powi(2), first as f64, band.points.len() as f64]);
+                first += 3 * band.points.len();
+            }
+            for band in &rule.bands {
+                table.extend(band.points.iter().flatten());
+            }
+        }
+        let rules = compute::storage(ctx, &layout::real_bytes(&table, p));
+        let counts = RuleCounts { imt: imt_rule.nodes().len(), rule_offset, bands: band_count };
+
+        let max_binding =
+            ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
+        let row_bytes = (dof * p.bytes()) as u64;
+        // The output binding and the host's staging copy stay below 64 MiB per tile, and the rows of a
+        // tile fit in one dimension of the dispatch grid.
+        let rows_per_tile = ((max_binding.min(64 << 20) / row_bytes.max(1)) as usize)
+            .min(ctx.limits.max_compute_workgroups_per_dimension as usize)
+            .clamp(1, dof.max(1));
+        let tiles: Vec<Range<usize>> =
+            (0..dof).step_by(rows_per_tile).map(|s| s..(s + rows_per_tile).min(dof)).collect();
+
+        let mut stats = PairStats::default();
+        *self.timings.lock().expect("timings lock") =
+            GpuTimings { tiles: tiles.len(), ..Default::default() };
+        let timed_plan = |t: &Range<usize>| {
+            let started = std::time::Instant::now();
+            let plan = plan_tile(t.clone(), scene, mesh, disc, planner);
+            self.timings.lock().expect("timings lock").planning_seconds +=
+                started.elapsed().as_secs_f64();
+            plan
+        };
+        let mut in_flight: Option<InFlight> = None;
+        let mut next_plan = tiles.first().map(timed_plan);
+        for k in 0..tiles.len() {
+            let plan = next_plan.take().expect("planned before use");
+            stats += plan.stats;
+            let submitted =
+                self.submit(&plan, disc, mesh, &elements, &rules, counts, max_binding)?;
+            if let Some(done) = in_flight.take() {
+                self.finish(done, &mut matrix, progress)?;
+            }
+            in_flight = Some(submitted);
+            // Plan the next tile while the device works on this one.
+            next_plan = tiles.get(k + 1).map(timed_plan);
+        }
+        if let Some(done) = in_flight.take() {
+            self.finish(done, &mut matrix, progress)?;
+        }
+        Ok(Assembly { matrix, stats })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn submit(
+        &self,
+        plan: &TilePlan,
+        disc: &Discretization,
+        mesh: &Mesh,
+        elements: &wgpu::Buffer,
+        rules: &wgpu::Buffer,
+        counts: RuleCounts,
+        max_binding: u64,
+    ) -> Result<InFlight> {
+        let ctx = self.ctx;
+        let p = self.precision;
+        let dof = disc.dof();
+        let rows = plan.rows.len();
+        let view_bytes = layout::real_bytes(&plan.views, p);
+        let vertex_bytes = layout::real_bytes(&plan.vertices, p);
+        let exception_bytes: &[u8] = bytemuck::cast_slice(&plan.exceptions);
+        for (what, len) in [
+            ("views", view_bytes.len()),
+            ("visible pieces", vertex_bytes.len()),
+            ("exceptions", exception_bytes.len()),
+        ] {
+            if len as u64 > max_binding {
+                return Err(Error::Gpu(format!(
+                    "{what} of one tile take {len} bytes, over the device's binding limit of {max_binding}"
+                )));
+            }
+        }
+        let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
+        let params = Params {
+            rows: rows as u32,
+            elements: disc.element_count() as u32,
+            faces: mesh.face_count() as u32,
+            dof: dof as u32,
+            imt_count: counts.imt as u32,
+            rule_offset: counts.rule_offset as u32,
+            band_count: counts.bands as u32,
+            exception_count: plan.exception_count,
+            piece_offset: plan.piece_offset,
+            stride,
+            _pad: [0; 2],
+        };
+        let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+        let views = compute::storage(ctx, &view_bytes);
+        let exceptions = compute::storage(ctx, exception_bytes);
+        let vertices = compute::storage(ctx, &vertex_bytes);
+        let size = (rows * dof * p.bytes()) as u64;
+        let (out, staging) = compute::output(ctx, size);
+        let group = compute::bind_group(
+            ctx,
+            &self.layout,
+            &[&params, &views, elements, rules, &exceptions, &vertices, &out],
+        );
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.full);
+            pass.set_bind_group(0, &group, &[]);
+            let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
+            pass.dispatch_workgroups(groups_x, rows as u32, 1);
+        }
+        if plan.exception_count > 0 {
+            // A second pass: ordered after the first, which it partly overwrites.
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pieces);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(exc_x, exc_y, 1);
+        }
+        encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, size.max(16));
+        ctx.queue.submit([encoder.finish()]);
+        Ok(InFlight {
+            rows: plan.rows.clone(),
+            staging,
+            size,
+            _buffers: vec![params, views, exceptions, vertices, out],
+        })
+    }
+
+    fn finish(
+        &self,
+        done: InFlight,
+        matrix: &mut CollocationMatrix,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<()> {
+        let started = std::time::Instant::now();
+        compute::wait(self.ctx, &done.staging, done.size)?;
+        let waited = started.elapsed().as_secs_f64();
+        let started = std::time::Instant::now();
+        let dof = matrix.dof();
+        compute::copy_mapped(
+            &done.staging,
+            done.size,
+            self.precision,
+            matrix.rows_slice_mut(done.rows.clone()),
+        )?;
+        let mut t = self.timings.lock().expect("timings lock");
+        t.device_wait_seconds += waited;
+        t.readback_seconds += started.elapsed().as_secs_f64();
+        drop(t);
+        debug_assert_eq!(done.size as usize, done.rows.len() * dof * self.precision.bytes());
+        progress(done.rows.len());
+        Ok(())
+    }
+}

@@ -1,0 +1,190 @@
+//! Small helpers over wgpu: pipelines from WGSL, buffers, dispatch grids and read-back.
+
+use wgpu::util::DeviceExt;
+
+use super::GpuContext;
+use super::layout::WORKGROUP;
+use super::shaders::Precision;
+use crate::error::{Error, Result};
+
+/// Compute pipelines for `entries` in `source`, with an explicit layout of buffers (binding 0 is a
+/// uniform; `writable` marks the read-write storage bindings).
+pub fn pipeline(
+    ctx: &GpuContext,
+    source: &str,
+    entries: &[&str],
+    bindings: u32,
+    writable: &[u32],
+) -> Result<(wgpu::BindGroupLayout, Vec<wgpu::ComputePipeline>)> {
+    let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = (0..bindings)
+        .map(|b| wgpu::BindGroupLayoutEntry {
+            binding: b,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: if b == 0 {
+                    wgpu::BufferBindingType::Uniform
+                } else {
+                    wgpu::BufferBindingType::Storage { read_only: !writable.contains(&b) }
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("radiosity"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let bind_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &layout_entries,
+    });
+    let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(&bind_layout)],
+        immediate_size: 0,
+    });
+    let pipelines = entries
+        .iter()
+        .map(|entry| {
+            ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        })
+        .collect();
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(Error::Gpu(format!("shader or pipeline creation failed: {e}")));
+    }
+    Ok((bind_layout, pipelines))
+}
+
+/// A read-only storage buffer holding `bytes` (at least 16 bytes, as empty bindings are invalid).
+pub fn storage(ctx: &GpuContext, bytes: &[u8]) -> wgpu::Buffer {
+    let padded;
+    let contents = if bytes.len() < 16 {
+        padded = [bytes, &[0u8; 16][..16 - bytes.len()]].concat();
+        &padded[..]
+    } else {
+        bytes
+    };
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents,
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+/// A uniform buffer.
+pub fn uniform(ctx: &GpuContext, bytes: &[u8]) -> wgpu::Buffer {
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytes,
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// A writable storage buffer of `size` bytes that can be copied out, and its staging twin.
+pub fn output(ctx: &GpuContext, size: u64) -> (wgpu::Buffer, wgpu::Buffer) {
+    let size = size.max(16);
+    let out = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("out"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("staging"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    (out, staging)
+}
+
+/// A bind group of whole buffers in binding order.
+pub fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32, resource: b.as_entire_binding() })
+        .collect();
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout,
+        entries: &entries,
+    })
+}
+
+/// Workgroup grid `(x, y)` covering `invocations`, and the invocations per grid row.
+pub fn grid(ctx: &GpuContext, invocations: u64) -> (u32, u32, u32) {
+    let groups = invocations.div_ceil(WORKGROUP as u64).max(1);
+    let max_x = ctx.limits.max_compute_workgroups_per_dimension.max(1) as u64;
+    let x = groups.min(max_x);
+    let y = groups.div_ceil(x);
+    (x as u32, y as u32, (x * WORKGROUP as u64) as u32)
+}
+
+/// Maps a staging buffer for reading and waits for the device to finish the work before it.
+pub fn wait(ctx: &GpuContext, staging: &wgpu::Buffer, size: u64) -> Result<()> {
+    let slice = staging.slice(..size.max(16));
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Gpu(format!("waiting for the device failed: {e}")))?;
+    rx.recv()
+        .map_err(|_| Error::Gpu("mapping callback never ran".into()))?
+        .map_err(|e| Error::Gpu(format!("mapping the output failed: {e}")))?;
+    Ok(())
+}
+
+/// Converts the reals of a staging buffer mapped by [`wait`] into `out` and unmaps it.
+pub fn copy_mapped(
+    staging: &wgpu::Buffer,
+    size: u64,
+    precision: Precision,
+    out: &mut [f64],
+) -> Result<()> {
+    {
+        let view = staging
+            .slice(..size.max(16))
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
+        let bytes = &view[..size as usize];
+        match precision {
+            Precision::F64 => out.copy_from_slice(bytemuck::cast_slice(bytes)),
+            Precision::F32 => {
+                let values: &[f32] = bytemuck::cast_slice(bytes);
+                out.iter_mut().zip(values).for_each(|(o, v)| *o = f64::from(*v));
+            }
+        }
+    }
+    staging.unmap();
+    Ok(())
+}
+
+/// Waits for the device and returns the reals of a staging buffer.
+pub fn read_back(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    size: u64,
+    precision: Precision,
+) -> Result<Vec<f64>> {
+    wait(ctx, staging, size)?;
+    let mut out = vec![0.0; size as usize / precision.bytes()];
+    copy_mapped(staging, size, precision, &mut out)?;
+    Ok(out)
+}

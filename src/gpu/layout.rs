@@ -1,0 +1,83 @@
+//! Data shared with the shaders: flat arrays of reals (f64 or f32) with fixed strides, mirrored by
+//! the constants of shaders/collocation.wgsl (checked by a test), and the uniform [`Params`].
+
+use bytemuck::{Pod, Zeroable};
+
+use super::shaders::Precision;
+use crate::discretization::Discretization;
+
+/// Reals per (row, face) view: the node in the face's frame (x, y, z, i, j, k), rho/π (0 where
+/// the node sees nothing of the face), padding.
+pub const VIEW_STRIDE: usize = 8;
+/// Reals per element: centroid in the face's frame, three vertices and three affine basis
+/// functions relative to the centroid, face.
+pub const ELEMENT_STRIDE: usize = 18;
+/// Invocations per workgroup.
+pub const WORKGROUP: u32 = 64;
+
+/// Mirrors `struct Params` of shaders/collocation.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct Params {
+    /// Rows in the tile.
+    pub rows: u32,
+    /// Elements n.
+    pub elements: u32,
+    /// Faces.
+    pub faces: u32,
+    /// Unknowns (row length).
+    pub dof: u32,
+    /// IMT nodes.
+    pub imt_count: u32,
+    /// Index in the rules array of the far-field band headers.
+    pub rule_offset: u32,
+    /// Far-field bands (0: the rule is off).
+    pub band_count: u32,
+    /// Exceptions in the tile.
+    pub exception_count: u32,
+    /// Index of the first piece record in the exceptions array.
+    pub piece_offset: u32,
+    /// Invocations per row of the exceptions' dispatch grid.
+    pub stride: u32,
+    /// Padding to a multiple of 16 bytes.
+    pub _pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<Params>() == 48);
+
+/// Elements, ELEMENT_STRIDE reals each: the discretization's element-local data and the centroid.
+pub fn pack_elements(disc: &Discretization) -> Vec<f64> {
+    let mut v = Vec::with_capacity(disc.element_count() * ELEMENT_STRIDE);
+    for (el, basis) in disc.elements.iter().zip(&disc.bases) {
+        v.extend_from_slice(&[el.centroid_in_face.x, el.centroid_in_face.y]);
+        for p in el.local {
+            v.extend_from_slice(&[p.x, p.y]);
+        }
+        for b in basis {
+            v.extend_from_slice(&[b.c0, b.cx, b.cy]);
+        }
+        v.push(el.face as f64);
+    }
+    v
+}
+
+/// The bytes of reals in the given precision.
+pub fn real_bytes(values: &[f64], precision: Precision) -> Vec<u8> {
+    match precision {
+        Precision::F64 => bytemuck::cast_slice(values).to_vec(),
+        Precision::F32 => {
+            let v: Vec<f32> = values.iter().map(|&x| x as f32).collect();
+            bytemuck::cast_slice(&v).to_vec()
+        }
+    }
+}
+
+/// Reals from bytes in the given precision.
+pub fn reals_from_bytes(bytes: &[u8], precision: Precision) -> Vec<f64> {
+    match precision {
+        Precision::F64 => bytemuck::pod_collect_to_vec::<u8, f64>(bytes),
+        Precision::F32 => {
+            bytemuck::pod_collect_to_vec::<u8, f32>(bytes).into_iter().map(f64::from).collect()
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! The far-field rule: where the element is far from the node, `G φ` is smooth on it and a fixed
+//! Gauss rule reaches rounding-level accuracy with no cancellation, while the closed forms, sums of
+//! edge terms that cancel, lose about two digits per tenfold distance. Used for the linear method,
+//! where it also replaces the per-edge IMT quadrature.
+//!
+//! The rule is the collapsed Gauss–Legendre product of the paper's (4.4), n × n points, with n
+//! falling as the node's distance grows ([`BANDS`]). It applies from 3 radii on: when the node is
+//! at least `(ratio + 1) r` from the element's centroid, r the element's radius about it. Measured
+//! against a 28 × 28 rule over random triangles, nodes and weights (test below): worst relative
+//! error below 6e-15 in every band.
+
+use glam::DVec2;
+
+use super::{Affine2, Observer};
+use crate::quadrature::GaussLegendre;
+
+/// Distance bands and orders: from `ratio` radii on, the `order × order` rule. Each order is one
+/// above the smallest that kept the worst relative error below 6e-15 at the band's start over 3000
+/// random triangles, nodes and weights (against a 28 × 28 rule); the order falls with distance,
+/// as the paper's graded rules do (sec. 4.2).
+pub const BANDS: [(f64, usize); 7] =
+    [(3.0, 11), (5.0, 10), (8.0, 9), (12.0, 8), (20.0, 7), (40.0, 6), (100.0, 5)];
+
+/// One distance band: its ratio and its points `(u, v, w)` on the unit triangle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Band {
+    /// Used when `|P - C| >= (ratio + 1) r`.
+    pub ratio: f64,
+    /// Points `(u, v, w)` on `{u, v >= 0, u + v <= 1}`; the weights sum to 1/2.
+    pub points: Vec<[f64; 3]>,
+}
+
+/// Collapsed Gauss rules on the unit triangle, graded by the distance of the node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FarFieldRule {
+    /// Bands by increasing ratio.
+    pub bands: Vec<Band>,
+}
+
+/// The `order × order` collapsed Gauss–Legendre rule of (4.4) on the unit triangle.
+pub fn collapsed_gauss(order: usize) -> Vec<[f64; 3]> {
+    let gl = GaussLegendre::new(order.max(1));
+    let mut points = Vec::with_capacity(order * order);
+    for (x, wx) in gl.nodes().iter().zip(gl.weights()) {
+        let x = 0.5 * (x + 1.0);
+        for (y, wy) in gl.nodes().iter().zip(gl.weights()) {
+            let y = 0.5 * (y + 1.0);
+            // s = (1 - y) x, t = y x, Jacobian x.
+            points.push([(1.0 - y) * x, y * x, 0.25 * wx * wy * x]);
+        }
+    }
+    points
+}
+
+impl FarFieldRule {
+    /// The graded rule of [`BANDS`].
+    pub fn standard() -> Self {
+        Self {
+            bands: BANDS
+                .iter()
+                .map(|&(ratio, order)| Band { ratio, points: collapsed_gauss(order) })
+                .collect(),
+        }
+    }
+
+    /// The band that applies to a node at `obs` (element-local coordinates, centroid at 0) and a
+    /// triangle of radius `radius`, if any.
+    pub fn band(&self, obs: &Observer, radius: f64) -> Option<&Band> {
+        let d2 = obs.position.length_squared();
+        self.bands.iter().rev().find(|b| d2 >= (b.ratio + 1.0) * (b.ratio + 1.0) * radius * radius)
+    }
+
+    /// `∫_T G φ_l` over the triangle `tri` for each weight, with the band's points. The rule
+    /// accumulates `∫ G`, `∫ G X`, `∫ G Y` and applies the affine weights once.
+    pub fn integrate<const L: usize>(
+        band: &Band,
+        obs: &Observer,
+        tri: &[DVec2; 3],
+        weights: &[Affine2; L],
+    ) -> [f64; L] {
+        let (a, b, c) = (tri[0], tri[1], tri[2]);
+        let jacobian = (b - a).perp_dot(c - a);
+        let (mut g0, mut gx, mut gy) = (0.0, 0.0, 0.0);
+        for &[u, v, w] in &band.points {
+            let q = a + (b - a) * u + (c - a) * v;
+            let g = w * obs.kernel(q);
+            g0 += g;
+            gx += g * q.x;
+            gy += g * q.y;
+        }
+        weights.map(|phi| jacobian * (phi.c0 * g0 + phi.cx * gx + phi.cy * gy))
+    }
+}
+
+/// The radius of a triangle about the origin (its centroid in element-local coordinates).
+pub fn radius(tri: &[DVec2; 3]) -> f64 {
+    tri.iter().map(|v| v.length_squared()).fold(0.0, f64::max).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    use super::*;
+
+    #[test]
+    fn the_graded_rule_is_at_rounding_level_in_every_band() {
+        let rule = FarFieldRule::standard();
+        let reference = Band { ratio: 3.0, points: collapsed_gauss(28) };
+        let mut rng = StdRng::seed_from_u64(5);
+        let mut worst: f64 = 0.0;
+        for _ in 0..2000 {
+            let mut tri = [(); 3]
+                .map(|_| DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)));
+            if (tri[1] - tri[0]).perp_dot(tri[2] - tri[0]) < 0.0 {
+                tri.swap(1, 2);
+            }
+            let c = (tri[0] + tri[1] + tri[2]) / 3.0;
+            let tri = tri.map(|v| v - c);
+            let r = tri.iter().map(|v| v.length()).fold(0.0, f64::max);
+            let dir = loop {
+                let d = DVec3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(0.05..1.0),
+                );
+                if d.length() < 1.0 {
+                    break d.normalize();
+                }
+            };
+            let normal = DVec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize();
+            let band_start = BANDS[rng.random_range(0..BANDS.len())].0;
+            let obs = Observer {
+                position: dir * (band_start + 1.0) * r * rng.random_range(1.0..1.5),
+                normal,
+            };
+            let band = rule.band(&obs, radius(&tri)).expect("far enough");
+            let w = [Affine2 { c0: 0.3, cx: 1.7 / r, cy: -0.9 / r }, Affine2::ONE];
+            let got = FarFieldRule::integrate(band, &obs, &tri, &w);
+            let want = FarFieldRule::integrate(&reference, &obs, &tri, &w);
+            let scale = want[0].abs().max(want[1].abs());
+            worst = worst.max((got[0] - want[0]).abs() / scale);
+        }
+        assert!(worst < 6e-15, "worst relative error {worst:e}");
+    }
+}
