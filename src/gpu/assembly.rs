@@ -164,6 +164,44 @@ struct RuleCounts {
     bands: usize,
 }
 
+/// The uniform tables (TABLE_SIZE entries of 4 reals): IMT nodes (x, w), then one header per
+/// far-field band ((ratio + 1)², first entry, count) and the bands' points (u, v, w).
+fn tables(options: &AssemblyOptions, method: Method) -> Result<(Vec<f64>, RuleCounts)> {
+    let imt = ImtRule::new(options.imt_nodes.max(2));
+    let mut entries: Vec<[f64; 4]> =
+        imt.nodes().iter().zip(imt.weights()).map(|(&x, &w)| [x, w, 0.0, 0.0]).collect();
+    let rule_offset = entries.len();
+    let mut bands = 0;
+    if options.far_field && method.nodes_per_element() == 3 {
+        let rule = FarFieldRule::standard();
+        bands = rule.bands.len();
+        let mut first = rule_offset + bands;
+        for band in &rule.bands {
+            entries.push([(band.ratio + 1.0).powi(2), first as f64, band.points.len() as f64, 0.0]);
+            first += band.points.len();
+        }
+        for band in &rule.bands {
+            entries.extend(band.points.iter().map(|&[u, v, w]| [u, v, w, 0.0]));
+        }
+    }
+    if entries.len() > layout::TABLE_SIZE {
+        return Err(Error::InvalidParameter {
+            name: "imt-nodes",
+            value: options.imt_nodes.to_string(),
+            reason: format!(
+                "the GPU kernels' tables hold {} entries and the far-field rules take {}",
+                layout::TABLE_SIZE,
+                entries.len() - imt.nodes().len()
+            ),
+        });
+    }
+    entries.resize(layout::TABLE_SIZE, [0.0; 4]);
+    Ok((
+        entries.into_iter().flatten().collect(),
+        RuleCounts { imt: imt.nodes().len(), rule_offset, bands },
+    ))
+}
+
 struct InFlight {
     rows: Range<usize>,
     staging: wgpu::Buffer,
@@ -181,8 +219,14 @@ impl<'a> GpuAssembler<'a> {
             )));
         }
         let source = shaders::collocation(precision, method.nodes_per_element() as u32);
-        let (layout, mut p) =
-            compute::pipeline(ctx, &source, &["assemble_full", "assemble_pieces"], 7, &[6])?;
+        let (layout, mut p) = compute::pipeline(
+            ctx,
+            &source,
+            &["assemble_full", "assemble_pieces"],
+            7,
+            &[0, 3],
+            &[6],
+        )?;
         let pieces = p.pop().expect("two pipelines");
         let full = p.pop().expect("two pipelines");
         Ok(Self { ctx, precision, method, layout, full, pieces, timings: Default::default() })
@@ -220,26 +264,8 @@ impl<'a> GpuAssembler<'a> {
         let mut matrix = CollocationMatrix::zeros(dof)?;
         let p = self.precision;
         let elements = compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc), p));
-        // The rules array: IMT pairs, then the far-field factor and points (linear method only).
-        let imt_rule = ImtRule::new(options.imt_nodes.max(2));
-        let mut table: Vec<f64> =
-            imt_rule.nodes().iter().zip(imt_rule.weights()).flat_map(|(&x, &w)| [x, w]).collect();
-        let rule_offset = table.len();
-        let mut band_count = 0;
-        if options.far_field && self.method.nodes_per_element() == 3 {
-            let rule = FarFieldRule::standard();
-            band_count = rule.bands.len();
-            let mut first = rule_offset + 3 * band_count;
-            for band in &rule.bands {
-                table.extend([(band.ratio + 1.0).powi(2), first as f64, band.points.len() as f64]);
-                first += 3 * band.points.len();
-            }
-            for band in &rule.bands {
-                table.extend(band.points.iter().flatten());
-            }
-        }
-        let rules = compute::storage(ctx, &layout::real_bytes(&table, p));
-        let counts = RuleCounts { imt: imt_rule.nodes().len(), rule_offset, bands: band_count };
+        let (tables, counts) = tables(options, self.method)?;
+        let tables = compute::uniform(ctx, &layout::real_bytes(&tables, p));
 
         let max_binding =
             ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
@@ -268,7 +294,7 @@ impl<'a> GpuAssembler<'a> {
             let plan = next_plan.take().expect("planned before use");
             stats += plan.stats;
             let submitted =
-                self.submit(&plan, disc, mesh, &elements, &rules, counts, max_binding)?;
+                self.submit(&plan, disc, mesh, &elements, &tables, counts, max_binding)?;
             if let Some(done) = in_flight.take() {
                 self.finish(done, &mut matrix, progress)?;
             }
@@ -289,7 +315,7 @@ impl<'a> GpuAssembler<'a> {
         disc: &Discretization,
         mesh: &Mesh,
         elements: &wgpu::Buffer,
-        rules: &wgpu::Buffer,
+        tables: &wgpu::Buffer,
         counts: RuleCounts,
         max_binding: u64,
     ) -> Result<InFlight> {
@@ -334,7 +360,7 @@ impl<'a> GpuAssembler<'a> {
         let group = compute::bind_group(
             ctx,
             &self.layout,
-            &[&params, &views, elements, rules, &exceptions, &vertices, &out],
+            &[&params, &views, elements, tables, &exceptions, &vertices, &out],
         );
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {

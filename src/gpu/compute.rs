@@ -7,13 +7,14 @@ use super::layout::WORKGROUP;
 use super::shaders::Precision;
 use crate::error::{Error, Result};
 
-/// Compute pipelines for `entries` in `source`, with an explicit layout of buffers (binding 0 is a
-/// uniform; `writable` marks the read-write storage bindings).
+/// Compute pipelines for `entries` in `source`, with an explicit layout of buffers: `uniforms` lists
+/// the uniform bindings, `writable` the read-write storage bindings, the rest are read-only storage.
 pub fn pipeline(
     ctx: &GpuContext,
     source: &str,
     entries: &[&str],
     bindings: u32,
+    uniforms: &[u32],
     writable: &[u32],
 ) -> Result<(wgpu::BindGroupLayout, Vec<wgpu::ComputePipeline>)> {
     let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = (0..bindings)
@@ -21,7 +22,7 @@ pub fn pipeline(
             binding: b,
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
-                ty: if b == 0 {
+                ty: if uniforms.contains(&b) {
                     wgpu::BufferBindingType::Uniform
                 } else {
                     wgpu::BufferBindingType::Storage { read_only: !writable.contains(&b) }

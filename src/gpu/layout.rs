@@ -14,6 +14,8 @@ pub const VIEW_STRIDE: usize = 8;
 pub const ELEMENT_STRIDE: usize = 18;
 /// Invocations per workgroup.
 pub const WORKGROUP: u32 = 64;
+/// Entries (4 reals each) of the uniform tables of IMT nodes and far-field rules.
+pub const TABLE_SIZE: usize = 1024;
 
 /// Mirrors `struct Params` of shaders/collocation.wgsl.
 #[repr(C)]

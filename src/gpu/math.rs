@@ -145,7 +145,7 @@ pub fn evaluate(
 ) -> Result<Vec<f64>> {
     let code = MathFunction::ALL.iter().position(|f| *f == function).expect("listed") as u32;
     let source = shaders::math_test(precision);
-    let (layout_, pipelines) = compute::pipeline(ctx, &source, &["math_eval"], 3, &[2])?;
+    let (layout_, pipelines) = compute::pipeline(ctx, &source, &["math_eval"], 3, &[0], &[2])?;
     let flat: Vec<f64> = samples.iter().flat_map(|&(x, y)| [x, y]).collect();
     let params: [u32; 4] = [code, samples.len() as u32, 0, 0];
     let uniform = compute::uniform(ctx, bytemuck::cast_slice(&params));

@@ -107,6 +107,7 @@ mod tests {
         assert_eq!(wgsl_u32_constant(&module, "VIEW_STRIDE") as usize, layout::VIEW_STRIDE);
         assert_eq!(wgsl_u32_constant(&module, "ELEMENT_STRIDE") as usize, layout::ELEMENT_STRIDE);
         assert_eq!(wgsl_u32_constant(&module, "WORKGROUP"), layout::WORKGROUP);
+        assert_eq!(wgsl_u32_constant(&module, "TABLE_SIZE") as usize, layout::TABLE_SIZE);
         assert_eq!(wgsl_u32_constant(&module, "PER_ELEMENT"), 3);
         let (_, params) = module
             .types
