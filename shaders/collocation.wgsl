@@ -1,8 +1,10 @@
-// Collocation integrals on the GPU: the mirror of src/kernels/moments.rs and src/kernels/exact.rs
-// (same names, same loop structure). The host prepends `alias real = f64|f32;`, the math library
-// of that precision (the m_* functions) and `const PER_ELEMENT: u32 = 1u|3u;` (basis functions per
-// element), so the centroid kernel carries none of the second-order and IMT code: on lavapipe that
-// dead weight alone made it five times slower.
+// Collocation integrals on the GPU: the mirror of src/kernels/moments.rs, src/kernels/exact.rs and
+// src/kernels/far_field.rs (same names, same loop structure). The host prepends
+// `alias real = f64|f32;`, the math library of that precision (the m_* functions),
+// `const PER_ELEMENT: u32 = 1u|3u;` (basis functions per element) and `const FAR_FIELD: bool`
+// (whether the far-field rule may be used: linear method or f32), so each kernel carries only the
+// code it can run: on lavapipe the dead weight of the second-order and IMT code alone made the
+// centroid kernel five times slower.
 //
 // Coordinates are those of each face's frame (src/scene/face.rs), in which the face lies in the
 // plane height = 0 with normal (0, 0, 1).
@@ -256,7 +258,7 @@ fn kernel(obs: Observer, q: vec2<real>) -> real {
 
 // The far-field band for a node and element (FarFieldRule::band): 1 + its index, or 0 for none.
 fn far_field_band(obs: Observer, el: u32) -> u32 {
-    if (PER_ELEMENT == 1u || params.band_count == 0u) {
+    if (!FAR_FIELD || params.band_count == 0u) {
         return 0u;
     }
     var r2: real = 0.0;

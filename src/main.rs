@@ -51,6 +51,18 @@ enum Command {
     Bench(BenchArgs),
     /// Assemble the collocation matrix K and write it as a NumPy .npy file
     Assemble(AssembleArgs),
+    /// The GPU adapter, its f64 support, and the worst errors (ulp) of the WGSL math library
+    GpuCheck {
+        /// Samples per function
+        #[arg(long, default_value_t = 1_000_000)]
+        samples: usize,
+        /// Precision of the math library to test
+        #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+        precision: PrecisionArg,
+        /// Write JSON to PATH (`-` for standard output) instead of text
+        #[arg(long, value_name = "PATH")]
+        json: Option<String>,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -467,6 +479,42 @@ fn run_assemble(args: &AssembleArgs) -> Result<()> {
     Ok(())
 }
 
+/// What `gpu-check` prints.
+#[derive(Serialize)]
+struct GpuCheck {
+    adapter: radiosity::gpu::AdapterSummary,
+    functions: Vec<radiosity::gpu::math::UlpReport>,
+}
+
+fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Result<()> {
+    let ctx = radiosity::gpu::shared_context()?;
+    let precision = match precision {
+        PrecisionArg::F64 => Precision::F64,
+        PrecisionArg::F32 => Precision::F32,
+    };
+    let functions = radiosity::gpu::math::measure(ctx, precision, samples)?;
+    let out = GpuCheck { adapter: ctx.adapter.clone(), functions };
+    if let Some(target) = json {
+        return report::write_json(&out, target);
+    }
+    let a = &out.adapter;
+    println!("adapter: {} ({}, {}), SHADER_F64: {}", a.name, a.backend, a.device_type, a.f64);
+    println!(
+        "math library in {}, {} samples per function, against Rust's f64 functions:",
+        precision.name(),
+        samples
+    );
+    for r in &out.functions {
+        println!(
+            "  {:<6} worst {:>6.2} ulp at {:?}",
+            format!("{:?}", r.function).to_lowercase(),
+            r.worst_ulp,
+            r.worst_at
+        );
+    }
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Study { id, max_n, device, json } => {
@@ -497,6 +545,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Inspect(args) => inspect(&args),
         Command::Bench(args) => run_bench(&args),
         Command::Assemble(args) => run_assemble(&args),
+        Command::GpuCheck { samples, precision, json } => {
+            gpu_check(samples, precision, json.as_deref())
+        }
     }
 }
 

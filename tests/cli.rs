@@ -114,3 +114,30 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
         assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
     }
 }
+
+#[test]
+fn assemble_writes_a_numpy_matrix_that_solves_like_the_library() {
+    let dir = std::env::temp_dir().join(format!("radiosity-npy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("k.npy");
+    let (ok, _, stderr) = radiosity(&[
+        "assemble",
+        "--scene",
+        "baffled-box",
+        "--refine",
+        "1",
+        "--output",
+        path.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let bytes = std::fs::read(&path).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    assert_eq!(npy.shape(), &[64, 64]);
+    let k: Vec<f64> = npy.into_vec().unwrap();
+    // A closed box: rows of K sum to rho = 0.5.
+    for i in 0..64 {
+        let s: f64 = k[i * 64..(i + 1) * 64].iter().sum();
+        assert!((s - 0.5).abs() < 1e-12, "row {i}: {s}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -164,16 +164,29 @@ struct RuleCounts {
     bands: usize,
 }
 
+/// The far-field rule the kernels use: in f64 the standard one for the linear method (when
+/// enabled), as on the CPU; in f32 the single-precision one for both methods, where the closed
+/// forms' cancellation far from the node would cost most of f32's digits.
+fn far_field_rule(precision: Precision, method: Method, enabled: bool) -> Option<FarFieldRule> {
+    match precision {
+        Precision::F32 => Some(FarFieldRule::single_precision()),
+        Precision::F64 => (enabled && method.nodes_per_element() == 3).then(FarFieldRule::standard),
+    }
+}
+
 /// The uniform tables (TABLE_SIZE entries of 4 reals): IMT nodes (x, w), then one header per
 /// far-field band ((ratio + 1)², first entry, count) and the bands' points (u, v, w).
-fn tables(options: &AssemblyOptions, method: Method) -> Result<(Vec<f64>, RuleCounts)> {
+fn tables(
+    options: &AssemblyOptions,
+    method: Method,
+    precision: Precision,
+) -> Result<(Vec<f64>, RuleCounts)> {
     let imt = ImtRule::new(options.imt_nodes.max(2));
     let mut entries: Vec<[f64; 4]> =
         imt.nodes().iter().zip(imt.weights()).map(|(&x, &w)| [x, w, 0.0, 0.0]).collect();
     let rule_offset = entries.len();
     let mut bands = 0;
-    if options.far_field && method.nodes_per_element() == 3 {
-        let rule = FarFieldRule::standard();
+    if let Some(rule) = far_field_rule(precision, method, options.far_field) {
         bands = rule.bands.len();
         let mut first = rule_offset + bands;
         for band in &rule.bands {
@@ -218,7 +231,11 @@ impl<'a> GpuAssembler<'a> {
                 ctx.adapter.name
             )));
         }
-        let source = shaders::collocation(precision, method.nodes_per_element() as u32);
+        let source = shaders::collocation(
+            precision,
+            method.nodes_per_element() as u32,
+            far_field_rule(precision, method, true).is_some(),
+        );
         let (layout, mut p) = compute::pipeline(
             ctx,
             &source,
@@ -252,6 +269,22 @@ impl<'a> GpuAssembler<'a> {
         options: &AssemblyOptions,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Assembly> {
+        self.assemble_with_tile_rows(scene, mesh, disc, planner, options, usize::MAX, progress)
+    }
+
+    /// [`Self::assemble`] with at most `max_tile_rows` rows per tile (the device's limits may
+    /// make tiles smaller still).
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble_with_tile_rows(
+        &self,
+        scene: &Scene,
+        mesh: &Mesh,
+        disc: &Discretization,
+        planner: &PairPlanner,
+        options: &AssemblyOptions,
+        max_tile_rows: usize,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Assembly> {
         if disc.method.nodes_per_element() != self.method.nodes_per_element() {
             return Err(Error::Gpu(format!(
                 "kernels compiled for the {} method cannot assemble the {} method",
@@ -264,7 +297,7 @@ impl<'a> GpuAssembler<'a> {
         let mut matrix = CollocationMatrix::zeros(dof)?;
         let p = self.precision;
         let elements = compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc), p));
-        let (tables, counts) = tables(options, self.method)?;
+        let (tables, counts) = tables(options, self.method, self.precision)?;
         let tables = compute::uniform(ctx, &layout::real_bytes(&tables, p));
 
         let max_binding =
@@ -274,6 +307,7 @@ impl<'a> GpuAssembler<'a> {
         // tile fit in one dimension of the dispatch grid.
         let rows_per_tile = ((max_binding.min(64 << 20) / row_bytes.max(1)) as usize)
             .min(ctx.limits.max_compute_workgroups_per_dimension as usize)
+            .min(max_tile_rows)
             .clamp(1, dof.max(1));
         let tiles: Vec<Range<usize>> =
             (0..dof).step_by(rows_per_tile).map(|s| s..(s + rows_per_tile).min(dof)).collect();

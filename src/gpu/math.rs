@@ -108,16 +108,24 @@ impl MathFunction {
     }
 }
 
-/// Distance between `got` and `want` in units of the last place of `want`.
-pub fn ulp_error(got: f64, want: f64) -> f64 {
+/// Distance between `got` and `want` in units of the last place of `want` in `precision`.
+pub fn ulp_error(got: f64, want: f64, precision: Precision) -> f64 {
     if got == want {
         return 0.0;
     }
     if !got.is_finite() || !want.is_finite() {
         return f64::INFINITY;
     }
-    let a = want.abs();
-    let ulp = if a == 0.0 { f64::from_bits(1) } else { a.next_up() - a };
+    let ulp = match precision {
+        Precision::F64 => {
+            let a = want.abs();
+            if a == 0.0 { f64::from_bits(1) } else { a.next_up() - a }
+        }
+        Precision::F32 => {
+            let a = (want as f32).abs();
+            f64::from(if a == 0.0 { f32::from_bits(1) } else { a.next_up() - a })
+        }
+    };
     (got - want).abs() / ulp
 }
 
@@ -130,7 +138,7 @@ pub struct UlpReport {
     pub precision: Precision,
     /// Samples evaluated.
     pub samples: usize,
-    /// Largest error in ulp of the f64 reference (for f32, ulp of f64 too).
+    /// Largest error in ulp of the reference in the kernel's precision.
     pub worst_ulp: f64,
     /// Arguments where it occurred.
     pub worst_at: (f64, f64),
@@ -173,27 +181,34 @@ pub fn measure(ctx: &GpuContext, precision: Precision, count: usize) -> Result<V
         .iter()
         .map(|&function| {
             let samples = function.samples(count);
-            // f32 kernels see the arguments rounded to f32: compare with the reference there.
+            // f32 kernels see the arguments rounded to f32 (normal numbers only): compare with
+            // the reference there.
             let rounded: Vec<(f64, f64)> = match precision {
                 Precision::F64 => samples.clone(),
-                Precision::F32 => {
-                    samples.iter().map(|&(x, y)| (x as f32 as f64, y as f32 as f64)).collect()
-                }
+                Precision::F32 => samples
+                    .iter()
+                    .map(|&(x, y)| (f64::from(x as f32), f64::from(y as f32)))
+                    .filter(|&(x, y)| [x, y].iter().all(|&v| v == 0.0 || (v as f32).is_normal()))
+                    .collect(),
             };
             let got = evaluate(ctx, precision, function, &rounded)?;
             let mut report = UlpReport {
                 function,
                 precision,
-                samples: samples.len(),
+                samples: rounded.len(),
                 worst_ulp: 0.0,
                 worst_at: (0.0, 0.0),
             };
             for (&(x, y), g) in rounded.iter().zip(got) {
                 let want = function.reference(x, y);
-                if !want.is_finite() {
+                let representable = match precision {
+                    Precision::F64 => want.is_finite(),
+                    Precision::F32 => want.abs() < f64::from(f32::MAX),
+                };
+                if !representable {
                     continue;
                 }
-                let e = ulp_error(g, want);
+                let e = ulp_error(g, want, precision);
                 if e > report.worst_ulp || e.is_nan() {
                     report.worst_ulp = e;
                     report.worst_at = (x, y);

@@ -43,11 +43,16 @@ fn with_math(precision: Precision, body: &str) -> String {
 }
 
 /// The collocation kernels (entry points `assemble_full`, `assemble_pieces`) for elements with
-/// `per_element` basis functions (1 or 3). The count is written into the source rather than passed
-/// as a pipeline-overridable constant: with wgpu 30 an `override` set at pipeline creation left the
-/// linear kernel computing wrong values on lavapipe.
-pub fn collocation(precision: Precision, per_element: u32) -> String {
-    with_math(precision, &format!("const PER_ELEMENT: u32 = {per_element}u;\n{COLLOCATION}"))
+/// `per_element` basis functions (1 or 3); `far_field` keeps the far-field rule's code. Both are
+/// written into the source rather than passed as pipeline-overridable constants: with wgpu 30 an
+/// `override` set at pipeline creation left the linear kernel computing wrong values on lavapipe.
+pub fn collocation(precision: Precision, per_element: u32, far_field: bool) -> String {
+    with_math(
+        precision,
+        &format!(
+            "const PER_ELEMENT: u32 = {per_element}u;\nconst FAR_FIELD: bool = {far_field};\n{COLLOCATION}"
+        ),
+    )
 }
 
 /// The math-library test kernel (entry point `math_eval`).
@@ -75,8 +80,9 @@ mod tests {
     fn every_shader_parses_and_validates_in_both_precisions() {
         for p in [Precision::F64, Precision::F32] {
             let sources = [
-                ("collocation, centroid", collocation(p, 1)),
-                ("collocation, linear", collocation(p, 3)),
+                ("collocation, centroid", collocation(p, 1, false)),
+                ("collocation, centroid, far field", collocation(p, 1, true)),
+                ("collocation, linear", collocation(p, 3, true)),
                 ("math_test", math_test(p)),
             ];
             for (name, src) in sources {
@@ -103,7 +109,7 @@ mod tests {
     #[test]
     fn layout_constants_match_the_host() {
         use super::super::layout;
-        let module = validate(&collocation(Precision::F64, 3)).unwrap();
+        let module = validate(&collocation(Precision::F64, 3, true)).unwrap();
         assert_eq!(wgsl_u32_constant(&module, "VIEW_STRIDE") as usize, layout::VIEW_STRIDE);
         assert_eq!(wgsl_u32_constant(&module, "ELEMENT_STRIDE") as usize, layout::ELEMENT_STRIDE);
         assert_eq!(wgsl_u32_constant(&module, "WORKGROUP"), layout::WORKGROUP);
