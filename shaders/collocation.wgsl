@@ -24,12 +24,18 @@
 //                          2 u32 per piece (first vertex, vertex count) from params.piece_offset
 //   5 vertices    storage  x, y per vertex of the visible pieces, relative to their element's centroid
 //   6 out         storage  rows x dof of K (rho/pi included), row-major
+//   7 near        storage  the deferred pairs: an atomic count, indirect dispatch arguments, then
+//                          (row, element) of up to params.near_capacity pairs
 //
 // Invocation contract: `assemble_full` runs on a grid of (element, row) with 64-wide workgroups
 // along the elements, and writes every entry of the tile, evaluating the whole element wherever the
-// node sees the face. `assemble_pieces` then runs one invocation per exception (1-D index
-// linearised by params.stride) and overwrites that pair's entries with the integral over its
-// visible pieces (zero pieces: a hidden pair).
+// node sees the face, except the pairs that need the IMT moment (linear method, near the node),
+// which it appends to the near list: those few pairs lie scattered among cheap ones, and a SIMD
+// batch with one of them would run the IMT loop for all its lanes. `prepare_near` (one invocation)
+// writes the indirect dispatch arguments, and `assemble_near` evaluates the listed pairs, one per
+// invocation. `assemble_pieces` then runs one invocation per exception (1-D index linearised by
+// params.stride) and overwrites that pair's entries with the integral over its visible pieces
+// (zero pieces: a hidden pair).
 
 const VIEW_STRIDE: u32 = 8u;
 const ELEMENT_STRIDE: u32 = 18u;
@@ -51,8 +57,21 @@ struct Params {
     exception_count: u32,
     piece_offset: u32,
     stride: u32,
+    near_capacity: u32,
+    _pad0: u32,
+}
+
+// The deferred pairs of `assemble_full` and the indirect dispatch of `assemble_near`.
+struct NearList {
+    count: atomic<u32>,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
+    dispatch_x: u32,
+    dispatch_y: u32,
+    dispatch_z: u32,
+    _pad3: u32,
+    pairs: array<u32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -62,6 +81,7 @@ struct Params {
 @group(0) @binding(4) var<storage, read> exceptions: array<u32>;
 @group(0) @binding(5) var<storage, read> vertices: array<real>;
 @group(0) @binding(6) var<storage, read_write> out: array<real>;
+@group(0) @binding(7) var<storage, read_write> near: NearList;
 
 // A node seen from a face's frame (kernels::Observer), with the row's factor rho/pi. Kernels move
 // it to an element's centroid with `relative_to`.
@@ -145,6 +165,25 @@ fn edge_terms(p: vec2<real>, q: vec2<real>, z2: real, with_log: bool) -> EdgeTer
     return t;
 }
 
+// [ln(1 + q)/q] r at w, with q = (h² + t²)/z², t = S sinh w, r = S cosh w (moments::log_integral):
+// one exponential gives both t and r, and 1 + q = r²/z², so for q >= 1 ln(1 + q) = 2 ln(r/z).
+fn log_integrand(w: real, s: real, h2: real, z: real) -> real {
+    let e = m_exp(w);
+    let inv = 1.0 / e;
+    let t = 0.5 * s * (e - inv);
+    let r = 0.5 * s * (e + inv);
+    let q = (h2 + t * t) / (z * z);
+    var ratio: real;
+    if (q < 1e-8) {
+        ratio = 1.0 - q * (0.5 - q / 3.0);
+    } else if (q < 1.0) {
+        ratio = m_log1p(q) / q;
+    } else {
+        ratio = 2.0 * m_log(r / z) / q;
+    }
+    return ratio * r;
+}
+
 // z L_e by the IMT rule in w with t = S sinh w (moments::log_integral).
 fn log_integral(edge: EdgeTerms, z: real) -> real {
     if (edge.h == 0.0) {
@@ -159,16 +198,7 @@ fn log_integral(edge: EdgeTerms, z: real) -> real {
     var acc: real = 0.0;
     for (var k = 0u; k < params.imt_count; k = k + 1u) {
         let node = tables.entries[k];
-        let w = wa + span * node.x;
-        let t = s * m_sinh(w);
-        let q = (h2 + t * t) / z2;
-        var ratio: real;
-        if (q < 1e-8) {
-            ratio = 1.0 - q * (0.5 - q / 3.0);
-        } else {
-            ratio = m_log1p(q) / q;
-        }
-        acc = acc + node.y * ratio * sqrt(edge.s2 + t * t);
+        acc = acc + node.y * log_integrand(wa + span * node.x, s, h2, z);
     }
     return 0.5 * edge.h * span * acc / z;
 }
@@ -338,6 +368,19 @@ fn assemble_full(@builtin(global_invocation_id) gid: vec3<u32>) {
         write_values(row, el, obs.scale, values);
         return;
     }
+    if (PER_ELEMENT == 3u && needs_log(obs, el)) {
+        let slot = atomicAdd(&near.count, 1u);
+        if (slot < params.near_capacity) {
+            near.pairs[2u * slot] = row;
+            near.pairs[2u * slot + 1u] = el;
+            return;
+        }
+    }
+    closed_form_pair(row, el, obs);
+}
+
+// The closed forms over the whole element (exact::constant_weight, exact::affine_weights).
+fn closed_form_pair(row: u32, el: u32, obs: Observer) {
     let o = obs.position.xy;
     let need_log = needs_log(obs, el);
     let second_order = PER_ELEMENT == 3u;
@@ -346,6 +389,25 @@ fn assemble_full(@builtin(global_invocation_id) gid: vec3<u32>) {
         add_edge(&m, element_vertex(el, k) - o, element_vertex(el, (k + 1u) % 3u) - o, obs.position.z, second_order, need_log);
     }
     write_pair(row, el, m, obs);
+}
+
+@compute @workgroup_size(1)
+fn prepare_near() {
+    let count = min(atomicLoad(&near.count), params.near_capacity);
+    near.dispatch_x = (count + WORKGROUP - 1u) / WORKGROUP;
+    near.dispatch_y = 1u;
+    near.dispatch_z = 1u;
+}
+
+@compute @workgroup_size(64)
+fn assemble_near(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let index = gid.x;
+    if (index >= min(atomicLoad(&near.count), params.near_capacity)) {
+        return;
+    }
+    let row = near.pairs[2u * index];
+    let el = near.pairs[2u * index + 1u];
+    closed_form_pair(row, el, relative_to(observer(row, element_face(el)), el));
 }
 
 @compute @workgroup_size(64)

@@ -101,7 +101,7 @@ fn m_log1p(x: f32) -> f32 {
 }
 
 fn m_exp(x: f32) -> f32 {
-    if (x > 88.7f) {
+    if (x > 88.72283f) {
         return ldexp(1.0f, 128);
     }
     if (x < -103.9f) {

@@ -158,8 +158,9 @@ fn studies_on_the_gpu_print_the_cpu_errors() {
 }
 
 #[test]
-fn tiles_smaller_than_the_matrix_give_the_same_matrix() {
-    // The tile size follows the device's binding limit; force several tiles through a large dof.
+fn tiles_and_a_full_near_list_give_the_same_matrix() {
+    // The tile size follows the device's binding limit and the near list its capacity: force
+    // several tiles and a near list too small for the tile's pairs.
     let Some(ctx) = gpu() else { return };
     let p = SurfaceParameters::default();
     let scene = BuiltinScene::BaffledBox.build(p).unwrap();
@@ -169,8 +170,9 @@ fn tiles_smaller_than_the_matrix_give_the_same_matrix() {
     let planner = PairPlanner::new(&scene);
     let opts = AssemblyOptions::default();
     let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
+    let limits = gpu::TileLimits { rows: 97, near_pairs: 100 };
     let gpu = assembler
-        .assemble_with_tile_rows(&scene, &mesh, &disc, &planner, &opts, 97, &|_| {})
+        .assemble_with_limits(&scene, &mesh, &disc, &planner, &opts, limits, &|_| {})
         .unwrap();
     assert!(assembler.last_timings().tiles > 1);
     let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();

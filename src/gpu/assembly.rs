@@ -26,6 +26,22 @@ use crate::quadrature::ImtRule;
 use crate::scene::Scene;
 use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
 
+/// Upper bounds on the work of one tile, below what the device allows (for tests and tuning).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileLimits {
+    /// Rows per tile.
+    pub rows: usize,
+    /// Pairs the near list may hold; pairs beyond it are evaluated in the first pass.
+    pub near_pairs: u64,
+}
+
+impl Default for TileLimits {
+    /// No bounds beyond the device's.
+    fn default() -> Self {
+        Self { rows: usize::MAX, near_pairs: u64::MAX }
+    }
+}
+
 /// Where the time of the last GPU assembly went (wall clock).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GpuTimings {
@@ -46,6 +62,8 @@ pub struct GpuAssembler<'a> {
     method: Method,
     layout: wgpu::BindGroupLayout,
     full: wgpu::ComputePipeline,
+    prepare_near: wgpu::ComputePipeline,
+    near: wgpu::ComputePipeline,
     pieces: wgpu::ComputePipeline,
     timings: std::sync::Mutex<GpuTimings>,
 }
@@ -236,17 +254,21 @@ impl<'a> GpuAssembler<'a> {
             method.nodes_per_element() as u32,
             far_field_rule(precision, method, true).is_some(),
         );
-        let (layout, mut p) = compute::pipeline(
+        let entries = ["assemble_full", "prepare_near", "assemble_near", "assemble_pieces"];
+        let (layout, pipelines) = compute::pipeline(ctx, &source, &entries, 8, &[0, 3], &[6, 7])?;
+        let [full, prepare_near, near, pieces]: [wgpu::ComputePipeline; 4] =
+            pipelines.try_into().expect("four pipelines");
+        Ok(Self {
             ctx,
-            &source,
-            &["assemble_full", "assemble_pieces"],
-            7,
-            &[0, 3],
-            &[6],
-        )?;
-        let pieces = p.pop().expect("two pipelines");
-        let full = p.pop().expect("two pipelines");
-        Ok(Self { ctx, precision, method, layout, full, pieces, timings: Default::default() })
+            precision,
+            method,
+            layout,
+            full,
+            prepare_near,
+            near,
+            pieces,
+            timings: Default::default(),
+        })
     }
 
     /// Precision of the kernels.
@@ -269,20 +291,27 @@ impl<'a> GpuAssembler<'a> {
         options: &AssemblyOptions,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Assembly> {
-        self.assemble_with_tile_rows(scene, mesh, disc, planner, options, usize::MAX, progress)
+        self.assemble_with_limits(
+            scene,
+            mesh,
+            disc,
+            planner,
+            options,
+            TileLimits::default(),
+            progress,
+        )
     }
 
-    /// [`Self::assemble`] with at most `max_tile_rows` rows per tile (the device's limits may
-    /// make tiles smaller still).
+    /// [`Self::assemble`] within `limits` (the device's limits may make tiles smaller still).
     #[allow(clippy::too_many_arguments)]
-    pub fn assemble_with_tile_rows(
+    pub fn assemble_with_limits(
         &self,
         scene: &Scene,
         mesh: &Mesh,
         disc: &Discretization,
         planner: &PairPlanner,
         options: &AssemblyOptions,
-        max_tile_rows: usize,
+        limits: TileLimits,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Assembly> {
         if disc.method.nodes_per_element() != self.method.nodes_per_element() {
@@ -307,7 +336,7 @@ impl<'a> GpuAssembler<'a> {
         // tile fit in one dimension of the dispatch grid.
         let rows_per_tile = ((max_binding.min(64 << 20) / row_bytes.max(1)) as usize)
             .min(ctx.limits.max_compute_workgroups_per_dimension as usize)
-            .min(max_tile_rows)
+            .min(limits.rows)
             .clamp(1, dof.max(1));
         let tiles: Vec<Range<usize>> =
             (0..dof).step_by(rows_per_tile).map(|s| s..(s + rows_per_tile).min(dof)).collect();
@@ -327,8 +356,16 @@ impl<'a> GpuAssembler<'a> {
         for k in 0..tiles.len() {
             let plan = next_plan.take().expect("planned before use");
             stats += plan.stats;
-            let submitted =
-                self.submit(&plan, disc, mesh, &elements, &tables, counts, max_binding)?;
+            let submitted = self.submit(
+                &plan,
+                disc,
+                mesh,
+                &elements,
+                &tables,
+                counts,
+                max_binding,
+                limits.near_pairs,
+            )?;
             if let Some(done) = in_flight.take() {
                 self.finish(done, &mut matrix, progress)?;
             }
@@ -352,6 +389,7 @@ impl<'a> GpuAssembler<'a> {
         tables: &wgpu::Buffer,
         counts: RuleCounts,
         max_binding: u64,
+        max_near_pairs: u64,
     ) -> Result<InFlight> {
         let ctx = self.ctx;
         let p = self.precision;
@@ -372,6 +410,19 @@ impl<'a> GpuAssembler<'a> {
             }
         }
         let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
+        // The near list holds every pair of the tile, up to what one indirect dispatch and one
+        // binding allow; pairs beyond it are evaluated in the first pass.
+        let near_capacity = if self.method.nodes_per_element() == 3 {
+            let grid_limit =
+                ctx.limits.max_compute_workgroups_per_dimension as u64 * layout::WORKGROUP as u64;
+            let binding_limit = (max_binding - layout::NEAR_HEADER_BYTES) / 8;
+            ((rows * disc.element_count()) as u64)
+                .min(grid_limit)
+                .min(binding_limit)
+                .min(max_near_pairs)
+        } else {
+            0
+        };
         let params = Params {
             rows: rows as u32,
             elements: disc.element_count() as u32,
@@ -383,9 +434,24 @@ impl<'a> GpuAssembler<'a> {
             exception_count: plan.exception_count,
             piece_offset: plan.piece_offset,
             stride,
-            _pad: [0; 2],
+            near_capacity: near_capacity as u32,
+            _pad: 0,
         };
         let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+        let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("near"),
+            size: layout::NEAR_HEADER_BYTES + 8 * near_capacity.max(1),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        // The indirect arguments, copied out of the near list: a buffer bound read-write cannot
+        // also drive the dispatch that binds it.
+        let near_args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("near dispatch"),
+            size: 16,
+            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let views = compute::storage(ctx, &view_bytes);
         let exceptions = compute::storage(ctx, exception_bytes);
         let vertices = compute::storage(ctx, &vertex_bytes);
@@ -394,7 +460,7 @@ impl<'a> GpuAssembler<'a> {
         let group = compute::bind_group(
             ctx,
             &self.layout,
-            &[&params, &views, elements, tables, &exceptions, &vertices, &out],
+            &[&params, &views, elements, tables, &exceptions, &vertices, &out, &near],
         );
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
@@ -403,6 +469,19 @@ impl<'a> GpuAssembler<'a> {
             pass.set_bind_group(0, &group, &[]);
             let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
             pass.dispatch_workgroups(groups_x, rows as u32, 1);
+        }
+        if near_capacity > 0 {
+            // The pairs the first pass deferred, with every lane busy.
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.prepare_near);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            drop(pass);
+            encoder.copy_buffer_to_buffer(&near, layout::NEAR_DISPATCH_OFFSET, &near_args, 0, 12);
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.near);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups_indirect(&near_args, 0);
         }
         if plan.exception_count > 0 {
             // A second pass: ordered after the first, which it partly overwrites.
@@ -417,7 +496,7 @@ impl<'a> GpuAssembler<'a> {
             rows: plan.rows.clone(),
             staging,
             size,
-            _buffers: vec![params, views, exceptions, vertices, out],
+            _buffers: vec![params, views, exceptions, vertices, out, near, near_args],
         })
     }
 

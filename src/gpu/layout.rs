@@ -41,9 +41,16 @@ pub struct Params {
     pub piece_offset: u32,
     /// Invocations per row of the exceptions' dispatch grid.
     pub stride: u32,
+    /// Pairs the near list can hold.
+    pub near_capacity: u32,
     /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
+
+/// Bytes of the near list before its pairs: count, padding, indirect dispatch arguments, padding.
+pub const NEAR_HEADER_BYTES: u64 = 32;
+/// Byte offset of the indirect dispatch arguments in the near list.
+pub const NEAR_DISPATCH_OFFSET: u64 = 16;
 
 const _: () = assert!(std::mem::size_of::<Params>() == 48);
 

@@ -8,7 +8,7 @@ pub mod layout;
 pub mod math;
 pub mod shaders;
 
-pub use assembly::{GpuAssembler, GpuTimings};
+pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
 pub use context::{AdapterRequest, AdapterSummary, GpuContext, INSTALL_HINT};
 pub use shaders::Precision;
 

@@ -118,12 +118,22 @@ pub(crate) fn log_integral(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
     let z2 = z * z;
     let h2 = edge.h * edge.h;
     let (wa, wb) = ((edge.ta / s).asinh(), (edge.tb / s).asinh());
-    // Integrand in w: [ln(1 + q)/q] r / z² with q = (h² + t²)/z², r = (S² + t²)^(1/2) = dt/dw.
+    // Integrand in w: [ln(1 + q)/q] r / z² with q = (h² + t²)/z² and r = (S² + t²)^(1/2) = dt/dw.
+    // One exponential gives t = S sinh w and r = S cosh w; and 1 + q = r²/z², so for q >= 1
+    // ln(1 + q) = 2 ln(r/z) (one log; below 1 the log1p of q itself keeps its digits).
     let integral = imt.integrate(wa, wb, |w| {
-        let t = s * w.sinh();
+        let e = w.exp();
+        let inv = 1.0 / e;
+        let (t, r) = (0.5 * s * (e - inv), 0.5 * s * (e + inv));
         let q = (h2 + t * t) / z2;
-        let ratio = if q < 1e-8 { 1.0 - q * (0.5 - q / 3.0) } else { q.ln_1p() / q };
-        ratio * (edge.s2 + t * t).sqrt()
+        let ratio = if q < 1e-8 {
+            1.0 - q * (0.5 - q / 3.0)
+        } else if q < 1.0 {
+            q.ln_1p() / q
+        } else {
+            2.0 * (r / z).ln() / q
+        };
+        ratio * r
     });
     0.5 * edge.h * integral / z
 }
