@@ -166,8 +166,9 @@ fn edge_terms(p: vec2<real>, q: vec2<real>, z2: real, with_log: bool) -> EdgeTer
 }
 
 // [ln(1 + q)/q] r at w, with q = (h² + t²)/z², t = S sinh w, r = S cosh w (moments::log_integral):
-// one exponential gives both t and r, and 1 + q = r²/z², so for q >= 1 ln(1 + q) = 2 ln(r/z).
-fn log_integrand(w: real, s: real, h2: real, z: real) -> real {
+// one exponential gives both t and r, and for q >= 1 ln(1 + q) = 2 ln(r/z)
+// = 2 [ln(S/z) + |w| - ln 2 + ln(1 + m²)], m = e^-|w| <= 1, with ln(S/z) given per edge.
+fn log_integrand(w: real, s: real, h2: real, z: real, log_s_over_z: real) -> real {
     let e = m_exp(w);
     let inv = 1.0 / e;
     let t = 0.5 * s * (e - inv);
@@ -179,7 +180,8 @@ fn log_integrand(w: real, s: real, h2: real, z: real) -> real {
     } else if (q < 1.0) {
         ratio = m_log1p(q) / q;
     } else {
-        ratio = 2.0 * m_log(r / z) / q;
+        let m = min(e, inv);
+        ratio = 2.0 * (log_s_over_z + abs(w) - LN2 + m_log1p_unit(m * m)) / q;
     }
     return ratio * r;
 }
@@ -195,10 +197,11 @@ fn log_integral(edge: EdgeTerms, z: real) -> real {
     let wa = m_asinh(edge.ta / s);
     let wb = m_asinh(edge.tb / s);
     let span = wb - wa;
+    let log_s_over_z = m_log(s / z);
     var acc: real = 0.0;
     for (var k = 0u; k < params.imt_count; k = k + 1u) {
         let node = tables.entries[k];
-        acc = acc + node.y * log_integrand(wa + span * node.x, s, h2, z);
+        acc = acc + node.y * log_integrand(wa + span * node.x, s, h2, z, log_s_over_z);
     }
     return 0.5 * edge.h * span * acc / z;
 }

@@ -46,6 +46,7 @@ fn m_atan2(y: f32, x: f32) -> f32 {
 const M32_LN2_HI: f32 = 0.693145751953125f;
 const M32_LN2_LO: f32 = 1.4286068e-06f;
 const M32_SQRT2: f32 = 1.4142135f;
+const LN2: f32 = 0.6931472f;
 
 // log(1 + f) + extra for f in [sqrt(2)/2 - 1, sqrt(2) - 1] (m_log1p_core of math_f64.wgsl with
 // the series of 2 atanh(s)/s cut for f32).
@@ -77,6 +78,14 @@ fn m_log(x: f32) -> f32 {
     return dk * M32_LN2_HI + m_log1p_core(m - 1.0f, dk * M32_LN2_LO);
 }
 
+// log(1 + y) for y in [0, 1].
+fn m_log1p_unit(y: f32) -> f32 {
+    if (y < 0.41421357f) {
+        return m_log1p_core(y, 0.0f);
+    }
+    return M32_LN2_HI + m_log1p_core((y - 1.0f) * 0.5f, M32_LN2_LO);
+}
+
 fn m_log1p(x: f32) -> f32 {
     if (x > -0.29289323f && x < 0.41421357f) {
         return m_log1p_core(x, 0.0f);
@@ -85,14 +94,7 @@ fn m_log1p(x: f32) -> f32 {
         return M32_LN2_HI + m_log1p_core((x - 1.0f) * 0.5f, M32_LN2_LO);
     }
     if (x > 1.0f) {
-        let y = 1.0f / x;
-        var tail: f32;
-        if (y < 0.41421357f) {
-            tail = m_log1p_core(y, 0.0f);
-        } else {
-            tail = M32_LN2_HI + m_log1p_core((y - 1.0f) * 0.5f, M32_LN2_LO);
-        }
-        return m_log(x) + tail;
+        return m_log(x) + m_log1p_unit(1.0f / x);
     }
     if (x > -0.5f) {
         return m_log1p_core(1.0f + 2.0f * x, -M32_LN2_LO) - M32_LN2_HI;

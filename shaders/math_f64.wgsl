@@ -19,6 +19,7 @@ const M_LN2_HI: f64 = 0.6931471805598903lf;
 const M_LN2_LO: f64 = 5.497923018708371e-14lf;
 const M_INV_LN2: f64 = 1.4426950408889634lf;
 const M_SQRT2: f64 = 1.4142135623730951lf;
+const LN2: f64 = 0.6931471805599453lf;
 
 // atan(c) = hi + lo for the reduction points c = 1/2, 1, 3/2 (and pi/2 for c = infinity).
 const M_ATAN_HALF_HI: f64 = 0.4636476090008061lf;

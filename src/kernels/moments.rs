@@ -119,8 +119,10 @@ pub(crate) fn log_integral(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
     let h2 = edge.h * edge.h;
     let (wa, wb) = ((edge.ta / s).asinh(), (edge.tb / s).asinh());
     // Integrand in w: [ln(1 + q)/q] r / z² with q = (h² + t²)/z² and r = (S² + t²)^(1/2) = dt/dw.
-    // One exponential gives t = S sinh w and r = S cosh w; and 1 + q = r²/z², so for q >= 1
-    // ln(1 + q) = 2 ln(r/z) (one log; below 1 the log1p of q itself keeps its digits).
+    // One exponential gives t = S sinh w and r = S cosh w. Since 1 + q = r²/z², for q >= 1
+    // ln(1 + q) = 2 ln(r/z) = 2 [ln(S/z) + |w| - ln 2 + ln(1 + m²)], m = e^-|w| <= 1: one log per
+    // edge and a log1p of an argument in [0, 1] per node (below q = 1 the log1p of q keeps its digits).
+    let log_s_over_z = (s / z).ln();
     let integral = imt.integrate(wa, wb, |w| {
         let e = w.exp();
         let inv = 1.0 / e;
@@ -131,7 +133,8 @@ pub(crate) fn log_integral(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
         } else if q < 1.0 {
             q.ln_1p() / q
         } else {
-            2.0 * (r / z).ln() / q
+            let m = e.min(inv);
+            2.0 * (log_s_over_z + w.abs() - std::f64::consts::LN_2 + (m * m).ln_1p()) / q
         };
         ratio * r
     });
