@@ -16,6 +16,7 @@ pub mod report;
 pub mod scene;
 pub mod solve;
 pub mod study;
+pub mod surface_error;
 pub mod visibility;
 
 pub use error::{Error, Result};

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use serde::Serialize;
 
-use radiosity::assembly::AssemblyOptions;
+use radiosity::assembly::{AssemblyOptions, Quadrature};
 use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
@@ -13,7 +13,7 @@ use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
 use radiosity::solve::SolverChoice;
-use radiosity::study::{self, StudyOptions};
+use radiosity::study::{self, StudyDevice, StudyOptions};
 use radiosity::visibility::PairPlanner;
 use radiosity::{bench, report};
 
@@ -30,15 +30,24 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Reproduce a table of the paper (ids: table-3.1, table-3.4)
+    /// Reproduce a table or figure of the paper, or run a study (ids: table-3.1 .. table-3.5,
+    /// table-4.1, table-4.2, figure-3.4 .. figure-3.7, error-vs-time, grading)
     Study {
         /// Study id
         id: String,
         /// Largest number of elements n to run (default: the paper's largest)
         #[arg(long)]
         max_n: Option<usize>,
-        #[command(flatten)]
-        device: DeviceArgs,
+        /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
+        /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
+        #[arg(long, value_enum)]
+        backend: Option<BackendArg>,
+        /// Precision of the GPU kernels with --backend gpu
+        #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+        precision: PrecisionArg,
+        /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
+        #[arg(long, value_name = "DIR", default_value = "figures")]
+        figures: String,
         /// Write JSON to PATH (`-` for standard output) instead of the text table
         #[arg(long, value_name = "PATH")]
         json: Option<String>,
@@ -96,9 +105,11 @@ enum SolverArg {
     Iterative,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum QuadratureArg {
     Exact,
+    SevenPoint,
+    Gauss,
 }
 
 /// The scene, its mesh and the collocation method.
@@ -122,9 +133,21 @@ struct GeometryArgs {
     /// Surface parameters A,B,C of the paper's surfaces
     #[arg(long, value_name = "A,B,C", default_value = "5,2,1")]
     params: String,
-    /// How the collocation integrals are evaluated
+    /// How the collocation integrals are evaluated: closed forms (+ IMT), or the paper's graded
+    /// 7-point or collapsed-Gauss rules (sec. 4.2)
     #[arg(long, value_enum, default_value_t = QuadratureArg::Exact)]
     quadrature: QuadratureArg,
+    /// MaxLev of the seven-point and gauss quadratures: 4^MaxLev subtriangles, or 2^(IBase+MaxLev)
+    /// Gauss points per dimension, next to the node
+    #[arg(long, default_value_t = 3)]
+    max_level: u32,
+    /// IBase of the gauss quadrature: 2^IBase points per dimension far from the node
+    #[arg(long, default_value_t = 1)]
+    ibase: u32,
+    /// The quadrature level is MaxLev within this many element diameters of the node, and falls by
+    /// one per doubling of the distance
+    #[arg(long, default_value_t = radiosity::kernels::graded::DEFAULT_NEAR)]
+    near_ratio: f64,
     /// IMT subintervals for the linear method's 1-D integrals
     #[arg(long, default_value_t = 128)]
     imt_nodes: usize,
@@ -163,6 +186,10 @@ struct SolveArgs {
     /// Linear solver: LU up to 6000 unknowns and BiCGSTAB beyond (auto), or forced
     #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
     solver: SolverArg,
+    /// Also report the largest errors over all of S, of u_n and of the iterated solution E + K u_n,
+    /// at the interior points of a barycentric lattice of spacing 1/M in every element
+    #[arg(long, value_name = "M")]
+    surface_lattice: Option<usize>,
     /// Write JSON to PATH (`-` for standard output) instead of text
     #[arg(long, value_name = "PATH")]
     json: Option<String>,
@@ -225,6 +252,17 @@ fn backend(b: BackendArg, p: PrecisionArg) -> Backend {
 }
 
 impl GeometryArgs {
+    fn quadrature(&self) -> Result<Quadrature> {
+        let (max_level, ibase, near_ratio) = (self.max_level, self.ibase, self.near_ratio);
+        let q = match self.quadrature {
+            QuadratureArg::Exact => Quadrature::Exact,
+            QuadratureArg::SevenPoint => Quadrature::SevenPoint { max_level, near_ratio },
+            QuadratureArg::Gauss => Quadrature::Gauss { ibase, max_level, near_ratio },
+        };
+        q.validate()?;
+        Ok(q)
+    }
+
     /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere.
     fn config(&self) -> Result<RunConfig> {
         let scene: BuiltinScene = self.scene.parse()?;
@@ -249,11 +287,17 @@ impl GeometryArgs {
             refine: self.refine,
             method,
             solution: scene.is_paper_surface().then_some(TrueSolution::X2Y2),
-            assembly: AssemblyOptions { imt_nodes: self.imt_nodes, far_field: !self.no_far_field },
+            assembly: AssemblyOptions {
+                quadrature: self.quadrature()?,
+                imt_nodes: self.imt_nodes,
+                far_field: !self.no_far_field,
+            },
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
             solver: SolverChoice::Auto,
             progress: true,
+            setup_repeats: 1,
+            surface_lattice: None,
         })
     }
 }
@@ -277,6 +321,16 @@ impl SolveArgs {
             }
         }
         config.backend = backend(self.device.backend, self.device.precision);
+        if let Some(m) = self.surface_lattice {
+            if m < 3 {
+                return Err(Error::InvalidParameter {
+                    name: "surface-lattice",
+                    value: m.to_string(),
+                    reason: "a lattice with interior points needs M >= 3".into(),
+                });
+            }
+        }
+        config.surface_lattice = self.surface_lattice;
         config.solver = match self.solver {
             SolverArg::Auto => SolverChoice::Auto,
             SolverArg::Lu => SolverChoice::Lu,
@@ -386,6 +440,12 @@ fn print_run(r: &RunReport) {
     }
     if let Some(e) = r.error {
         println!("max error at the nodes E_n = {e:.6e}");
+    }
+    if let Some(s) = &r.over_surface {
+        println!(
+            "max error over S ({} points): u_n {:.6e}, iterated solution E + K u_n {:.6e}",
+            s.points, s.interpolant, s.iterated
+        );
     }
     println!(
         "solution at the nodes: min {:.6}, mean {:.6}, max {:.6}",
@@ -517,12 +577,14 @@ fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Res
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Study { id, max_n, device, json } => {
-            let options = StudyOptions {
-                max_n,
-                backend: backend(device.backend, device.precision),
-                progress: true,
+        Command::Study { id, max_n, backend: device, precision, figures, json } => {
+            let device = match (device, backend(BackendArg::Gpu, precision)) {
+                (None, _) => StudyDevice::Auto,
+                (Some(BackendArg::Cpu), _) => StudyDevice::Cpu,
+                (Some(BackendArg::Gpu), b) => StudyDevice::Gpu(b.precision()),
             };
+            let options =
+                StudyOptions { max_n, device, progress: true, figure_dir: Some(figures.into()) };
             let result = study::run_study(&id, &options)?;
             match json {
                 Some(target) => report::write_json(&result, &target),

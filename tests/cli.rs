@@ -106,6 +106,19 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
         (&["solve", "--scene", "four-piece", "--solution", "parabola"], "'parabola'"),
         (&["solve", "--scene", "four-piece", "--refine", "40"], "refine = 40"),
         (&["study", "table-9.9"], "unknown study 'table-9.9'"),
+        (
+            &["solve", "--scene", "four-piece", "--quadrature", "gauss", "--max-level", "9"],
+            "max-level",
+        ),
+        (
+            &["solve", "--scene", "four-piece", "--quadrature", "gauss", "--near-ratio", "0"],
+            "near-ratio",
+        ),
+        (
+            &["solve", "--scene", "four-piece", "--quadrature", "seven-point", "--backend", "gpu"],
+            "exact method only",
+        ),
+        (&["solve", "--scene", "four-piece", "--surface-lattice", "2"], "surface-lattice"),
     ];
     for (args, needle) in cases {
         let (ok, _, stderr) = radiosity(args);
@@ -139,5 +152,161 @@ fn assemble_writes_a_numpy_matrix_that_solves_like_the_library() {
         let s: f64 = k[i * 64..(i + 1) * 64].iter().sum();
         assert!((s - 0.5).abs() < 1e-12, "row {i}: {s}");
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn rows_of<'a>(v: &'a Value, quadrature: &str, max_level: Option<u64>) -> Vec<&'a Value> {
+    v["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["quadrature"] == quadrature && r["max_level"].as_u64() == max_level)
+        .collect()
+}
+
+fn within(r: &Value, tolerance: f64) {
+    let (e, p) = (r["error"].as_f64().unwrap(), r["paper_error"].as_f64().unwrap());
+    assert!((e - p).abs() <= tolerance * p, "{}: n = {}: {e} vs paper {p}", r["series"], r["n"]);
+}
+
+#[test]
+fn table_4_1_matches_the_paper_for_all_three_integration_methods() {
+    let v = json(&["study", "table-4.1", "--max-n", "640", "--backend", "cpu", "--json", "-"]);
+    for (quadrature, max_level) in [("exact", None), ("seven-point", Some(3)), ("gauss", Some(3))] {
+        let rows = rows_of(&v, quadrature, max_level);
+        assert_eq!(rows.len(), 4, "{quadrature}: n = 10, 40, 160, 640");
+        for r in rows.iter().filter(|r| r["n"] != 10) {
+            within(r, 0.03);
+            assert!(r["paper_setup_seconds"].as_f64().is_some());
+            assert!(r["setup_seconds"].as_f64().unwrap() > 0.0);
+            if quadrature == "gauss" {
+                assert_eq!(r["ibase"], 1);
+            }
+            // The paper's settings integrate to about 1e-3: visible, and not rounding error.
+            let int = r["integration_error"].as_f64();
+            match quadrature {
+                "exact" => assert!(int.is_none(), "the exact CPU rows are the reference"),
+                _ => assert!(int.unwrap() > 1e-4 && int.unwrap() < 1e-2, "{r}"),
+            }
+        }
+    }
+    let gpu = v["series"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["series"].as_str().unwrap().contains("gpu"));
+    assert!(gpu.unwrap()["skipped"].as_str().unwrap().contains("--backend cpu"));
+}
+
+#[test]
+fn table_4_2_reproduces_the_gauss_method_losing_accuracy_at_max_level_4() {
+    let v = json(&["study", "table-4.2", "--max-n", "640", "--backend", "cpu", "--json", "-"]);
+    for (quadrature, max_level) in [("exact", None), ("gauss", Some(4)), ("gauss", Some(5))] {
+        for r in rows_of(&v, quadrature, max_level) {
+            within(r, 0.03);
+        }
+    }
+    let at_640 = |max_level| {
+        rows_of(&v, "gauss", Some(max_level)).iter().find(|r| r["n"] == 640).unwrap()["error"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(at_640(4) > 4.0 * at_640(5), "MaxLev 4 loses accuracy at n = 640, MaxLev 5 not");
+}
+
+#[test]
+fn table_3_5_follows_the_caption_the_edge_solution_converges_at_half_order() {
+    let v = json(&["study", "table-3.5", "--max-n", "640", "--json", "-"]);
+    let five: Vec<&Value> =
+        v["rows"].as_array().unwrap().iter().filter(|r| r["surface"] == "five-piece").collect();
+    assert_eq!(five.len(), 4);
+    for r in &five[1..] {
+        for key in ["surface", "mesh", "n", "error", "ratio"] {
+            assert!(!r[key].is_null(), "row lacks {key}: {r}");
+        }
+        let ratio = r["ratio"].as_f64().unwrap();
+        assert!((ratio - 2f64.sqrt()).abs() < 0.02, "O(h^0.5) expected: ratio {ratio}");
+    }
+    assert!(v["notes"][0].as_str().unwrap().contains("caption"));
+}
+
+#[test]
+fn figure_studies_write_png_and_svg_and_fit_rates() {
+    let dir = std::env::temp_dir().join(format!("radiosity-figures-{}", std::process::id()));
+    let dir_text = dir.to_str().unwrap();
+    let v = json(&["study", "figure-3.4", "--max-n", "160", "--figures", dir_text, "--json", "-"]);
+    let meshes: Vec<&str> =
+        v["rows"].as_array().unwrap().iter().map(|r| r["mesh"].as_str().unwrap()).collect();
+    assert!(meshes.contains(&"uniform") && meshes.contains(&"discontinuity"));
+    for s in v["series"].as_array().unwrap() {
+        // Centroid collocation on the 5-piece surface: about O(h) (paper (2.30)).
+        let rate = s["rate"].as_f64().unwrap();
+        assert!(rate > 0.5 && rate < 1.5, "{s}");
+    }
+    let png = std::fs::read(dir.join("figure-3.4.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    assert!(png.len() > 10_000, "a real picture, not an empty canvas");
+    let svg = std::fs::read_to_string(dir.join("figure-3.4.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("uniform, nodes"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn figure_3_7_measures_the_error_over_all_of_s() {
+    let dir = std::env::temp_dir().join(format!("radiosity-figure-37-{}", std::process::id()));
+    let v = json(&[
+        "study",
+        "figure-3.7",
+        "--max-n",
+        "100",
+        "--figures",
+        dir.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2 + 2 + 2 + 1, "n = 8, 32 | 24, 96 | 10, 40 | 30");
+    for r in rows {
+        let nodes = r["error"].as_f64().unwrap();
+        let over = r["surface_error"].as_f64().unwrap();
+        let iterated = r["iterated_error"].as_f64().unwrap();
+        // u_n is worse between the nodes than at them; the iterated solution is not.
+        assert!(over > 2.0 * nodes, "{r}");
+        assert!(iterated < 3.0 * nodes && iterated >= 0.5 * nodes, "{r}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn error_vs_time_marks_a_pareto_front_per_method() {
+    let dir = std::env::temp_dir().join(format!("radiosity-evt-{}", std::process::id()));
+    let v = json(&[
+        "study",
+        "error-vs-time",
+        "--max-n",
+        "40",
+        "--backend",
+        "cpu",
+        "--figures",
+        dir.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    let rows = v["rows"].as_array().unwrap();
+    for method in ["centroid", "linear"] {
+        let of_method: Vec<&Value> = rows.iter().filter(|r| r["method"] == method).collect();
+        assert!(of_method.len() >= 20, "{method}: {} rows", of_method.len());
+        let front: Vec<&&Value> = of_method.iter().filter(|r| r["pareto"] == true).collect();
+        assert!(!front.is_empty());
+        // Nothing off the front is both faster and more accurate than a point on it.
+        for f in &front {
+            let (t, e) = (f["setup_seconds"].as_f64().unwrap(), f["error"].as_f64().unwrap());
+            assert!(!of_method.iter().any(|r| {
+                let (s, g) = (r["setup_seconds"].as_f64().unwrap(), r["error"].as_f64().unwrap());
+                s < t && g < e
+            }));
+        }
+    }
+    assert!(dir.join("error-vs-time.png").exists() && dir.join("error-vs-time.svg").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -124,25 +124,34 @@ fn f32_kernels_are_within_single_precision_error_of_the_f64_cpu_matrix() {
 }
 
 #[test]
+fn the_gpu_column_of_table_4_1_agrees_with_the_exact_cpu_column() {
+    let Some(_) = gpu() else { return };
+    use radiosity::study::{StudyDevice, StudyOptions, run_study};
+    let options = StudyOptions {
+        max_n: Some(160),
+        device: StudyDevice::Gpu(Precision::F64),
+        progress: false,
+        figure_dir: None,
+    };
+    let result = run_study("table-4.1", &options).unwrap();
+    let gpu_rows: Vec<_> = result.rows.iter().filter(|r| r.backend == "gpu").collect();
+    assert_eq!(gpu_rows.len(), 3, "n = 10, 40, 160");
+    for r in gpu_rows {
+        assert_eq!(r.quadrature.name(), "exact");
+        let difference = r.integration_error.expect("compared with the exact CPU run");
+        assert!(difference < 1e-13, "n = {}: {difference:e}", r.n);
+    }
+}
+
+#[test]
 fn studies_on_the_gpu_print_the_cpu_errors() {
     let Some(_) = gpu() else { return };
-    use radiosity::pipeline::Backend;
-    use radiosity::study::{StudyOptions, run_study};
+    use radiosity::study::{StudyDevice, StudyOptions, run_study};
+    let options =
+        |device| StudyOptions { max_n: Some(160), device, progress: false, figure_dir: None };
     for id in ["table-3.1", "table-3.4"] {
-        let cpu = run_study(
-            id,
-            &StudyOptions { max_n: Some(160), backend: Backend::Cpu, progress: false },
-        )
-        .unwrap();
-        let gpu = run_study(
-            id,
-            &StudyOptions {
-                max_n: Some(160),
-                backend: Backend::Gpu(Precision::F64),
-                progress: false,
-            },
-        )
-        .unwrap();
+        let cpu = run_study(id, &options(StudyDevice::Cpu)).unwrap();
+        let gpu = run_study(id, &options(StudyDevice::Gpu(Precision::F64))).unwrap();
         assert_eq!(cpu.rows.len(), gpu.rows.len());
         for (c, g) in cpu.rows.iter().zip(&gpu.rows) {
             assert_eq!(g.backend, "gpu");

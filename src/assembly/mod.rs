@@ -5,52 +5,40 @@
 //! once, and elements of unobstructed faces skip all visibility work.
 
 mod matrix;
+mod options;
 
 pub use matrix::CollocationMatrix;
+pub use options::{AssemblyOptions, Quadrature};
 
 use std::f64::consts::PI;
 
 use glam::DVec2;
 use rayon::prelude::*;
 
-use crate::discretization::{Discretization, ElementFrame, Method};
+use crate::discretization::{Discretization, ElementFrame, Method, Node};
 use crate::error::Result;
 use crate::kernels::far_field::{self, FarFieldRule};
+use crate::kernels::graded::GradedRule;
 use crate::kernels::{Affine2, Observer, exact};
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
 use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
-
-/// How the collocation integrals are evaluated.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AssemblyOptions {
-    /// Subintervals of the IMT rule for the one non-elementary moment (paper: 128).
-    pub imt_nodes: usize,
-    /// Use the far-field rule ([`FarFieldRule::standard`]) for elements (and visible pieces) far from
-    /// the node in the linear method. Off: the paper's exact method everywhere.
-    pub far_field: bool,
-}
-
-impl Default for AssemblyOptions {
-    /// The exact method with 128 IMT nodes, and the far-field rule for the linear method.
-    fn default() -> Self {
-        Self { imt_nodes: ImtRule::PAPER_NODES, far_field: true }
-    }
-}
 
 /// Evaluates the collocation integrals of one (node, element) pair.
 pub struct PairIntegrator {
     method: Method,
     imt: ImtRule,
     far_field: Option<FarFieldRule>,
+    graded: Option<GradedRule>,
 }
 
 impl PairIntegrator {
     /// An integrator for `method`.
     pub fn new(method: Method, options: &AssemblyOptions) -> Self {
-        let far_field =
-            (options.far_field && method.nodes_per_element() == 3).then(FarFieldRule::standard);
-        Self { method, imt: ImtRule::new(options.imt_nodes.max(2)), far_field }
+        let graded = options.quadrature.graded_rule();
+        let far_field = (graded.is_none() && options.far_field && method.nodes_per_element() == 3)
+            .then(FarFieldRule::standard);
+        Self { method, imt: ImtRule::new(options.imt_nodes.max(2)), far_field, graded }
     }
 
     /// `∫ G φ_l` over the visible part of element `el` for each of its basis functions, seen from a
@@ -65,42 +53,49 @@ impl PairIntegrator {
     ) -> [f64; 3] {
         let obs =
             Observer { position: el.frame.to_local(p), normal: el.frame.dir_to_local(normal) };
-        if let Some(rule) = &self.far_field {
-            if let Some(band) = rule.band(&obs, far_field::radius(&el.local)) {
-                return match visibility {
-                    Visibility::Skip(_) => [0.0; 3],
-                    Visibility::Full => FarFieldRule::integrate(band, &obs, &el.local, basis),
-                    Visibility::Partial(pieces) => {
-                        let mut sum = [0.0; 3];
-                        for piece in pieces {
-                            let local: Vec<DVec2> =
-                                piece.iter().map(|&q| q - el.centroid_in_face).collect();
-                            for k in 1..local.len() - 1 {
-                                let tri = [local[0], local[k], local[k + 1]];
-                                let part = FarFieldRule::integrate(band, &obs, &tri, basis);
-                                sum.iter_mut().zip(part).for_each(|(s, p)| *s += p);
-                            }
-                        }
-                        sum
-                    }
-                };
-            }
-        }
-        let shifted: Vec<Vec<DVec2>>;
-        let loops: Vec<&[DVec2]> = match visibility {
-            Visibility::Skip(_) => return [0.0; 3],
-            Visibility::Full => vec![&el.local[..]],
+        match visibility {
+            Visibility::Skip(_) => [0.0; 3],
+            Visibility::Full => self.integrate_loops(&obs, el, &[&el.local[..]], basis),
             Visibility::Partial(pieces) => {
-                shifted = pieces
+                let shifted: Vec<Vec<DVec2>> = pieces
                     .iter()
                     .map(|piece| piece.iter().map(|&q| q - el.centroid_in_face).collect())
                     .collect();
-                shifted.iter().map(Vec::as_slice).collect()
+                let loops: Vec<&[DVec2]> = shifted.iter().map(Vec::as_slice).collect();
+                self.integrate_loops(&obs, el, &loops, basis)
             }
-        };
+        }
+    }
+
+    /// `∫ G φ_l` over `loops`: the visible convex pieces of `el`, counter-clockwise, in its local
+    /// coordinates.
+    fn integrate_loops(
+        &self,
+        obs: &Observer,
+        el: &ElementFrame,
+        loops: &[&[DVec2]],
+        basis: &[Affine2; 3],
+    ) -> [f64; 3] {
+        if let Some(rule) = &self.graded {
+            return rule.integrate(obs, &el.local, loops, basis);
+        }
+        if let Some(band) =
+            self.far_field.as_ref().and_then(|rule| rule.band(obs, far_field::radius(&el.local)))
+        {
+            let mut sum = [0.0; 3];
+            for piece in loops {
+                for k in 1..piece.len() - 1 {
+                    let tri = [piece[0], piece[k], piece[k + 1]];
+                    let part = obs.integrate_by_rule(&band.rule, &tri, basis);
+                    sum.iter_mut().zip(part).for_each(|(s, p)| *s += p);
+                }
+            }
+            return sum;
+        }
+        let loops = loops.iter().copied();
         match self.method {
-            Method::Centroid => [exact::constant_weight(&obs, loops), 0.0, 0.0],
-            Method::Linear { .. } => exact::affine_weights(&obs, loops, basis, &self.imt),
+            Method::Centroid => [exact::constant_weight(obs, loops), 0.0, 0.0],
+            Method::Linear { .. } => exact::affine_weights(obs, loops, basis, &self.imt),
         }
     }
 }
@@ -123,6 +118,7 @@ pub fn assemble(
     options: &AssemblyOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Assembly> {
+    options.quadrature.validate()?;
     let dof = disc.dof();
     let mut matrix = CollocationMatrix::zeros(dof)?;
     let integrator = PairIntegrator::new(disc.method, options);
@@ -130,7 +126,7 @@ pub fn assemble(
         .rows_mut()
         .enumerate()
         .map(|(i, row)| {
-            let s = assemble_row(i, row, mesh, disc, planner, &integrator);
+            let s = assemble_row(&disc.nodes[i], row, mesh, disc, planner, &integrator);
             progress(1);
             s
         })
@@ -141,16 +137,40 @@ pub fn assemble(
     Ok(Assembly { matrix, stats })
 }
 
-/// Row i of K (node i against every element).
+/// `(K u)(P)` at arbitrary points of S (the operator of (1.4) applied to the collocation solution
+/// `u` of `disc`, seen from each point), without storing K.
+pub fn apply_at(
+    points: &[Node],
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+    options: &AssemblyOptions,
+    u: &[f64],
+) -> Result<Vec<f64>> {
+    options.quadrature.validate()?;
+    let integrator = PairIntegrator::new(disc.method, options);
+    Ok(points
+        .par_iter()
+        .map_init(
+            || vec![0.0; disc.dof()],
+            |row, point| {
+                row.fill(0.0);
+                assemble_row(point, row, mesh, disc, planner, &integrator);
+                row.iter().zip(u).map(|(k, v)| k * v).sum()
+            },
+        )
+        .collect())
+}
+
+/// The row of K for a point `node` of S against every element.
 fn assemble_row(
-    i: usize,
+    node: &Node,
     row: &mut [f64],
     mesh: &Mesh,
     disc: &Discretization,
     planner: &PairPlanner,
     integrator: &PairIntegrator,
 ) -> PairStats {
-    let node = &disc.nodes[i];
     let per = disc.method.nodes_per_element() as u64;
     let scale = node.rho / PI;
     let mut stats = PairStats::default();

@@ -122,6 +122,21 @@ pub fn convex_contains(poly: &[DVec2], x: DVec2) -> bool {
     })
 }
 
+/// Distance from a point to a counter-clockwise convex polygon (0 inside).
+pub fn distance_to_convex(poly: &[DVec2], x: DVec2) -> f64 {
+    let n = poly.len();
+    if (0..n).all(|k| (poly[(k + 1) % n] - poly[k]).perp_dot(x - poly[k]) >= 0.0) {
+        return 0.0;
+    }
+    (0..n)
+        .map(|k| {
+            let (p, q) = (poly[k], poly[(k + 1) % n]);
+            let t = ((x - p).dot(q - p) / (q - p).length_squared()).clamp(0.0, 1.0);
+            (x - (p + (q - p) * t)).length()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// `piece \ hole` for convex counter-clockwise polygons, as disjoint convex pieces.
 ///
 /// Walks the hole's edges: the part of what is left that lies outside an edge's line is a piece of
@@ -201,6 +216,14 @@ mod tests {
 
     fn square(lo: f64, hi: f64) -> Vec<DVec2> {
         vec![DVec2::new(lo, lo), DVec2::new(hi, lo), DVec2::new(hi, hi), DVec2::new(lo, hi)]
+    }
+
+    #[test]
+    fn distance_to_a_square_from_inside_beside_and_off_a_corner() {
+        let sq = square(0.0, 2.0);
+        assert_eq!(distance_to_convex(&sq, DVec2::new(1.0, 0.5)), 0.0);
+        assert!((distance_to_convex(&sq, DVec2::new(1.0, -0.5)) - 0.5).abs() < 1e-15);
+        assert!((distance_to_convex(&sq, DVec2::new(5.0, 6.0)) - 5.0).abs() < 1e-15);
     }
 
     #[test]

@@ -208,11 +208,16 @@ fn tables(
         bands = rule.bands.len();
         let mut first = rule_offset + bands;
         for band in &rule.bands {
-            entries.push([(band.ratio + 1.0).powi(2), first as f64, band.points.len() as f64, 0.0]);
-            first += band.points.len();
+            entries.push([
+                (band.ratio + 1.0).powi(2),
+                first as f64,
+                band.rule.points.len() as f64,
+                0.0,
+            ]);
+            first += band.rule.points.len();
         }
         for band in &rule.bands {
-            entries.extend(band.points.iter().map(|&[u, v, w]| [u, v, w, 0.0]));
+            entries.extend(band.rule.points.iter().map(|&[u, v, w]| [u, v, w, 0.0]));
         }
     }
     if entries.len() > layout::TABLE_SIZE {

@@ -7,7 +7,7 @@
 pub enum Precision {
     /// Double precision (needs `SHADER_F64`); software transcendentals.
     F64,
-    /// Single precision; built-in transcendentals.
+    /// Single precision, with the f32 math library of `shaders/math_f32.wgsl`.
     F32,
 }
 

@@ -154,12 +154,9 @@ mod tests {
         let local_obs = Observer { position: case.obs.position - centroid.extend(0.0), ..case.obs };
         let rule = FarFieldRule::standard();
         let got = match rule.band(&local_obs, far_field::radius(&local)) {
-            Some(band) => FarFieldRule::integrate(
-                band,
-                &local_obs,
-                &local,
-                &phi.map(|w| shifted(w, centroid)),
-            ),
+            Some(band) => {
+                local_obs.integrate_by_rule(&band.rule, &local, &phi.map(|w| shifted(w, centroid)))
+            }
             None => affine_weights(&case.obs, loops, &phi, &imt),
         };
         for (l, w) in phi.iter().enumerate() {
@@ -210,12 +207,8 @@ mod tests {
             let local_obs = Observer { position: obs.position - centroid.extend(0.0), ..obs };
             let far_field = FarFieldRule::standard();
             let band = far_field.band(&local_obs, far_field::radius(&local)).expect("far");
-            let rule = FarFieldRule::integrate(
-                band,
-                &local_obs,
-                &local,
-                &phi.map(|w| shifted(w, centroid)),
-            );
+            let rule =
+                local_obs.integrate_by_rule(&band.rule, &local, &phi.map(|w| shifted(w, centroid)));
             for l in 0..3 {
                 let want = reference::integral(&obs, &tri, |q| phi[l].eval(q), t);
                 let closed = (got[l] - want).abs() / scale;

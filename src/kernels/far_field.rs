@@ -11,8 +11,8 @@
 
 use glam::DVec2;
 
-use super::{Affine2, Observer};
-use crate::quadrature::GaussLegendre;
+use super::Observer;
+use crate::quadrature::TriangleRule;
 
 /// Distance bands and orders: from `ratio` radii on, the `order × order` rule. Each order is one
 /// above the smallest that kept the worst relative error below 6e-15 at the band's start over 3000
@@ -25,13 +25,13 @@ pub const BANDS: [(f64, usize); 7] =
 /// below 1e-7 (f32's rounding) at each band's start, in the same experiment as [`BANDS`].
 pub const SINGLE_PRECISION_BANDS: [(f64, usize); 4] = [(1.5, 7), (3.0, 6), (4.0, 5), (20.0, 4)];
 
-/// One distance band: its ratio and its points `(u, v, w)` on the unit triangle.
+/// One distance band: its ratio and its rule.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Band {
     /// Used when `|P - C| >= (ratio + 1) r`.
     pub ratio: f64,
-    /// Points `(u, v, w)` on `{u, v >= 0, u + v <= 1}`; the weights sum to 1/2.
-    pub points: Vec<[f64; 3]>,
+    /// The collapsed Gauss rule used in the band.
+    pub rule: TriangleRule,
 }
 
 /// Collapsed Gauss rules on the unit triangle, graded by the distance of the node.
@@ -39,21 +39,6 @@ pub struct Band {
 pub struct FarFieldRule {
     /// Bands by increasing ratio.
     pub bands: Vec<Band>,
-}
-
-/// The `order × order` collapsed Gauss–Legendre rule of (4.4) on the unit triangle.
-pub fn collapsed_gauss(order: usize) -> Vec<[f64; 3]> {
-    let gl = GaussLegendre::new(order.max(1));
-    let mut points = Vec::with_capacity(order * order);
-    for (x, wx) in gl.nodes().iter().zip(gl.weights()) {
-        let x = 0.5 * (x + 1.0);
-        for (y, wy) in gl.nodes().iter().zip(gl.weights()) {
-            let y = 0.5 * (y + 1.0);
-            // s = (1 - y) x, t = y x, Jacobian x.
-            points.push([(1.0 - y) * x, y * x, 0.25 * wx * wy * x]);
-        }
-    }
-    points
 }
 
 impl FarFieldRule {
@@ -71,7 +56,7 @@ impl FarFieldRule {
         Self {
             bands: bands
                 .iter()
-                .map(|&(ratio, order)| Band { ratio, points: collapsed_gauss(order) })
+                .map(|&(ratio, order)| Band { ratio, rule: TriangleRule::collapsed_gauss(order) })
                 .collect(),
         }
     }
@@ -81,27 +66,6 @@ impl FarFieldRule {
     pub fn band(&self, obs: &Observer, radius: f64) -> Option<&Band> {
         let d2 = obs.position.length_squared();
         self.bands.iter().rev().find(|b| d2 >= (b.ratio + 1.0) * (b.ratio + 1.0) * radius * radius)
-    }
-
-    /// `∫_T G φ_l` over the triangle `tri` for each weight, with the band's points. The rule
-    /// accumulates `∫ G`, `∫ G X`, `∫ G Y` and applies the affine weights once.
-    pub fn integrate<const L: usize>(
-        band: &Band,
-        obs: &Observer,
-        tri: &[DVec2; 3],
-        weights: &[Affine2; L],
-    ) -> [f64; L] {
-        let (a, b, c) = (tri[0], tri[1], tri[2]);
-        let jacobian = (b - a).perp_dot(c - a);
-        let (mut g0, mut gx, mut gy) = (0.0, 0.0, 0.0);
-        for &[u, v, w] in &band.points {
-            let q = a + (b - a) * u + (c - a) * v;
-            let g = w * obs.kernel(q);
-            g0 += g;
-            gx += g * q.x;
-            gy += g * q.y;
-        }
-        weights.map(|phi| jacobian * (phi.c0 * g0 + phi.cx * gx + phi.cy * gy))
     }
 }
 
@@ -116,11 +80,12 @@ mod tests {
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     use super::*;
+    use crate::kernels::Affine2;
 
     /// Worst relative error of `rule` in every band, over random triangles, nodes and weights,
     /// against a 28 × 28 rule.
     fn worst_error(rule: &FarFieldRule, starts: &[f64]) -> f64 {
-        let reference = Band { ratio: 0.0, points: collapsed_gauss(28) };
+        let reference = TriangleRule::collapsed_gauss(28);
         let mut rng = StdRng::seed_from_u64(5);
         let mut worst: f64 = 0.0;
         for _ in 0..2000 {
@@ -153,8 +118,8 @@ mod tests {
                 Observer { position: dir * (start + 1.0) * r * rng.random_range(1.0..1.5), normal };
             let band = rule.band(&obs, r).expect("far enough");
             let w = [Affine2 { c0: 0.3, cx: 1.7 / r, cy: -0.9 / r }, Affine2::ONE];
-            let got = FarFieldRule::integrate(band, &obs, &tri, &w);
-            let want = FarFieldRule::integrate(&reference, &obs, &tri, &w);
+            let got = obs.integrate_by_rule(&band.rule, &tri, &w);
+            let want = obs.integrate_by_rule(&reference, &tri, &w);
             let scale = want[0].abs().max(want[1].abs());
             worst = worst.max((got[0] - want[0]).abs() / scale);
         }

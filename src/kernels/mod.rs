@@ -14,12 +14,14 @@
 //! - [`exact`]: the production kernel: closed forms in edge form for the constant weight, closed
 //!   forms plus one IMT quadrature per edge for affine weights (eqs. 4.5–4.9, 4.13).
 //! - [`far_field`]: a collapsed Gauss rule for elements far from the node (linear method).
+//! - [`graded`]: the paper's 7-point and Gauss methods (sec. 4.2), distance-graded fixed rules.
 //! - [`lambert`]: Lambert's contour formula, an independent closed form for the constant weight.
 //! - [`paper_closed_form`]: the paper's own formulas over right triangles σ_ab, (4.5), (4.10), (4.11).
 //! - [`reference`]: adaptive quadrature of G φ itself, for tests.
 
 pub mod exact;
 pub mod far_field;
+pub mod graded;
 pub mod lambert;
 mod moments;
 pub mod paper_closed_form;
@@ -28,6 +30,8 @@ pub mod reference;
 pub use moments::{Moments, ThirdOrderMoments};
 
 use glam::{DVec2, DVec3};
+
+use crate::quadrature::TriangleRule;
 
 /// A collocation node seen from an element's frame: its local position (x, y, z) and unit normal
 /// (i, j, k).
@@ -45,6 +49,18 @@ impl Observer {
         let d = q.extend(0.0) - self.position;
         let r2 = d.length_squared();
         d.dot(self.normal) * self.position.z / (r2 * r2)
+    }
+
+    /// `∫_T G φ_l` over the triangle `tri` for each affine weight, by a fixed rule: the rule
+    /// accumulates `∫ G`, `∫ G X`, `∫ G Y` and the weights are applied once.
+    pub fn integrate_by_rule<const L: usize>(
+        &self,
+        rule: &TriangleRule,
+        tri: &[DVec2; 3],
+        weights: &[Affine2; L],
+    ) -> [f64; L] {
+        let [g0, gx, gy] = rule.moments(tri, |q| self.kernel(q));
+        weights.map(|phi| phi.c0 * g0 + phi.cx * gx + phi.cy * gy)
     }
 }
 

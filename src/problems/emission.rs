@@ -1,4 +1,4 @@
-//! Emissivity at the nodes from a true solution: `E(P) = u(P) - (rho/π) Σ_F ∫_{F visible from P} u G dS`.
+//! Emissivity at points of S from a true solution: `E(P) = u(P) - (rho/π) Σ_F ∫_{F visible from P} u G dS`.
 //!
 //! The integrals respect visibility exactly (the visible part of each face from the pair plan) and
 //! the kinks of u (faces are cut along them). Quadratic u are integrated in closed form up to one
@@ -11,7 +11,7 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
 use super::FaceFunction;
-use crate::discretization::Discretization;
+use crate::discretization::Node;
 use crate::geometry::{HalfPlane, PlaneFrame, clip_convex};
 use crate::kernels::{Observer, Quadratic2, exact};
 use crate::quadrature::{ImtRule, Tolerance, integrate_triangle};
@@ -33,17 +33,18 @@ impl Default for EmissionOptions {
     }
 }
 
-/// `E` at every node of `disc` for the true solution given face by face in `u`.
-pub fn emission_at_nodes(
+/// `E` at `points` of S (the collocation nodes, or any other points with their face's normal and
+/// rho) for the true solution given face by face in `u`.
+pub fn emission_at(
     scene: &Scene,
-    disc: &Discretization,
+    points: &[Node],
     planner: &PairPlanner,
     u: &[FaceFunction],
     options: &EmissionOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Vec<f64> {
     let imt = ImtRule::new(options.imt_nodes.max(2));
-    disc.nodes
+    points
         .par_iter()
         .map(|node| {
             let mut integral = 0.0;
@@ -137,7 +138,7 @@ mod tests {
     use std::sync::Arc;
 
     use super::*;
-    use crate::discretization::Method;
+    use crate::discretization::{Discretization, Method};
     use crate::mesh::{Mesh, MeshKind};
     use crate::problems::TrueSolution;
     use crate::scene::{SurfaceParameters, five_piece, four_piece};
@@ -166,8 +167,8 @@ mod tests {
                 })
                 .collect();
             let opts = EmissionOptions::default();
-            let e1 = emission_at_nodes(&scene, &disc, &planner, &exact_u, &opts, &|_| {});
-            let e2 = emission_at_nodes(&scene, &disc, &planner, &general_u, &opts, &|_| {});
+            let e1 = emission_at(&scene, &disc.nodes, &planner, &exact_u, &opts, &|_| {});
+            let e2 = emission_at(&scene, &disc.nodes, &planner, &general_u, &opts, &|_| {});
             for (i, (a, b)) in e1.iter().zip(&e2).enumerate() {
                 let scale = disc.nodes[i].position.truncate().length_squared().max(1.0);
                 assert!((a - b).abs() < 1e-10 * scale, "{} node {i}: {a} vs {b}", scene.name);
@@ -186,8 +187,8 @@ mod tests {
             let u = sol.on_faces(&scene, &p).unwrap();
             let loose = EmissionOptions { relative_tolerance: 1e-10, ..Default::default() };
             let tight = EmissionOptions { relative_tolerance: 1e-13, ..Default::default() };
-            let a = emission_at_nodes(&scene, &disc, &planner, &u, &loose, &|_| {});
-            let b = emission_at_nodes(&scene, &disc, &planner, &u, &tight, &|_| {});
+            let a = emission_at(&scene, &disc.nodes, &planner, &u, &loose, &|_| {});
+            let b = emission_at(&scene, &disc.nodes, &planner, &u, &tight, &|_| {});
             for (i, (x, y)) in a.iter().zip(&b).enumerate() {
                 assert!((x - y).abs() < 1e-10 * y.abs().max(1.0), "{sol}: node {i}: {x} vs {y}");
             }

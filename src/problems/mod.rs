@@ -1,8 +1,8 @@
 //! Test problems of the paper (sec. 3.2): true solutions u on the 4-piece and 5-piece surfaces, and
-//! the emissivity `E = u - (rho/π) ∫ u G V dS` at the collocation nodes that makes u the solution.
+//! the emissivity `E = u - (rho/π) ∫ u G V dS` at the collocation nodes (or any points of S) that makes u the solution.
 
 mod emission;
 mod solutions;
 
-pub use emission::{EmissionOptions, emission_at_nodes};
+pub use emission::{EmissionOptions, emission_at};
 pub use solutions::{FaceFunction, TrueSolution};

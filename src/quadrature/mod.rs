@@ -1,10 +1,13 @@
-//! One-dimensional quadrature rules: Gauss–Legendre, the IMT rule of the paper (sec. 4.1), and
-//! adaptive Gauss–Kronrod integration (for the reference integrals, iterated over triangles).
+//! Quadrature rules: Gauss–Legendre, the IMT rule of the paper (sec. 4.1), adaptive Gauss–Kronrod
+//! integration (for the reference integrals, iterated over triangles), and fixed rules on the unit
+//! triangle (sec. 4: Stroud's 7-point rule, composites, collapsed Gauss).
 
 mod adaptive;
 mod gauss_legendre;
 mod imt;
+mod triangle;
 
 pub use adaptive::{Tolerance, integrate_adaptive, integrate_triangle};
 pub use gauss_legendre::GaussLegendre;
 pub use imt::ImtRule;
+pub use triangle::TriangleRule;

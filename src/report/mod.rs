@@ -1,4 +1,6 @@
-//! Reports: plain-text tables for people, JSON for programs.
+//! Reports: plain-text tables for people, JSON for programs, plots and NumPy files.
+
+pub mod plot;
 
 use std::io::Write;
 use std::path::Path;
@@ -6,7 +8,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::error::Result;
-use crate::study::StudyResult;
+use crate::study::{StudyResult, StudyRow};
 
 /// Writes `value` as pretty JSON to `target` (`-` for standard output).
 pub fn write_json<T: Serialize>(value: &T, target: &str) -> Result<()> {
@@ -21,10 +23,6 @@ pub fn write_json<T: Serialize>(value: &T, target: &str) -> Result<()> {
     Ok(())
 }
 
-fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map(|x| format!("{x:.digits$}")).unwrap_or_else(|| "-".into())
-}
-
 fn sci(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-2 || v.abs() >= 1e3) {
         format!("{v:.3e}")
@@ -33,42 +31,70 @@ fn sci(v: f64) -> String {
     }
 }
 
-/// A study as a text table: our E_n and ratio beside the paper's, and the times.
+/// A column of the study table: header, and the cell of a row (`None`: empty).
+type Column = (&'static str, fn(&StudyRow) -> Option<String>);
+
+const COLUMNS: [Column; 14] = [
+    ("n", |r| Some(r.n.to_string())),
+    ("dof", |r| Some(r.dof.to_string())),
+    ("E_n", |r| Some(sci(r.error))),
+    ("ratio", |r| r.ratio.map(|x| format!("{x:.2}"))),
+    ("paper E_n", |r| r.paper_error.map(sci)),
+    ("ratio", |r| r.paper_ratio.map(|x| format!("{x:.2}"))),
+    ("vs paper", |r| r.relative_to_paper.map(|d| format!("{:+.2}%", 100.0 * d))),
+    ("u_n over S", |r| r.surface_error.map(sci)),
+    ("iterated", |r| r.iterated_error.map(sci)),
+    ("int. err", |r| r.integration_error.map(|e| format!("{e:.1e}"))),
+    ("setup s", |r| Some(format!("{:.3}", r.setup_seconds))),
+    ("paper s", |r| r.paper_setup_seconds.map(|t| format!("{t}"))),
+    ("E s", |r| Some(format!("{:.3}", r.emission_seconds))),
+    ("solve s", |r| Some(format!("{:.3}", r.solve_seconds))),
+];
+
+/// A study as text: per series our E_n and ratio beside the paper's, and the times; then the
+/// fitted rates, skipped series, notes and plots.
 pub fn study_table(study: &StudyResult) -> String {
-    let mut s = format!("{}\n\n", study.title);
-    s += &format!(
-        "{:<11} {:<13} {:>6} {:>6} {:>11} {:>6} {:>11} {:>6} {:>8} {:>9} {:>9} {:>8}\n",
-        "surface",
-        "mesh",
-        "n",
-        "dof",
-        "E_n",
-        "ratio",
-        "paper E_n",
-        "ratio",
-        "vs paper",
-        "setup s",
-        "E s",
-        "solve s"
-    );
-    for r in &study.rows {
-        s += &format!(
-            "{:<11} {:<13} {:>6} {:>6} {:>11} {:>6} {:>11} {:>6} {:>8} {:>9.3} {:>9.3} {:>8.3}\n",
-            r.surface,
-            r.mesh,
-            r.n,
-            r.dof,
-            sci(r.error),
-            opt(r.ratio, 2),
-            r.paper_error.map(sci).unwrap_or_else(|| "-".into()),
-            opt(r.paper_ratio, 2),
-            r.relative_to_paper
-                .map(|d| format!("{:+.2}%", 100.0 * d))
-                .unwrap_or_else(|| "-".into()),
-            r.setup_seconds,
-            r.emission_seconds,
-            r.solve_seconds,
-        );
+    let columns: Vec<&Column> =
+        COLUMNS.iter().filter(|(_, cell)| study.rows.iter().any(|r| cell(r).is_some())).collect();
+    let mut header = String::new();
+    for (name, _) in &columns {
+        header += &format!("{name:>11}");
+    }
+    let mut s = format!("{}\n", study.title);
+    for summary in &study.series {
+        s += &format!("\n{}", summary.series);
+        if let Some(why) = &summary.skipped {
+            s += &format!(": {why}\n");
+            continue;
+        }
+        let rates: Vec<String> = [
+            ("nodes", summary.rate),
+            ("u_n over S", summary.surface_rate),
+            ("iterated", summary.iterated_rate),
+        ]
+        .iter()
+        .filter_map(|(what, rate)| rate.map(|p| format!("{what} O(h^{p:.2})")))
+        .collect();
+        if !rates.is_empty() {
+            s += &format!("  (fitted: {})", rates.join(", "));
+        }
+        s += &format!("\n{header}\n");
+        for r in study.rows.iter().filter(|r| r.series == summary.series) {
+            for (_, cell) in &columns {
+                let text = cell(r).unwrap_or_else(|| "-".into());
+                s += &format!("{text:>11}");
+            }
+            if r.pareto == Some(true) {
+                s += "  Pareto";
+            }
+            s += "\n";
+        }
+    }
+    for note in &study.notes {
+        s += &format!("\nNote: {note}\n");
+    }
+    for path in &study.figures {
+        s += &format!("wrote {path}\n");
     }
     s
 }

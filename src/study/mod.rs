@@ -1,29 +1,54 @@
-//! The paper's tables, reproduced: each row is one [`crate::pipeline::run`], with the paper's
-//! printed value beside ours.
+//! The paper's tables and figures, reproduced, and the error-against-time studies: each row is one
+//! [`crate::pipeline::run`], with the paper's printed value beside ours where it has one.
 
-mod tables;
+mod analysis;
+mod figures;
+mod specs;
 
-pub use tables::{StudySpec, TableColumn, study_ids};
+pub use analysis::{fit_rate, pareto_front};
+pub use specs::{Kind, Placement, Series, StudySpec, study_ids};
+
+use std::collections::HashMap;
+use std::path::PathBuf;
 
 use serde::Serialize;
 
+use crate::assembly::Quadrature;
 use crate::error::{Error, Result};
-use crate::pipeline::{self, RunConfig};
+use crate::gpu::{self, Precision};
+use crate::pipeline::{self, Backend, RunConfig};
+use crate::quadrature::ImtRule;
+
+/// Where a study's series run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StudyDevice {
+    /// CPU, plus the studies' GPU series where an adapter is found.
+    Auto,
+    /// CPU only; GPU series are left out.
+    Cpu,
+    /// Everything that can run on the GPU runs there, in this precision (GPU series keep theirs);
+    /// a missing adapter is an error.
+    Gpu(Precision),
+}
 
 /// Options shared by all studies.
 #[derive(Clone, Debug)]
 pub struct StudyOptions {
-    /// Largest n to run (default: the paper's largest for the study).
+    /// Largest n to run (default: the study's).
     pub max_n: Option<usize>,
-    /// Where the matrices are assembled.
-    pub backend: crate::pipeline::Backend,
+    /// Where the series run.
+    pub device: StudyDevice,
     /// Show progress on stderr.
     pub progress: bool,
+    /// Where plots are written (PNG and SVG), for the studies that draw them; `None`: no plots.
+    pub figure_dir: Option<PathBuf>,
 }
 
 /// One row of a study.
 #[derive(Clone, Debug, Serialize)]
 pub struct StudyRow {
+    /// The series' label.
+    pub series: String,
     /// Scene name (`four-piece`, `five-piece`).
     pub surface: String,
     /// `uniform` or `discontinuity`.
@@ -32,10 +57,13 @@ pub struct StudyRow {
     pub method: &'static str,
     /// α of the linear method.
     pub alpha: Option<f64>,
-    /// How the collocation integrals were evaluated.
-    pub quadrature: &'static str,
+    /// How the collocation integrals were evaluated (`quadrature` and its parameters).
+    #[serde(flatten)]
+    pub quadrature: Quadrature,
     /// `cpu` or `gpu`.
     pub backend: &'static str,
+    /// `f64` or `f32`.
+    pub precision: &'static str,
     /// Elements.
     pub n: usize,
     /// Unknowns.
@@ -44,7 +72,7 @@ pub struct StudyRow {
     pub error: f64,
     /// E_{n/4} / E_n.
     pub ratio: Option<f64>,
-    /// Matrix setup time.
+    /// Matrix setup time (planning and assembly).
     pub setup_seconds: f64,
     /// Emissivity time.
     pub emission_seconds: f64,
@@ -56,6 +84,31 @@ pub struct StudyRow {
     pub paper_ratio: Option<f64>,
     /// `(E_n - paper E_n) / paper E_n`.
     pub relative_to_paper: Option<f64>,
+    /// The paper's setup time, where printed.
+    pub paper_setup_seconds: Option<f64>,
+    /// `max |u_n - u_n(exact, cpu)| / max |u_n(exact, cpu)|` at the nodes (timing studies).
+    pub integration_error: Option<f64>,
+    /// Max error of u_n over sample points of all of S.
+    pub surface_error: Option<f64>,
+    /// Max error of the iterated solution E + K u_n over the same points.
+    pub iterated_error: Option<f64>,
+    /// On the Pareto front of (setup time, error) among the rows of its method (error-vs-time).
+    pub pareto: Option<bool>,
+}
+
+/// Per series: the fitted rates, or why it did not run.
+#[derive(Clone, Debug, Serialize)]
+pub struct SeriesSummary {
+    /// The series' label.
+    pub series: String,
+    /// p in E_n = O(h^p), least squares over the rows (h ~ n^(-1/2)).
+    pub rate: Option<f64>,
+    /// The same for the error over all of S.
+    pub surface_rate: Option<f64>,
+    /// The same for the iterated solution over all of S.
+    pub iterated_rate: Option<f64>,
+    /// Why the series did not run.
+    pub skipped: Option<String>,
 }
 
 /// A finished study.
@@ -65,8 +118,30 @@ pub struct StudyResult {
     pub study: String,
     /// Title.
     pub title: String,
-    /// Rows, column by column of the paper's table.
+    /// Rows, series by series.
     pub rows: Vec<StudyRow>,
+    /// Fitted rates and skipped series.
+    pub series: Vec<SeriesSummary>,
+    /// Remarks.
+    pub notes: Vec<String>,
+    /// Plots written.
+    pub figures: Vec<String>,
+}
+
+/// Where `series` runs under `device`, or why it does not.
+fn backend_for(series: &Series, device: StudyDevice) -> std::result::Result<Backend, String> {
+    match (series.placement, device) {
+        (Placement::Selected, StudyDevice::Gpu(p)) if series.quadrature == Quadrature::Exact => {
+            Ok(Backend::Gpu(p))
+        }
+        (Placement::Selected | Placement::Cpu, _) => Ok(Backend::Cpu),
+        (Placement::Gpu(_), StudyDevice::Cpu) => Err("left out: --backend cpu".into()),
+        (Placement::Gpu(p), StudyDevice::Gpu(_)) => Ok(Backend::Gpu(p)),
+        (Placement::Gpu(p), StudyDevice::Auto) => match gpu::shared_context() {
+            Ok(_) => Ok(Backend::Gpu(p)),
+            Err(e) => Err(format!("left out: {e}")),
+        },
+    }
 }
 
 /// Runs the study `id`.
@@ -76,58 +151,140 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
         name: id.into(),
         expected: study_ids().join(", "),
     })?;
-    let max_n = options.max_n.unwrap_or_else(|| spec.largest_n());
+    let max_n = options.max_n.unwrap_or(spec.default_max_n);
+    let timing = matches!(spec.kind, Kind::Timing { .. });
+    // Exact CPU solutions by (method, n): the reference of the integration errors.
+    let mut reference: HashMap<(&'static str, usize), Vec<f64>> = HashMap::new();
     let mut rows = Vec::new();
-    for column in &spec.columns {
+    let mut summaries = Vec::new();
+    for series in &spec.series {
+        let label = series.label();
+        let backend = match backend_for(series, options.device) {
+            Ok(b) => b,
+            Err(why) => {
+                summaries.push(SeriesSummary {
+                    series: label,
+                    rate: None,
+                    surface_rate: None,
+                    iterated_rate: None,
+                    skipped: Some(why),
+                });
+                continue;
+            }
+        };
+        let first = rows.len();
         let mut previous: Option<(f64, Option<f64>)> = None;
         for refine in 0.. {
-            let mut config = RunConfig::paper(column.scene, refine);
-            config.mesh = column.mesh;
-            config.method = spec.method;
-            config.solution = Some(spec.solution);
+            let mut config = RunConfig::paper(series.scene, refine);
+            config.mesh = series.mesh;
+            config.method = series.method;
+            config.solution = Some(series.solution);
+            config.assembly.quadrature = series.quadrature;
+            config.assembly.imt_nodes = series.imt_nodes;
+            config.backend = backend;
             config.progress = options.progress;
-            config.backend = options.backend;
+            config.setup_repeats = if timing { 3 } else { 1 };
+            config.surface_lattice = spec.surface_lattice;
             let (_, mesh, _) = pipeline::build(&config)?;
             if mesh.len() > max_n {
                 break;
             }
             if options.progress {
-                eprintln!(
-                    "{}: {} {} n = {}",
-                    spec.id,
-                    column.scene,
-                    column.mesh.name(),
-                    mesh.len()
-                );
+                eprintln!("{}: {label}: n = {}", spec.id, mesh.len());
             }
             let report = pipeline::run(&config)?;
             let error = report.error.expect("a true solution is set");
-            let paper_error = column.paper.iter().find(|(n, _)| *n == report.n).map(|(_, e)| *e);
-            let ratio = previous.map(|(e, _)| e / error);
+            let paper_error = lookup(series.paper, report.n);
             let paper_ratio = match (previous, paper_error) {
                 (Some((_, Some(p))), Some(q)) => Some(p / q),
                 _ => None,
             };
+            let key = (report.method, report.n);
+            let integration_error = if !timing {
+                None
+            } else if series.quadrature == Quadrature::Exact
+                && backend == Backend::Cpu
+                && series.imt_nodes == ImtRule::PAPER_NODES
+            {
+                reference.insert(key, report.u.clone());
+                None
+            } else {
+                reference.get(&key).map(|exact| relative_difference(&report.u, exact))
+            };
             rows.push(StudyRow {
+                series: label.clone(),
                 surface: report.surface,
                 mesh: report.mesh,
                 method: report.method,
                 alpha: report.alpha,
                 quadrature: report.quadrature,
                 backend: report.backend,
+                precision: report.precision,
                 n: report.n,
                 dof: report.dof,
                 error,
-                ratio,
+                ratio: previous.map(|(e, _)| e / error),
                 setup_seconds: report.setup_seconds,
                 emission_seconds: report.emission_seconds,
                 solve_seconds: report.solve_seconds,
                 paper_error,
                 paper_ratio,
                 relative_to_paper: paper_error.map(|p| (error - p) / p),
+                paper_setup_seconds: lookup(series.paper_seconds, report.n),
+                integration_error,
+                surface_error: report.over_surface.map(|s| s.interpolant),
+                iterated_error: report.over_surface.map(|s| s.iterated),
+                pareto: None,
             });
             previous = Some((error, paper_error));
         }
+        let done = &rows[first..];
+        let rate_of = |f: &dyn Fn(&StudyRow) -> Option<f64>| {
+            let points: Option<Vec<(usize, f64)>> =
+                done.iter().map(|r| f(r).map(|e| (r.n, e))).collect();
+            points.and_then(|p| fit_rate(&p))
+        };
+        summaries.push(SeriesSummary {
+            series: label,
+            rate: rate_of(&|r| Some(r.error)),
+            surface_rate: rate_of(&|r| r.surface_error),
+            iterated_rate: rate_of(&|r| r.iterated_error),
+            skipped: None,
+        });
     }
-    Ok(StudyResult { study: spec.id.into(), title: spec.title.into(), rows })
+    if spec.kind == (Kind::Timing { plot: true }) {
+        for method in ["centroid", "linear"] {
+            let points: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.method == method)
+                .map(|r| (r.setup_seconds, r.error))
+                .collect();
+            let front = pareto_front(&points);
+            for (row, on_front) in rows.iter_mut().filter(|r| r.method == method).zip(front) {
+                row.pareto = Some(on_front);
+            }
+        }
+    }
+    let mut result = StudyResult {
+        study: spec.id.into(),
+        title: spec.title.into(),
+        rows,
+        series: summaries,
+        notes: spec.notes.iter().map(|s| s.to_string()).collect(),
+        figures: Vec::new(),
+    };
+    if let Some(dir) = &options.figure_dir {
+        result.figures = figures::write(&spec, &result, dir)?;
+    }
+    Ok(result)
+}
+
+fn lookup(table: &[(usize, f64)], n: usize) -> Option<f64> {
+    table.iter().find(|(m, _)| *m == n).map(|(_, v)| *v)
+}
+
+/// `max |a - b| / max |b|`.
+fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
 }
