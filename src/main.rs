@@ -11,6 +11,7 @@ use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
 use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport};
 use radiosity::problems::{EmissionOptions, TrueSolution};
+use radiosity::report::TableFormat;
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
 use radiosity::solve::SolverChoice;
 use radiosity::study::{self, StudyDevice, StudyOptions};
@@ -48,9 +49,12 @@ enum Command {
         /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
         #[arg(long, value_name = "DIR", default_value = "figures")]
         figures: String,
-        /// Write JSON to PATH (`-` for standard output) instead of the text table
+        /// Also write JSON to PATH; `-`: JSON on standard output instead of the text table
         #[arg(long, value_name = "PATH")]
         json: Option<String>,
+        /// Print Markdown tables instead of aligned text
+        #[arg(long)]
+        markdown: bool,
     },
     /// Solve one problem and report its error and timings
     Solve(SolveArgs),
@@ -577,7 +581,7 @@ fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Res
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Study { id, max_n, backend: device, precision, figures, json } => {
+        Command::Study { id, max_n, backend: device, precision, figures, json, markdown } => {
             let device = match (device, backend(BackendArg::Gpu, precision)) {
                 (None, _) => StudyDevice::Auto,
                 (Some(BackendArg::Cpu), _) => StudyDevice::Cpu,
@@ -586,13 +590,14 @@ fn run(cli: Cli) -> Result<()> {
             let options =
                 StudyOptions { max_n, device, progress: true, figure_dir: Some(figures.into()) };
             let result = study::run_study(&id, &options)?;
-            match json {
-                Some(target) => report::write_json(&result, &target),
-                None => {
-                    print!("{}", report::study_table(&result));
-                    Ok(())
-                }
+            if let Some(target) = &json {
+                report::write_json(&result, target)?;
             }
+            if json.as_deref() != Some("-") {
+                let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
+                print!("{}", report::study_table(&result, format));
+            }
+            Ok(())
         }
         Command::Solve(args) => {
             let r = pipeline::run(&args.config()?)?;

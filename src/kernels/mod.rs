@@ -45,6 +45,7 @@ pub struct Observer {
 
 impl Observer {
     /// The kernel G(P, Q) at an in-plane point Q (paper (1.2)).
+    #[inline(always)]
     pub fn kernel(&self, q: DVec2) -> f64 {
         let d = q.extend(0.0) - self.position;
         let r2 = d.length_squared();

@@ -63,8 +63,13 @@ fn convergence(result: &StudyResult) -> Figure {
                     if points.is_empty() {
                         continue;
                     }
+                    let last = if j == 0 {
+                        summary.last_rate.map(|p| format!(", last {p:.2}")).unwrap_or_default()
+                    } else {
+                        String::new()
+                    };
                     lines.push(Line {
-                        label: format!("{mesh}, {what}: {}", rate_text(rate)),
+                        label: format!("{mesh}, {what}: {}{last}", rate_text(rate)),
                         points,
                         color: 3 * k + j,
                         dashed,

@@ -103,6 +103,8 @@ pub struct SeriesSummary {
     pub series: String,
     /// p in E_n = O(h^p), least squares over the rows (h ~ n^(-1/2)).
     pub rate: Option<f64>,
+    /// p from the last two rows alone, `log2(E_{n/4} / E_n)` (the paper quotes final ratios).
+    pub last_rate: Option<f64>,
     /// The same for the error over all of S.
     pub surface_rate: Option<f64>,
     /// The same for the iterated solution over all of S.
@@ -165,6 +167,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
                 summaries.push(SeriesSummary {
                     series: label,
                     rate: None,
+                    last_rate: None,
                     surface_rate: None,
                     iterated_rate: None,
                     skipped: Some(why),
@@ -247,6 +250,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
         summaries.push(SeriesSummary {
             series: label,
             rate: rate_of(&|r| Some(r.error)),
+            last_rate: done.last().and_then(|r| r.ratio).map(f64::log2),
             surface_rate: rate_of(&|r| r.surface_error),
             iterated_rate: rate_of(&|r| r.iterated_error),
             skipped: None,
