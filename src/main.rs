@@ -5,13 +5,16 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use serde::Serialize;
 
-use radiosity::assembly::{AssemblyOptions, Quadrature};
+use radiosity::assembly::{Assembly, AssemblyOptions, Quadrature};
+use radiosity::discretization::Discretization;
 use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
+use radiosity::mesh::Mesh;
 use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::report::TableFormat;
+use radiosity::scene::Scene;
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
 use radiosity::solve::SolverChoice;
 use radiosity::study::{self, StudyDevice, StudyOptions};
@@ -367,20 +370,32 @@ struct Inspection {
     setup_seconds: f64,
 }
 
+/// K for `config` on its backend.
+fn assemble_without_progress(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+) -> Result<Assembly> {
+    let (assembled, _) = pipeline::assemble_on(
+        config.backend,
+        scene,
+        mesh,
+        disc,
+        planner,
+        &config.assembly,
+        &|_| {},
+    )?;
+    Ok(assembled)
+}
+
 fn inspect(args: &SolveArgs) -> Result<()> {
     let config = args.config()?;
     let (scene, mesh, disc) = pipeline::build(&config)?;
     let started = std::time::Instant::now();
     let planner = PairPlanner::new(&scene);
-    let (assembled, _) = pipeline::assemble_on(
-        config.backend,
-        &scene,
-        &mesh,
-        &disc,
-        &planner,
-        &config.assembly,
-        &|_| {},
-    )?;
+    let assembled = assemble_without_progress(&config, &scene, &mesh, &disc, &planner)?;
     let setup_seconds = started.elapsed().as_secs_f64();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, node) in disc.nodes.iter().enumerate() {
@@ -523,16 +538,7 @@ fn run_assemble(args: &AssembleArgs) -> Result<()> {
     let mut config = args.geometry.config()?;
     config.backend = backend(args.device.backend, args.device.precision);
     let (scene, mesh, disc) = pipeline::build(&config)?;
-    let planner = PairPlanner::new(&scene);
-    let (a, _) = pipeline::assemble_on(
-        config.backend,
-        &scene,
-        &mesh,
-        &disc,
-        &planner,
-        &config.assembly,
-        &|_| {},
-    )?;
+    let a = assemble_without_progress(&config, &scene, &mesh, &disc, &PairPlanner::new(&scene))?;
     radiosity::report::write_npy(&args.output, &a.matrix)?;
     eprintln!(
         "wrote K ({} x {}, float64, rho/pi included) to {}",

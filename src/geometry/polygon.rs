@@ -96,18 +96,7 @@ pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
     if d.iter().all(|&v| v <= 0.0) {
         return None;
     }
-    let n = poly.len();
-    let mut out = Vec::with_capacity(n + 2);
-    for k in 0..n {
-        let (p, q) = (poly[k], poly[(k + 1) % n]);
-        let (dp, dq) = (d[k], d[(k + 1) % n]);
-        if dp >= 0.0 {
-            out.push(p);
-        }
-        if (dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0) {
-            out.push(p + (q - p) * (dp / (dp - dq)));
-        }
-    }
+    let out = keep_nonnegative_side(poly, &d);
     cleaned(out, ON_LINE * scale)
 }
 
@@ -164,6 +153,30 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
     out
 }
 
+/// One Sutherland–Hodgman pass: the part of the polygon where the signed distances `d` (one per
+/// vertex, snapped to 0 on the line) are non-negative, with the crossing points interpolated.
+fn keep_nonnegative_side<P>(poly: &[P], d: &[f64]) -> Vec<P>
+where
+    P: Copy
+        + std::ops::Add<Output = P>
+        + std::ops::Sub<Output = P>
+        + std::ops::Mul<f64, Output = P>,
+{
+    let n = poly.len();
+    let mut out = Vec::with_capacity(n + 2);
+    for k in 0..n {
+        let (p, q) = (poly[k], poly[(k + 1) % n]);
+        let (dp, dq) = (d[k], d[(k + 1) % n]);
+        if dp >= 0.0 {
+            out.push(p);
+        }
+        if (dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0) {
+            out.push(p + (q - p) * (dp / (dp - dq)));
+        }
+    }
+    out
+}
+
 /// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`.
 /// For a convex polygon the result is convex; returns `None` when nothing with area is left.
 pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec<DVec3>> {
@@ -184,18 +197,7 @@ pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec
     if d.iter().all(|&v| v <= 0.0) {
         return None;
     }
-    let n = poly.len();
-    let mut out: Vec<DVec3> = Vec::with_capacity(n + 2);
-    for k in 0..n {
-        let (p, q) = (poly[k], poly[(k + 1) % n]);
-        let (dp, dq) = (d[k], d[(k + 1) % n]);
-        if dp >= 0.0 {
-            out.push(p);
-        }
-        if (dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0) {
-            out.push(p + (q - p) * (dp / (dp - dq)));
-        }
-    }
+    let mut out = keep_nonnegative_side(poly, &d);
     out.dedup_by(|a, b| (*a - *b).length() <= ON_LINE * scale);
     while out.len() > 1 && (out[0] - out[out.len() - 1]).length() <= ON_LINE * scale {
         out.pop();
