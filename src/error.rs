@@ -19,6 +19,38 @@ pub enum Error {
         /// Coordinates as given.
         z: f64,
     },
+    /// A vertex coordinate is too large for the kernels' arithmetic.
+    #[error(
+        "face '{face}': vertex {vertex} has a coordinate of magnitude {magnitude:e}, beyond \
+         {limit:e}; rescale the scene (the results do not depend on its unit of length)"
+    )]
+    CoordinateOutOfRange {
+        /// Face name.
+        face: String,
+        /// Vertex index within the face.
+        vertex: usize,
+        /// Largest |coordinate| of the vertex.
+        magnitude: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A scene whose faces span too many orders of magnitude.
+    #[error(
+        "scene '{scene}': face '{face}' has size {size:e} while coordinates reach {magnitude:e}; \
+         a ratio beyond {limit:e} cannot be integrated in f64"
+    )]
+    ScaleRange {
+        /// Scene name.
+        scene: String,
+        /// The smallest face.
+        face: String,
+        /// Its size.
+        size: f64,
+        /// Largest |coordinate| in the scene.
+        magnitude: f64,
+        /// Largest ratio allowed.
+        limit: f64,
+    },
     /// A face has fewer than three vertices.
     #[error("face '{face}': a face needs at least 3 vertices, got {count}")]
     TooFewVertices {
@@ -143,8 +175,9 @@ pub enum Error {
     },
     /// A dense matrix that cannot fit in memory.
     #[error(
-        "a dense {dof} x {dof} matrix needs {needed_gib:.1} GiB but only {available_gib:.1} GiB may be used; \
-         use a coarser mesh (smaller --refine) or the iterative solver without a stored matrix"
+        "a dense {dof} x {dof} matrix needs {needed_gib:.1} GiB but only {available_gib:.1} GiB may be used \
+         (the iterative solver also keeps the matrix); use a coarser mesh (smaller --refine: each \
+         level multiplies the memory by 16) or a machine with more memory"
     )]
     TooLarge {
         /// Unknowns.
@@ -156,12 +189,15 @@ pub enum Error {
     },
     /// The linear system is singular or too ill-conditioned to solve.
     #[error(
-        "the system I - K is singular or nearly singular (estimated condition number {condition:e}); \
-         a closed surface with rho = 1 has no unique solution"
+        "the system I - K is singular or nearly singular ({reason}; estimated condition number \
+         {condition:e}): a closed surface with rho = 1 has no unique solution (lower rho or open \
+         the surface)"
     )]
     SingularSystem {
-        /// Estimated condition number (infinite when exactly singular).
+        /// Estimated 1-norm condition number (infinite when exactly singular).
         condition: f64,
+        /// What showed it.
+        reason: String,
     },
     /// An iterative solver did not converge.
     #[error(

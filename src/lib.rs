@@ -15,6 +15,7 @@ pub mod quadrature;
 pub mod report;
 pub mod scene;
 pub mod solve;
+pub mod stability;
 pub mod study;
 pub mod surface_error;
 pub mod visibility;

@@ -128,9 +128,9 @@ struct GeometryArgs {
     /// Collocation method
     #[arg(long, value_enum, default_value_t = MethodArg::Centroid)]
     method: MethodArg,
-    /// Node parameter alpha of the linear method, in [0, 1/3)
-    #[arg(long, default_value_t = Method::PAPER_ALPHA)]
-    alpha: f64,
+    /// Node parameter alpha of the linear method, in [0, 1/3) (default 1/6)
+    #[arg(long)]
+    alpha: Option<f64>,
     /// Mesh
     #[arg(long, value_enum, default_value_t = MeshArg::Uniform)]
     mesh: MeshArg,
@@ -158,8 +158,8 @@ struct GeometryArgs {
     /// IMT subintervals for the linear method's 1-D integrals
     #[arg(long, default_value_t = 128)]
     imt_nodes: usize,
-    /// Use the paper's closed forms for every pair, also far from the node (slower, and less
-    /// accurate in the far field, where the closed forms cancel)
+    /// Use the paper's closed forms for every pair, also far from the node and on thin elements
+    /// (slower, and less accurate there, where the closed forms cancel)
     #[arg(long)]
     no_far_field: bool,
 }
@@ -274,8 +274,15 @@ impl GeometryArgs {
     fn config(&self) -> Result<RunConfig> {
         let scene: BuiltinScene = self.scene.parse()?;
         let method = match self.method {
+            MethodArg::Centroid if self.alpha.is_some() => {
+                return Err(Error::InvalidParameter {
+                    name: "alpha",
+                    value: format!("{}", self.alpha.unwrap_or_default()),
+                    reason: "alpha belongs to --method linear".into(),
+                });
+            }
             MethodArg::Centroid => Method::Centroid,
-            MethodArg::Linear => Method::linear(self.alpha)?,
+            MethodArg::Linear => Method::linear(self.alpha.unwrap_or(Method::PAPER_ALPHA))?,
         };
         if self.imt_nodes < 2 {
             return Err(Error::InvalidParameter {
@@ -470,8 +477,10 @@ fn print_run(r: &RunReport) {
         "solution at the nodes: min {:.6}, mean {:.6}, max {:.6}",
         r.solution_range[0], r.solution_range[1], r.solution_range[2]
     );
-    let iterations =
-        if r.iterations > 0 { format!(", {} iterations", r.iterations) } else { String::new() };
+    let iterations = match r.condition_estimate {
+        Some(k) => format!(", condition ~{k:.1e}, {} refinement steps", r.refinement_steps),
+        None => format!(", {} iterations", r.iterations),
+    };
     println!(
         "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",
         r.setup_seconds, r.emission_seconds, r.solve_seconds, r.solver, r.residual
@@ -593,14 +602,38 @@ fn run(cli: Cli) -> Result<()> {
                 (Some(BackendArg::Cpu), _) => StudyDevice::Cpu,
                 (Some(BackendArg::Gpu), b) => StudyDevice::Gpu(b.precision()),
             };
+            let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
+            let print_table = json.as_deref() != Some("-");
+            match id.as_str() {
+                "stability" => {
+                    let result = radiosity::stability::run_stability(device)?;
+                    if let Some(target) = &json {
+                        report::write_json(&result, target)?;
+                    }
+                    if print_table {
+                        print!("{}", report::stability_table(&result, format));
+                    }
+                    return Ok(());
+                }
+                "stiff" => {
+                    let result = radiosity::stability::run_stiff(device)?;
+                    if let Some(target) = &json {
+                        report::write_json(&result, target)?;
+                    }
+                    if print_table {
+                        print!("{}", report::stiff_table(&result, format));
+                    }
+                    return Ok(());
+                }
+                _ => {}
+            }
             let options =
                 StudyOptions { max_n, device, progress: true, figure_dir: Some(figures.into()) };
             let result = study::run_study(&id, &options)?;
             if let Some(target) = &json {
                 report::write_json(&result, target)?;
             }
-            if json.as_deref() != Some("-") {
-                let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
+            if print_table {
                 print!("{}", report::study_table(&result, format));
             }
             Ok(())

@@ -86,7 +86,8 @@ pub fn assemble_on(
         Backend::Gpu(precision) => {
             let ctx = gpu::shared_context()?;
             let assembler = GpuAssembler::new(ctx, precision, disc.method)?;
-            let a = assembler.assemble(scene, mesh, disc, planner, options, progress)?;
+            let mut a = assembler.assemble(scene, mesh, disc, planner, options, progress)?;
+            assembly::recompute_thin_columns(&mut a, disc, planner, options);
             Ok((a, Some(format!("{} ({})", ctx.adapter.name, ctx.adapter.backend))))
         }
     }
@@ -173,6 +174,10 @@ pub struct RunReport {
     pub solver: &'static str,
     /// Iterations of the iterative solver.
     pub iterations: usize,
+    /// Estimated 1-norm condition number of I - K (LU only).
+    pub condition_estimate: Option<f64>,
+    /// Steps of iterative refinement after LU.
+    pub refinement_steps: usize,
     /// Number of elements.
     pub n: usize,
     /// Number of unknowns.
@@ -312,6 +317,8 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
         device,
         solver: outcome.solver,
         iterations: outcome.iterations,
+        condition_estimate: outcome.condition_estimate,
+        refinement_steps: outcome.refinement_steps,
         n: mesh.len(),
         dof: disc.dof(),
         error,

@@ -119,6 +119,15 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
             "exact method only",
         ),
         (&["solve", "--scene", "four-piece", "--surface-lattice", "2"], "surface-lattice"),
+        (&["solve", "--scene", "four-piece", "--alpha", "0.1"], "alpha belongs to --method linear"),
+        (&["solve", "--scene", "five-piece", "--solution", "edge", "--gamma", "1"], "no gamma"),
+        (
+            &["solve", "--scene", "four-piece", "--solution", "shadow", "--beta", "nan"],
+            "beta = NaN",
+        ),
+        (&["solve", "--scene", "four-piece", "--params", "nan,2,1"], "(NaN, 2, 1)"),
+        (&["solve", "--scene", "five-piece", "--refine", "8"], "3200.0 GiB"),
+        (&["study", "stiff", "--backend", "cpu", "--max-n", "x"], "--max-n"),
     ];
     for (args, needle) in cases {
         let (ok, _, stderr) = radiosity(args);
@@ -309,4 +318,79 @@ fn error_vs_time_marks_a_pareto_front_per_method() {
     }
     assert!(dir.join("error-vs-time.png").exists() && dir.join("error-vs-time.svg").exists());
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_stability_study_passes_its_bounds_on_the_cpu() {
+    let v = json(&["study", "stability", "--backend", "cpu", "--json", "-"]);
+    let rows = v["rows"].as_array().unwrap();
+    let mut cases: Vec<&str> = rows.iter().map(|r| r["case"].as_str().unwrap()).collect();
+    cases.dedup();
+    assert!(cases.len() >= 20, "{} cases", cases.len());
+    for r in rows {
+        for key in ["case", "backend", "precision", "relative_error", "bound"] {
+            assert!(!r[key].is_null(), "row lacks {key}: {r}");
+        }
+        assert_eq!(r["backend"], "cpu");
+        let (e, b) = (r["relative_error"].as_f64().unwrap(), r["bound"].as_f64().unwrap());
+        assert!(e <= b, "{} ({}): {e} > {b}", r["case"], r["method"]);
+        assert!(b < 1.0, "{}: a vacuous bound {b}", r["case"]);
+    }
+    assert_eq!(v["failed"], 0);
+    // The rules that replace the closed forms where these cancel save digits: the thin element
+    // and the far node lose at least 4 digits with closed forms everywhere, none with the rules.
+    for case in ["sliver 1e6, far", "far away (1e4)"] {
+        let r = rows
+            .iter()
+            .find(|r| r["case"] == case && r["method"] == "linear")
+            .unwrap_or_else(|| panic!("no row {case}"));
+        let (ours, closed) =
+            (r["relative_error"].as_f64().unwrap(), r["closed_forms_error"].as_f64().unwrap());
+        assert!(
+            ours < 1e-14 && closed > 1e-12 && closed > 1e4 * ours,
+            "{case}: {ours} vs {closed}"
+        );
+    }
+}
+
+#[test]
+fn the_stiff_study_shows_conditioning_and_refuses_singular_systems() {
+    let v = json(&["study", "stiff", "--json", "-"]);
+    let rows = v["rows"].as_array().unwrap();
+    let closed: Vec<&Value> = rows.iter().filter(|r| r["case"] == "cube").collect();
+    assert!(closed.len() >= 5);
+    let mut last = 0.0;
+    for r in &closed {
+        let rho = r["rho"].as_f64().unwrap();
+        if rho == 1.0 {
+            assert!(r["status"].as_str().unwrap().contains("singular"), "{r}");
+            assert!(r["error_refined"].is_null());
+            continue;
+        }
+        assert_eq!(r["status"], "solved");
+        let kappa = r["condition_estimate"].as_f64().unwrap();
+        assert!(kappa > last, "condition must grow as rho -> 1: {kappa} after {last}");
+        // Near 1/(1 - rho): the constant mode of K has eigenvalue rho.
+        assert!(kappa * (1.0 - rho) > 0.5 && kappa * (1.0 - rho) < 50.0, "rho {rho}: {kappa}");
+        last = kappa;
+        let (e, b) = (r["error_refined"].as_f64().unwrap(), r["bound"].as_f64().unwrap());
+        assert!(e <= b, "rho {rho}: refined error {e} above its bound {b}");
+        assert!(e <= r["error_lu"].as_f64().unwrap() + 1e-16, "refinement must not lose digits");
+    }
+    // An open box stays regular at rho = 1.
+    let open = rows
+        .iter()
+        .find(|r| r["rho"] == 1.0 && r["case"].as_str().unwrap().contains("open"))
+        .unwrap();
+    assert_eq!(open["status"], "solved");
+    assert!(open["condition_estimate"].as_f64().unwrap() < 1e3);
+}
+
+#[test]
+fn a_closed_surface_with_rho_1_is_reported_singular_by_solve() {
+    // The baffled box is closed; its rho is 0.5, so it solves; the refused case runs in the stiff
+    // study. Here the solver's report carries its condition estimate.
+    let v = json(&["solve", "--scene", "baffled-box", "--refine", "1", "--json", "-"]);
+    let kappa = v["condition_estimate"].as_f64().unwrap();
+    assert!(kappa > 1.0 && kappa < 10.0, "rho = 0.5 inside a closed box: condition {kappa}");
 }

@@ -225,3 +225,24 @@ fn bench_prints_per_backend_timings_and_differences_as_json() {
     assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-12, "{v}");
     assert!(v["max_abs_diff"].as_f64().unwrap() <= 1e-12, "{v}");
 }
+
+#[test]
+fn the_stability_study_passes_its_bounds_on_the_gpu_in_f64_and_f32() {
+    let Some(_) = gpu() else { return };
+    let result =
+        radiosity::stability::run_stability(radiosity::study::StudyDevice::Gpu(Precision::F64))
+            .unwrap();
+    for precision in ["f64", "f32"] {
+        let rows: Vec<_> =
+            result.rows.iter().filter(|r| r.backend == "gpu" && r.precision == precision).collect();
+        assert!(rows.len() >= 20, "{precision}: {} rows", rows.len());
+        for r in rows {
+            assert!(
+                r.passed,
+                "{} ({}, gpu {precision}): {} > {}",
+                r.case, r.method, r.relative_error, r.bound
+            );
+        }
+    }
+    assert_eq!(result.failed, 0);
+}

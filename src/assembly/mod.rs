@@ -30,15 +30,24 @@ pub struct PairIntegrator {
     imt: ImtRule,
     far_field: Option<FarFieldRule>,
     graded: Option<GradedRule>,
+    /// For thin elements ([`far_field::is_thin`]) under the exact method, unless the closed forms
+    /// are asked for everywhere (`far_field` off).
+    subdivision: Option<FarFieldRule>,
 }
 
 impl PairIntegrator {
     /// An integrator for `method`.
     pub fn new(method: Method, options: &AssemblyOptions) -> Self {
         let graded = options.quadrature.graded_rule();
-        let far_field = (graded.is_none() && options.far_field && method.nodes_per_element() == 3)
-            .then(FarFieldRule::standard);
-        Self { method, imt: ImtRule::new(options.imt_nodes.max(2)), far_field, graded }
+        let far_field =
+            (graded.is_none() && options.far_field).then(|| FarFieldRule::for_method(method));
+        Self {
+            method,
+            imt: ImtRule::new(options.imt_nodes.max(2)),
+            far_field,
+            graded,
+            subdivision: options.far_field.then(FarFieldRule::standard),
+        }
     }
 
     /// `∫ G φ_l` over the visible part of element `el` for each of its basis functions, seen from a
@@ -51,53 +60,76 @@ impl PairIntegrator {
         normal: glam::DVec3,
         visibility: &Visibility,
     ) -> [f64; 3] {
-        let obs =
-            Observer { position: el.frame.to_local(p), normal: el.frame.dir_to_local(normal) };
+        if let Visibility::Skip(_) = visibility {
+            return [0.0; 3];
+        }
+        // The integrals are invariant under scaling (G dS is dimensionless), so the pair is
+        // integrated in units of the element's size, a power of two (exact): no square or fourth
+        // power of a length can under- or overflow, whatever the scene's unit.
+        let unit = crate::geometry::power_of_two_unit(far_field::radius(&el.local));
+        let obs = Observer {
+            position: el.frame.to_local(p) * unit,
+            normal: el.frame.dir_to_local(normal),
+        };
+        let local = el.local.map(|v| v * unit);
+        let basis = basis.map(|b| Affine2 { c0: b.c0, cx: b.cx / unit, cy: b.cy / unit });
         match visibility {
-            Visibility::Skip(_) => [0.0; 3],
-            Visibility::Full => self.integrate_loops(&obs, el, &[&el.local[..]], basis),
             Visibility::Partial(pieces) => {
                 let shifted: Vec<Vec<DVec2>> = pieces
                     .iter()
-                    .map(|piece| piece.iter().map(|&q| q - el.centroid_in_face).collect())
+                    .map(|piece| piece.iter().map(|&q| (q - el.centroid_in_face) * unit).collect())
                     .collect();
                 let loops: Vec<&[DVec2]> = shifted.iter().map(Vec::as_slice).collect();
-                self.integrate_loops(&obs, el, &loops, basis)
+                self.integrate_loops(&obs, &local, &loops, &basis)
             }
+            _ => self.integrate_loops(&obs, &local, &[&local[..]], &basis),
         }
     }
 
-    /// `∫ G φ_l` over `loops`: the visible convex pieces of `el`, counter-clockwise, in its local
-    /// coordinates.
+    /// `∫ G φ_l` over `loops`: the visible convex pieces of an element with vertices `local`,
+    /// counter-clockwise, in its local coordinates.
     fn integrate_loops(
         &self,
         obs: &Observer,
-        el: &ElementFrame,
+        local: &[DVec2; 3],
         loops: &[&[DVec2]],
         basis: &[Affine2; 3],
     ) -> [f64; 3] {
         if let Some(rule) = &self.graded {
-            return rule.integrate(obs, &el.local, loops, basis);
+            return rule.integrate(obs, local, loops, basis);
+        }
+        if let Some(rule) = self.subdivision.as_ref().filter(|_| far_field::is_thin(local)) {
+            let near = |piece: &[DVec2; 3]| self.closed_forms(obs, &[&piece[..]], basis);
+            return integrate_fan(loops, |tri| rule.integrate_subdivided(obs, tri, basis, near));
         }
         if let Some(band) =
-            self.far_field.as_ref().and_then(|rule| rule.band(obs, far_field::radius(&el.local)))
+            self.far_field.as_ref().and_then(|rule| rule.band(obs, far_field::radius(local)))
         {
-            let mut sum = [0.0; 3];
-            for piece in loops {
-                for k in 1..piece.len() - 1 {
-                    let tri = [piece[0], piece[k], piece[k + 1]];
-                    let part = obs.integrate_by_rule(&band.rule, &tri, basis);
-                    sum.iter_mut().zip(part).for_each(|(s, p)| *s += p);
-                }
-            }
-            return sum;
+            return integrate_fan(loops, |tri| obs.integrate_by_rule(&band.rule, tri, basis));
         }
+        self.closed_forms(obs, loops, basis)
+    }
+
+    /// The exact method's closed forms (and IMT quadrature) over `loops`.
+    fn closed_forms(&self, obs: &Observer, loops: &[&[DVec2]], basis: &[Affine2; 3]) -> [f64; 3] {
         let loops = loops.iter().copied();
         match self.method {
             Method::Centroid => [exact::constant_weight(obs, loops), 0.0, 0.0],
             Method::Linear { .. } => exact::affine_weights(obs, loops, basis, &self.imt),
         }
     }
+}
+
+/// The sum of `part` over the fan triangles of every loop.
+fn integrate_fan(loops: &[&[DVec2]], part: impl Fn(&[DVec2; 3]) -> [f64; 3]) -> [f64; 3] {
+    let mut sum = [0.0; 3];
+    for piece in loops {
+        for k in 1..piece.len() - 1 {
+            let values = part(&[piece[0], piece[k], piece[k + 1]]);
+            sum.iter_mut().zip(values).for_each(|(s, v)| *s += v);
+        }
+    }
+    sum
 }
 
 /// The assembled matrix and the pair counts.
@@ -135,6 +167,41 @@ pub fn assemble(
             a
         });
     Ok(Assembly { matrix, stats })
+}
+
+/// Recomputes on the CPU the columns of the thin elements ([`far_field::is_thin`]): the GPU kernels
+/// evaluate closed forms only, which cancel on such elements. Nothing is done (and nothing is
+/// planned) when the mesh has no thin element, as in the paper's meshes, or when the closed forms
+/// are asked for everywhere (`far_field` off).
+pub fn recompute_thin_columns(
+    assembly: &mut Assembly,
+    disc: &Discretization,
+    planner: &PairPlanner,
+    options: &AssemblyOptions,
+) {
+    let thin: Vec<usize> =
+        (0..disc.elements.len()).filter(|&j| far_field::is_thin(&disc.elements[j].local)).collect();
+    if thin.is_empty() || !options.far_field {
+        return;
+    }
+    let integrator = PairIntegrator::new(disc.method, options);
+    let per = disc.method.nodes_per_element();
+    assembly.matrix.rows_mut().enumerate().for_each(|(i, row)| {
+        let node = &disc.nodes[i];
+        let scale = node.rho / PI;
+        for &j in &thin {
+            let el = &disc.elements[j];
+            let view = planner.face_view(node.position, node.normal, node.face, el.face);
+            let vis = match view {
+                FaceView::Skip(reason) => Visibility::Skip(reason),
+                _ => planner.visible(&view, &el.in_face()),
+            };
+            let values = integrator.integrate(el, &disc.bases[j], node.position, node.normal, &vis);
+            for (c, v) in values.iter().take(per).enumerate() {
+                row[j * per + c] = scale * v;
+            }
+        }
+    });
 }
 
 /// `(K u)(P)` at arbitrary points of S (the operator of (1.4) applied to the collocation solution

@@ -125,8 +125,9 @@ pub struct AssemblyOptions {
     /// Subintervals of the IMT rule for the one non-elementary moment (paper: 128); exact method.
     pub imt_nodes: usize,
     /// Use the far-field rule ([`crate::kernels::far_field::FarFieldRule::standard`]) for elements
-    /// (and visible pieces) far from the node in the linear method. Off: the paper's exact method
-    /// everywhere. Exact method only.
+    /// (and visible pieces) far from the node in the linear method, and its subdivided form for
+    /// thin elements in both methods. Off: the paper's closed forms for every pair. Exact method
+    /// only.
     pub far_field: bool,
 }
 

@@ -89,6 +89,7 @@ struct RowPlan {
 }
 
 fn plan_row(
+    unit: f64,
     i: usize,
     scene: &Scene,
     mesh: &Mesh,
@@ -110,7 +111,7 @@ fn plan_row(
             continue;
         }
         let frame = &scene.faces[face].frame;
-        let (p, n) = (frame.to_local(node.position), frame.dir_to_local(node.normal));
+        let (p, n) = (frame.to_local(node.position) * unit, frame.dir_to_local(node.normal));
         let scale = node.rho / std::f64::consts::PI;
         plan.views[face * VIEW_STRIDE..face * VIEW_STRIDE + 7]
             .copy_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, scale]);
@@ -128,7 +129,7 @@ fn plan_row(
                     let c = disc.elements[j].centroid_in_face;
                     let local = pieces
                         .into_iter()
-                        .map(|p| p.into_iter().map(|q| q - c).collect())
+                        .map(|p| p.into_iter().map(|q| (q - c) * unit).collect())
                         .collect();
                     plan.exceptions.push((j as u32, local));
                 }
@@ -139,14 +140,18 @@ fn plan_row(
 }
 
 fn plan_tile(
+    unit: f64,
     rows: Range<usize>,
     scene: &Scene,
     mesh: &Mesh,
     disc: &Discretization,
     planner: &PairPlanner,
 ) -> TilePlan {
-    let row_plans: Vec<RowPlan> =
-        rows.clone().into_par_iter().map(|i| plan_row(i, scene, mesh, disc, planner)).collect();
+    let row_plans: Vec<RowPlan> = rows
+        .clone()
+        .into_par_iter()
+        .map(|i| plan_row(unit, i, scene, mesh, disc, planner))
+        .collect();
     let mut views = Vec::with_capacity(rows.len() * mesh.face_count() * VIEW_STRIDE);
     let mut records = Vec::new();
     let mut piece_records = Vec::new();
@@ -182,13 +187,13 @@ struct RuleCounts {
     bands: usize,
 }
 
-/// The far-field rule the kernels use: in f64 the standard one for the linear method (when
-/// enabled), as on the CPU; in f32 the single-precision one for both methods, where the closed
-/// forms' cancellation far from the node would cost most of f32's digits.
+/// The far-field rule the kernels use: in f64 the CPU's for the method (when enabled); in f32 the
+/// single-precision one for both methods, where the closed forms' cancellation far from the node
+/// would cost most of f32's digits.
 fn far_field_rule(precision: Precision, method: Method, enabled: bool) -> Option<FarFieldRule> {
     match precision {
         Precision::F32 => Some(FarFieldRule::single_precision()),
-        Precision::F64 => (enabled && method.nodes_per_element() == 3).then(FarFieldRule::standard),
+        Precision::F64 => enabled.then(|| FarFieldRule::for_method(method)),
     }
 }
 
@@ -330,7 +335,12 @@ impl<'a> GpuAssembler<'a> {
         let dof = disc.dof();
         let mut matrix = CollocationMatrix::zeros(dof)?;
         let p = self.precision;
-        let elements = compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc), p));
+        // Lengths go to the device in units of the scene's size (a power of two, exact), so that
+        // no square or fourth power of a length under- or overflows, in f32 least of all.
+        let largest_face = scene.faces.iter().map(|f| f.size()).fold(0.0, f64::max);
+        let unit = crate::geometry::power_of_two_unit(largest_face);
+        let elements =
+            compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc, unit), p));
         let (tables, counts) = tables(options, self.method, self.precision)?;
         let tables = compute::uniform(ctx, &layout::real_bytes(&tables, p));
 
@@ -351,7 +361,7 @@ impl<'a> GpuAssembler<'a> {
             GpuTimings { tiles: tiles.len(), ..Default::default() };
         let timed_plan = |t: &Range<usize>| {
             let started = std::time::Instant::now();
-            let plan = plan_tile(t.clone(), scene, mesh, disc, planner);
+            let plan = plan_tile(unit, t.clone(), scene, mesh, disc, planner);
             self.timings.lock().expect("timings lock").planning_seconds +=
                 started.elapsed().as_secs_f64();
             plan

@@ -54,16 +54,18 @@ pub const NEAR_DISPATCH_OFFSET: u64 = 16;
 
 const _: () = assert!(std::mem::size_of::<Params>() == 48);
 
-/// Elements, ELEMENT_STRIDE reals each: the discretization's element-local data and the centroid.
-pub fn pack_elements(disc: &Discretization) -> Vec<f64> {
+/// Elements, ELEMENT_STRIDE reals each: the discretization's element-local data and the centroid,
+/// lengths in units of `1 / unit` (a power of two; basis gradients scaled inversely).
+pub fn pack_elements(disc: &Discretization, unit: f64) -> Vec<f64> {
     let mut v = Vec::with_capacity(disc.element_count() * ELEMENT_STRIDE);
     for (el, basis) in disc.elements.iter().zip(&disc.bases) {
-        v.extend_from_slice(&[el.centroid_in_face.x, el.centroid_in_face.y]);
+        let c = el.centroid_in_face * unit;
+        v.extend_from_slice(&[c.x, c.y]);
         for p in el.local {
-            v.extend_from_slice(&[p.x, p.y]);
+            v.extend_from_slice(&[p.x * unit, p.y * unit]);
         }
         for b in basis {
-            v.extend_from_slice(&[b.c0, b.cx, b.cy]);
+            v.extend_from_slice(&[b.c0, b.cx / unit, b.cy / unit]);
         }
         v.push(el.face as f64);
     }

@@ -100,7 +100,18 @@ impl TrueSolution {
         let sol = match name {
             "x2y2" => Self::X2Y2,
             "shadow" => Self::Shadow { beta: beta.unwrap_or(1.0), gamma: gamma.unwrap_or(1.5) },
-            "edge" => Self::Edge { beta: beta.unwrap_or(0.5) },
+            "edge" => {
+                if let Some(g) = gamma {
+                    return Err(Error::InvalidParameter {
+                        name: "gamma",
+                        value: g.to_string(),
+                        reason:
+                            "the edge solution (3.4) has no gamma; it belongs to --solution shadow"
+                                .into(),
+                    });
+                }
+                Self::Edge { beta: beta.unwrap_or(0.5) }
+            }
             _ => {
                 return Err(Error::UnknownName {
                     kind: "true solution",

@@ -134,6 +134,124 @@ pub fn study_table(study: &StudyResult, format: TableFormat) -> String {
     s
 }
 
+/// A plain table: a left-aligned first column (names) and right-aligned others.
+fn plain_table(title: &str, header: &[&str], rows: &[Vec<String>], format: TableFormat) -> String {
+    let mut s = String::new();
+    match format {
+        TableFormat::Markdown => {
+            s += &format!("**{title}**\n\n| {} |\n", header.join(" | "));
+            let align: Vec<&str> =
+                (0..header.len()).map(|k| if k == 0 { "---" } else { "---:" }).collect();
+            s += &format!("| {} |\n", align.join(" | "));
+            for r in rows {
+                s += &format!("| {} |\n", r.join(" | "));
+            }
+        }
+        TableFormat::Text => {
+            let width = |k: usize| {
+                rows.iter()
+                    .map(|r| r[k].chars().count())
+                    .chain([header[k].len()])
+                    .max()
+                    .unwrap_or(0)
+            };
+            let widths: Vec<usize> = (0..header.len()).map(width).collect();
+            let line = |cells: Vec<&str>| {
+                let mut l = String::new();
+                for (k, c) in cells.iter().enumerate() {
+                    let pad = widths[k] - c.chars().count();
+                    if k == 0 {
+                        l += &format!("{c}{}", " ".repeat(pad));
+                    } else {
+                        l += &format!("  {}{c}", " ".repeat(pad));
+                    }
+                }
+                l + "\n"
+            };
+            s += &format!("{title}\n\n");
+            s += &line(header.to_vec());
+            for r in rows {
+                s += &line(r.iter().map(String::as_str).collect());
+            }
+        }
+    }
+    s
+}
+
+/// `study stability` as a table: one row per case, method and backend.
+pub fn stability_table(result: &crate::stability::StabilityResult, format: TableFormat) -> String {
+    let rows: Vec<Vec<String>> = result
+        .rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.case.clone(),
+                r.method.into(),
+                format!("{}-{}", r.backend, r.precision),
+                format!("{:.6e}", r.reference),
+                format!("{:.1e}", r.relative_error),
+                r.closed_forms_error.map_or("-".into(), |e| format!("{e:.1e}")),
+                format!("{:.0e}", r.bound),
+                if r.passed { "ok".into() } else { "FAILED".into() },
+            ]
+        })
+        .collect();
+    let header =
+        ["case", "method", "backend", "reference", "rel. error", "closed forms", "bound", ""];
+    let mut s = plain_table(
+        "Stability of the collocation integrals at extreme geometry",
+        &header,
+        &rows,
+        format,
+    );
+    s += &format!("\n{} of {} rows within their bounds\n", rows.len() - result.failed, rows.len());
+    for note in &result.notes {
+        s += &format!("\nNote: {note}\n");
+    }
+    s
+}
+
+/// `study stiff` as a table: one row per scene and rho.
+pub fn stiff_table(result: &crate::stability::StiffResult, format: TableFormat) -> String {
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.1e}"));
+    let rows: Vec<Vec<String>> = result
+        .rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.case.clone(),
+                r.method.into(),
+                format!("{}", r.rho),
+                r.dof.to_string(),
+                opt(r.condition_estimate),
+                opt(r.error_lu),
+                opt(r.error_refined),
+                r.refinement_steps.map_or("-".into(), |k| k.to_string()),
+                opt(r.bound),
+                r.status.clone(),
+            ]
+        })
+        .collect();
+    let header = [
+        "case",
+        "method",
+        "rho",
+        "dof",
+        "condition",
+        "LU error",
+        "refined",
+        "steps",
+        "bound",
+        "status",
+    ];
+    let mut s =
+        plain_table("Stiff systems: rho -> 1 in open and closed boxes", &header, &rows, format);
+    for note in &result.notes {
+        s += &format!("\nNote: {note}\n");
+    }
+    s
+}
+
 /// Writes K as a NumPy .npy file (float64, C order, dof × dof).
 pub fn write_npy(path: &str, matrix: &crate::assembly::CollocationMatrix) -> Result<()> {
     use npyz::WriterBuilder;

@@ -33,6 +33,14 @@ pub struct Face {
     pub diagonal: Diagonal,
 }
 
+/// Largest coordinate magnitude accepted. The pair plan and the face checks work with fourth
+/// powers of lengths (squared lengths of vector areas, cross products of cross products), which
+/// must stay inside f64's normal range: lengths within [1e-50, 1e50] keep them there.
+pub const MAX_COORDINATE: f64 = 1e50;
+
+/// Smallest face size (diameter) accepted; see [`MAX_COORDINATE`].
+pub const MIN_FACE_SIZE: f64 = 1e-50;
+
 /// Relative tolerance (of the face's size) for planarity.
 const PLANARITY: f64 = 1e-9;
 
@@ -48,10 +56,23 @@ impl Face {
         if let Some((k, v)) = vertices.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(Error::NonFiniteVertex { face: name, vertex: k, x: v.x, y: v.y, z: v.z });
         }
+        if let Some((k, v)) =
+            vertices.iter().enumerate().find(|(_, v)| v.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(Error::CoordinateOutOfRange {
+                face: name,
+                vertex: k,
+                magnitude: v.abs().max_element(),
+                limit: MAX_COORDINATE,
+            });
+        }
         if !(0.0..=1.0).contains(&rho) {
             return Err(Error::ReflectivityOutOfRange { face: name, rho });
         }
         let size = diameter(&vertices);
+        if size < MIN_FACE_SIZE {
+            return Err(Error::DegenerateFace { face: name, area: 0.0, size });
+        }
         // Newell's method: twice the vector area, robust for non-convex polygons.
         let centre = vertices.iter().sum::<DVec3>() / vertices.len() as f64;
         let n = vertices.len();
@@ -62,8 +83,11 @@ impl Face {
             return Err(Error::DegenerateFace { face: name, area, size });
         }
         let normal = twice_area / (2.0 * area);
-        let tolerance = PLANARITY * size;
-        for (k, &v) in vertices.iter().enumerate() {
+        // Coordinates far from the origin carry a rounding error of ε |v| that no planarity test
+        // can see through; a triangle is planar whatever its coordinates.
+        let magnitude = vertices.iter().map(|v| v.abs().max_element()).fold(0.0, f64::max);
+        let tolerance = PLANARITY * size + 64.0 * f64::EPSILON * magnitude;
+        for (k, &v) in vertices.iter().enumerate().filter(|_| n > 3) {
             let distance = (v - centre).dot(normal).abs();
             if distance > tolerance {
                 return Err(Error::NonPlanarFace { face: name, vertex: k, distance, tolerance });

@@ -19,6 +19,10 @@ pub struct Scene {
     pub faces: Vec<Face>,
 }
 
+/// Largest ratio of the scene's largest coordinate to its smallest face: beyond it, the kernels'
+/// fourth powers of distances in units of an element could overflow.
+pub const MAX_SCALE_RANGE: f64 = 1e60;
+
 impl Scene {
     /// A scene from validated faces; face names must be unique.
     pub fn new(name: impl Into<String>, faces: Vec<Face>) -> Result<Self> {
@@ -36,6 +40,22 @@ impl Scene {
                     name: "face name",
                     value: f.name.clone(),
                     reason: "face names must be unique".into(),
+                });
+            }
+        }
+        let magnitude = faces
+            .iter()
+            .flat_map(|f| f.vertices.iter())
+            .map(|v| v.abs().max_element())
+            .fold(0.0, f64::max);
+        if let Some(small) = faces.iter().min_by(|a, b| a.size().total_cmp(&b.size())) {
+            if magnitude > MAX_SCALE_RANGE * small.size() {
+                return Err(Error::ScaleRange {
+                    scene: name,
+                    face: small.name.clone(),
+                    size: small.size(),
+                    magnitude,
+                    limit: MAX_SCALE_RANGE,
                 });
             }
         }

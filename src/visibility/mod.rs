@@ -70,8 +70,12 @@ pub enum Visibility {
     Partial(Vec<Vec<DVec2>>),
 }
 
-/// Relative tolerance for "on the plane" decisions.
+/// Relative tolerance for "on the line" decisions when clipping by a tangent plane (no slivers).
 const PLANE_TOLERANCE: f64 = 1e-12;
+
+/// A point's height above a plane is known to within this many ulps of its distance from the
+/// plane's origin.
+const HEIGHT_ROUNDING: f64 = 8.0 * f64::EPSILON;
 
 /// Decides visibility for a scene; built once per scene.
 #[derive(Clone, Debug)]
@@ -139,8 +143,11 @@ impl PairPlanner {
             return FaceView::Skip(SkipReason::SamePlane);
         }
         let f = &self.faces[face];
+        // On or behind the face's plane, up to the rounding of the height itself: G vanishes
+        // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
+        // limit, e.g. 1/2 beside a common edge, so no larger tolerance is right.)
         let z = f.frame.height(p);
-        if z <= PLANE_TOLERANCE * f.size {
+        if z <= HEIGHT_ROUNDING * (p - f.frame.origin).length() {
             return FaceView::Skip(SkipReason::FacingAway);
         }
         // The node's tangent plane n·(Q - P) >= 0 restricted to the face's plane.
