@@ -51,6 +51,30 @@ pub enum Error {
         /// Largest ratio allowed.
         limit: f64,
     },
+    /// A vertex lies on the line through its two neighbours.
+    #[error(
+        "face '{face}': vertex {vertex} lies on the line through its neighbours; remove it (the \
+         face's triangulation would contain a triangle without area)"
+    )]
+    CollinearVertex {
+        /// Face name.
+        face: String,
+        /// Vertex index within the face.
+        vertex: usize,
+    },
+    /// A face whose triangulation contains a triangle without area.
+    #[error(
+        "face '{face}': its triangulation has a triangle of area {area:e} against size {size:e} \
+         (three vertices nearly collinear across a diagonal); move the vertex or split the face"
+    )]
+    DegenerateElement {
+        /// Face name.
+        face: String,
+        /// Area of the triangle.
+        area: f64,
+        /// Its diameter.
+        size: f64,
+    },
     /// A face has fewer than three vertices.
     #[error("face '{face}': a face needs at least 3 vertices, got {count}")]
     TooFewVertices {

@@ -71,6 +71,13 @@ impl PairIntegrator {
             position: el.frame.to_local(p) * unit,
             normal: el.frame.dir_to_local(normal),
         };
+        // The pair plan decided the node is above the face's plane in the face's frame; in the
+        // element's frame (origin at its centroid) the height carries another rounding, and a
+        // face that is planar only to within its tolerance (1e-9 of its size) can put the node
+        // on the other side. Such a node is in the plane as far as the data can tell: G = 0.
+        if obs.position.z.is_nan() || obs.position.z <= 0.0 {
+            return [0.0; 3];
+        }
         let local = el.local.map(|v| v * unit);
         let basis = basis.map(|b| Affine2 { c0: b.c0, cx: b.cx / unit, cy: b.cy / unit });
         match visibility {

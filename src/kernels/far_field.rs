@@ -97,9 +97,9 @@ impl FarFieldRule {
     /// of aspect 1e6 seen from 0.36 of its length lost 10 digits in the constant weight and 12
     /// in the affine ones; `study stability`): pieces are bisected across their longest edge, which
     /// halves their aspect ratio, until each is far from the node compared with its size (then
-    /// the band's rule) or no longer thin (then `near`, the closed forms, which are accurate on a
-    /// fat piece near the node). The work grows with the logarithm of the aspect ratio and of the
-    /// node's closeness, not with their powers.
+    /// the band's rule), or no longer thin, or within a few of its widths of the node (then
+    /// `near`, the closed forms, which do not cancel there). The work grows with the logarithm of
+    /// the aspect ratio and of the node's closeness, not with their powers.
     pub fn integrate_subdivided<const L: usize>(
         &self,
         obs: &Observer,
@@ -109,12 +109,19 @@ impl FarFieldRule {
     ) -> [f64; L] {
         let mut sum = [0.0; L];
         let mut stack = vec![(*tri, 0usize)];
+        let mut pieces = 0;
         while let Some((t, depth)) = stack.pop() {
+            pieces += 1;
             let centre = (t[0] + t[1] + t[2]) / 3.0;
             let radius = t.iter().map(|v| (*v - centre).length()).fold(0.0, f64::max);
+            let exhausted = depth >= MAX_BISECTION_DEPTH || pieces > MAX_PIECES;
             let part = match self.band_about(obs, centre, radius) {
                 Some(band) => obs.integrate_by_rule(&band.rule, &t, weights),
-                None if !is_thin(&t) || depth >= MAX_BISECTION_DEPTH => near(&t),
+                None if !is_thin(&t) || exhausted => near(&t),
+                // Within a few widths of the node the closed forms do not cancel either; and a
+                // needle's tip region stays thin under any subdivision, so waiting for fat pieces
+                // there would never end.
+                None if within_widths(obs, &t) => near(&t),
                 None => {
                     let k = (0..3)
                         .max_by(|&a, &b| {
@@ -135,6 +142,22 @@ impl FarFieldRule {
         sum
     }
 }
+
+/// Whether the node is within four widths (twice the area over the diameter) of the triangle,
+/// where the closed forms' edge terms are no larger than the result.
+fn within_widths(obs: &Observer, t: &[DVec2; 3]) -> bool {
+    let diameter = (0..3).map(|k| (t[k] - t[(k + 1) % 3]).length()).fold(0.0, f64::max);
+    let width = (t[1] - t[0]).perp_dot(t[2] - t[0]).abs() / diameter;
+    let ccw = if (t[1] - t[0]).perp_dot(t[2] - t[0]) >= 0.0 { *t } else { [t[0], t[2], t[1]] };
+    let in_plane = crate::geometry::distance_to_convex(&ccw, obs.position.truncate());
+    in_plane.hypot(obs.position.z) <= 4.0 * width
+}
+
+/// Most pieces [`FarFieldRule::integrate_subdivided`] visits before handing the rest to the closed
+/// forms. Aspect ratios up to 1e6 need at most about 4000 even with the node 1e-5 above the
+/// element; beyond about 1e10, longest-edge bisection stacks needles across the width and the
+/// count would grow exponentially (found by fuzzing), so the budget bounds the time.
+pub const MAX_PIECES: usize = 16384;
 
 /// Deepest bisection of [`FarFieldRule::integrate_subdivided`]: each level halves a piece's
 /// aspect ratio, so 64 levels make any finite aspect ratio fat.

@@ -11,6 +11,10 @@
 //! Regions are given as closed loops of 2-D vertices, counter-clockwise for area and clockwise for
 //! holes; any set of loops whose winding number is the indicator of the region will do.
 //!
+//! Lengths are expected in units of the element's size (the assembly scales every pair by a power
+//! of two so), with the node within 1e60 of the element (the scene's scale range guarantees it):
+//! squares and fourth powers of lengths then stay inside f64's normal range.
+//!
 //! - [`exact`]: the production kernel: closed forms in edge form for the constant weight, closed
 //!   forms plus one IMT quadrature per edge for affine weights (eqs. 4.5–4.9, 4.13).
 //! - [`far_field`]: a collapsed Gauss rule for elements far from the node (linear method).

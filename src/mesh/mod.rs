@@ -88,6 +88,15 @@ impl Mesh {
                 Some(c) => grid::cut_quadrilateral(face, c)?,
                 None => initial_triangles(face)?,
             };
+            for tri in &tris {
+                let size = (0..3).map(|i| (tri[i] - tri[(i + 1) % 3]).length()).fold(0.0, f64::max);
+                let area = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
+                // The face's own checks allow vertices that are collinear only with a diagonal;
+                // such a triangle has no usable basis functions and defeats every quadrature.
+                if area.is_nan() || area <= 1e-12 * size * size {
+                    return Err(Error::DegenerateElement { face: face.name.clone(), area, size });
+                }
+            }
             per_face.push(tris.into_iter().map(|vertices| Element { face: k, vertices }).collect());
         }
         for _ in 0..refine {

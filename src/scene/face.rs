@@ -82,6 +82,15 @@ impl Face {
         if area.is_nan() || area <= 1e-12 * size * size {
             return Err(Error::DegenerateFace { face: name, area, size });
         }
+        // A vertex on the line through its neighbours makes a degenerate triangle in the face's
+        // triangulation (and a zero-area element with an infinite basis gradient).
+        for k in 0..n {
+            let (a, b, c) = (vertices[(k + n - 1) % n], vertices[k], vertices[(k + 1) % n]);
+            let corner = 0.5 * (b - a).cross(c - b).length();
+            if corner.is_nan() || corner <= 1e-12 * size * size {
+                return Err(Error::CollinearVertex { face: name, vertex: k });
+            }
+        }
         let normal = twice_area / (2.0 * area);
         // Coordinates far from the origin carry a rounding error of ε |v| that no planarity test
         // can see through; a triangle is planar whatever its coordinates.
@@ -253,6 +262,12 @@ mod tests {
             Face::new("bowtie", bowtie, 0.5),
             Err(Error::SelfIntersectingFace { .. })
         ));
+
+        // Found by the fuzzer: a quadrilateral with three collinear vertices, whose diagonal
+        // split made a triangle without area (and NaN basis functions).
+        let kinked = vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0), DVec3::Y];
+        let e = Face::new("kinked", kinked, 0.5).unwrap_err().to_string();
+        assert!(e.contains("'kinked'") && e.contains("vertex 1"), "{e}");
 
         let f = Face::new("sq", square(), 0.5).unwrap();
         assert!(f.check_normal(-DVec3::Z).is_err());
