@@ -75,6 +75,19 @@ pub enum Error {
         /// Its diameter.
         size: f64,
     },
+    /// Two faces in one plane, facing the same way, overlap.
+    #[error(
+        "faces '{first}' and '{second}' lie in one plane, face the same way and overlap (area \
+         {area:e}): each point there would be counted twice"
+    )]
+    OverlappingFaces {
+        /// First face.
+        first: String,
+        /// Second face.
+        second: String,
+        /// Common area.
+        area: f64,
+    },
     /// A face has fewer than three vertices.
     #[error("face '{face}': a face needs at least 3 vertices, got {count}")]
     TooFewVertices {

@@ -7,7 +7,10 @@ mod face;
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use face::{Diagonal, Face};
 
+use glam::DVec2;
+
 use crate::error::{Error, Result};
+use crate::geometry::{HalfPlane, clip_convex, signed_area, triangulate};
 
 /// A set of faces. Every face is opaque to light crossing it (an occluder), and radiates and
 /// receives on the side its normal points to.
@@ -59,7 +62,33 @@ impl Scene {
                 });
             }
         }
-        Ok(Self { name, faces })
+        let scene = Self { name, faces };
+        scene.check_no_overlap()?;
+        Ok(scene)
+    }
+
+    /// Two faces in one plane facing the same way must not overlap: a node would see the shared
+    /// area twice. (Facing opposite ways they are the two sides of a plate, as S2 and S3.)
+    fn check_no_overlap(&self) -> Result<()> {
+        for a in 0..self.faces.len() {
+            for b in a + 1..self.faces.len() {
+                let (fa, fb) = (&self.faces[a], &self.faces[b]);
+                if fa.frame.normal.dot(fb.frame.normal) <= 0.0 || !self.coplanar(a, b) {
+                    continue;
+                }
+                let pa = fa.local_polygon();
+                let pb: Vec<DVec2> = fb.vertices.iter().map(|&v| fa.frame.to_plane(v)).collect();
+                let area = overlap_area(&pa, &pb);
+                if area > 1e-9 * fa.area().min(fb.area()) {
+                    return Err(Error::OverlappingFaces {
+                        first: fa.name.clone(),
+                        second: fb.name.clone(),
+                        area,
+                    });
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Index of the face with this name.
@@ -78,5 +107,56 @@ impl Scene {
     /// Total area.
     pub fn area(&self) -> f64 {
         self.faces.iter().map(Face::area).sum()
+    }
+}
+
+/// Area common to two simple counter-clockwise polygons (triangulated, then clipped pairwise).
+fn overlap_area(a: &[DVec2], b: &[DVec2]) -> f64 {
+    let triangles = |p: &[DVec2]| -> Vec<[DVec2; 3]> {
+        triangulate(p).unwrap_or_default().iter().map(|t| [p[t[0]], p[t[1]], p[t[2]]]).collect()
+    };
+    let (ta, tb) = (triangles(a), triangles(b));
+    let mut area = 0.0;
+    for s in &ta {
+        for t in &tb {
+            let mut piece = Some(s.to_vec());
+            for k in 0..3 {
+                let edge = HalfPlane::left_of(t[k], t[(k + 1) % 3]);
+                piece = piece.and_then(|p| clip_convex(&p, &edge));
+            }
+            area += piece.map_or(0.0, |p| signed_area(&p).abs());
+        }
+    }
+    area
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+
+    fn square(name: &str, x0: f64, flip: bool) -> Face {
+        let mut v = vec![
+            DVec3::new(x0, 0.0, 0.0),
+            DVec3::new(x0 + 1.0, 0.0, 0.0),
+            DVec3::new(x0 + 1.0, 1.0, 0.0),
+            DVec3::new(x0, 1.0, 0.0),
+        ];
+        if flip {
+            v.reverse();
+        }
+        Face::new(name, v, 0.5).unwrap()
+    }
+
+    #[test]
+    fn overlapping_faces_in_one_plane_are_refused_unless_they_are_a_plate() {
+        // Found by fuzzing: two coplanar faces facing the same way, seen twice by every node.
+        let e = Scene::new("s", vec![square("a", 0.0, false), square("b", 0.5, false)]);
+        let e = e.unwrap_err().to_string();
+        assert!(e.contains("'a' and 'b'") && e.contains("5e-1"), "{e}");
+        // Side by side, or the two sides of one plate: fine.
+        assert!(Scene::new("s", vec![square("a", 0.0, false), square("b", 1.0, false)]).is_ok());
+        assert!(Scene::new("s", vec![square("a", 0.0, false), square("b", 0.0, true)]).is_ok());
     }
 }
