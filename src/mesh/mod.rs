@@ -13,7 +13,7 @@ use std::ops::Range;
 use glam::DVec3;
 
 use crate::error::{Error, Result};
-use crate::scene::{Diagonal, Scene};
+use crate::scene::{Diagonal, MIN_RELATIVE_AREA, Scene};
 
 /// A triangle of the mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,7 +93,7 @@ impl Mesh {
                 let area = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
                 // The face's own checks allow vertices that are collinear only with a diagonal;
                 // such a triangle has no usable basis functions and defeats every quadrature.
-                if area.is_nan() || area <= 1e-12 * size * size {
+                if area.is_nan() || area <= MIN_RELATIVE_AREA * size * size {
                     return Err(Error::DegenerateElement { face: face.name.clone(), area, size });
                 }
             }

@@ -38,6 +38,12 @@ pub struct Face {
 /// must stay inside f64's normal range: lengths within [1e-50, 1e50] keep them there.
 pub const MAX_COORDINATE: f64 = 1e50;
 
+/// Smallest area of a face, of the triangle at each of its corners and of each triangle of its
+/// triangulation, relative to the squared size: an aspect ratio up to about 1e10. Thinner
+/// triangles have normals set by the rounding of their coordinates (fuzzing found a 1e12 sliver
+/// whose normal was off by 1e-2), and no visibility decision about them can be trusted.
+pub const MIN_RELATIVE_AREA: f64 = 1e-10;
+
 /// Smallest face size (diameter) accepted; see [`MAX_COORDINATE`].
 pub const MIN_FACE_SIZE: f64 = 1e-50;
 
@@ -79,7 +85,7 @@ impl Face {
         let twice_area: DVec3 =
             (0..n).map(|k| (vertices[k] - centre).cross(vertices[(k + 1) % n] - centre)).sum();
         let area = 0.5 * twice_area.length();
-        if area.is_nan() || area <= 1e-12 * size * size {
+        if area.is_nan() || area <= MIN_RELATIVE_AREA * size * size {
             return Err(Error::DegenerateFace { face: name, area, size });
         }
         // A vertex on the line through its neighbours makes a degenerate triangle in the face's
@@ -87,7 +93,7 @@ impl Face {
         for k in 0..n {
             let (a, b, c) = (vertices[(k + n - 1) % n], vertices[k], vertices[(k + 1) % n]);
             let corner = 0.5 * (b - a).cross(c - b).length();
-            if corner.is_nan() || corner <= 1e-12 * size * size {
+            if corner.is_nan() || corner <= MIN_RELATIVE_AREA * size * size {
                 return Err(Error::CollinearVertex { face: name, vertex: k });
             }
         }

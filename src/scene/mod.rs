@@ -5,7 +5,7 @@ mod builtin;
 mod face;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
-pub use face::{Diagonal, Face};
+pub use face::{Diagonal, Face, MIN_RELATIVE_AREA};
 
 use glam::DVec2;
 
@@ -21,6 +21,11 @@ pub struct Scene {
     /// The faces.
     pub faces: Vec<Face>,
 }
+
+/// Faces whose planes are this close (relative to their size) and ...
+const COPLANAR_DISTANCE: f64 = 1e-9;
+/// ... this parallel (radians) count as one plane.
+const COPLANAR_ANGLE: f64 = 1e-6;
 
 /// Largest ratio of the scene's largest coordinate to its smallest face: beyond it, the kernels'
 /// fourth powers of distances in units of an element could overflow.
@@ -96,12 +101,17 @@ impl Scene {
         self.faces.iter().position(|f| f.name == name)
     }
 
-    /// Whether faces `a` and `b` lie in one plane (either orientation), up to a relative tolerance.
+    /// Whether faces `a` and `b` lie in one plane (either orientation), up to the planarity
+    /// tolerance of a face (1e-9 of the larger size) and a 1e-6 angle between their normals.
+    /// Faces that close are in contact: a node on one sees the other edge-on or not at all, and
+    /// the integrals between them have no accurate digits, so the pair plan skips them (fuzzing
+    /// found a face 1e-22 in front of another, tilted 1e-9, counted as filling a hemisphere).
     pub fn coplanar(&self, a: usize, b: usize) -> bool {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        let tol = 1e-10 * fa.size().max(fb.size());
-        fa.frame.normal.cross(fb.frame.normal).length() < 1e-10
+        let tol = COPLANAR_DISTANCE * fa.size().max(fb.size());
+        fa.frame.normal.cross(fb.frame.normal).length() < COPLANAR_ANGLE
             && fb.vertices.iter().all(|&v| fa.frame.height(v).abs() <= tol)
+            && fa.vertices.iter().all(|&v| fb.frame.height(v).abs() <= tol)
     }
 
     /// Total area.
