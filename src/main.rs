@@ -594,6 +594,21 @@ fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Res
     Ok(())
 }
 
+/// A study's result: JSON to `json` when given, and the table unless the JSON goes to stdout.
+fn emit<T: Serialize>(
+    result: &T,
+    json: Option<&str>,
+    table: impl FnOnce() -> String,
+) -> Result<()> {
+    if let Some(target) = json {
+        report::write_json(result, target)?;
+    }
+    if json != Some("-") {
+        print!("{}", table());
+    }
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Study { id, max_n, backend: device, precision, figures, json, markdown } => {
@@ -603,40 +618,23 @@ fn run(cli: Cli) -> Result<()> {
                 (Some(BackendArg::Gpu), b) => StudyDevice::Gpu(b.precision()),
             };
             let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
-            let print_table = json.as_deref() != Some("-");
+            let json = json.as_deref();
             match id.as_str() {
                 "stability" => {
                     let result = radiosity::stability::run_stability(device)?;
-                    if let Some(target) = &json {
-                        report::write_json(&result, target)?;
-                    }
-                    if print_table {
-                        print!("{}", report::stability_table(&result, format));
-                    }
-                    return Ok(());
+                    emit(&result, json, || report::stability_table(&result, format))
                 }
                 "stiff" => {
                     let result = radiosity::stability::run_stiff(device)?;
-                    if let Some(target) = &json {
-                        report::write_json(&result, target)?;
-                    }
-                    if print_table {
-                        print!("{}", report::stiff_table(&result, format));
-                    }
-                    return Ok(());
+                    emit(&result, json, || report::stiff_table(&result, format))
                 }
-                _ => {}
+                _ => {
+                    let figure_dir = Some(figures.into());
+                    let options = StudyOptions { max_n, device, progress: true, figure_dir };
+                    let result = study::run_study(&id, &options)?;
+                    emit(&result, json, || report::study_table(&result, format))
+                }
             }
-            let options =
-                StudyOptions { max_n, device, progress: true, figure_dir: Some(figures.into()) };
-            let result = study::run_study(&id, &options)?;
-            if let Some(target) = &json {
-                report::write_json(&result, target)?;
-            }
-            if print_table {
-                print!("{}", report::study_table(&result, format));
-            }
-            Ok(())
         }
         Command::Solve(args) => {
             let r = pipeline::run(&args.config()?)?;
