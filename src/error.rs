@@ -250,6 +250,15 @@ pub enum Error {
     #[error("GPU: {0}")]
     Gpu(String),
     /// Input/output.
+    /// A scene or mesh file that cannot be read or understood.
+    #[error("{path}: {reason}")]
+    SceneFile {
+        /// The file.
+        path: String,
+        /// What is wrong, with the line where known.
+        reason: String,
+    },
+    /// Reading or writing a file failed.
     #[error(transparent)]
     Io(#[from] std::io::Error),
 }

@@ -11,11 +11,11 @@ use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
 use radiosity::mesh::Mesh;
-use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport};
+use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport, SceneSource};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::report::TableFormat;
 use radiosity::scene::Scene;
-use radiosity::scene::{BuiltinScene, SurfaceParameters};
+use radiosity::scene::SurfaceParameters;
 use radiosity::solve::SolverChoice;
 use radiosity::study::{self, StudyDevice, StudyOptions};
 use radiosity::visibility::PairPlanner;
@@ -122,7 +122,7 @@ enum QuadratureArg {
 /// The scene, its mesh and the collocation method.
 #[derive(Args)]
 struct GeometryArgs {
-    /// Scene: four-piece, five-piece, cube, baffled-box
+    /// Scene: four-piece, five-piece, cube, baffled-box, or a scene file (.toml, .obj, .stl)
     #[arg(long)]
     scene: String,
     /// Collocation method
@@ -272,7 +272,7 @@ impl GeometryArgs {
 
     /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere.
     fn config(&self) -> Result<RunConfig> {
-        let scene: BuiltinScene = self.scene.parse()?;
+        let scene = SceneSource::parse(&self.scene)?;
         let method = match self.method {
             MethodArg::Centroid if self.alpha.is_some() => {
                 return Err(Error::InvalidParameter {
@@ -291,6 +291,7 @@ impl GeometryArgs {
                 reason: "the IMT rule needs at least 2 subintervals".into(),
             });
         }
+        let solution = scene.is_paper_surface().then_some(TrueSolution::X2Y2);
         Ok(RunConfig {
             scene,
             params: parse_params(&self.params)?,
@@ -300,7 +301,7 @@ impl GeometryArgs {
             },
             refine: self.refine,
             method,
-            solution: scene.is_paper_surface().then_some(TrueSolution::X2Y2),
+            solution,
             assembly: AssemblyOptions {
                 quadrature: self.quadrature()?,
                 imt_nodes: self.imt_nodes,

@@ -1,6 +1,7 @@
 //! One solve from end to end (DESIGN.md sec. 2): scene -> mesh -> discretization -> pair plan ->
 //! assembly -> emissivity -> solve -> errors, with the time of each stage.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -93,11 +94,44 @@ pub fn assemble_on(
     }
 }
 
+/// Where the scene comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneSource {
+    /// A built-in scene.
+    Builtin(BuiltinScene),
+    /// A `.toml` scene file or an `.obj` / `.stl` mesh ([`crate::scene::load`]).
+    File(PathBuf),
+}
+
+impl SceneSource {
+    /// A built-in scene's name, or a path ending in `.toml`, `.obj` or `.stl`.
+    pub fn parse(name: &str) -> Result<Self> {
+        if crate::scene::is_scene_file(name) {
+            Ok(Self::File(PathBuf::from(name)))
+        } else {
+            Ok(Self::Builtin(name.parse()?))
+        }
+    }
+
+    /// Builds or loads the scene; `params` is used by the paper's surfaces only.
+    pub fn build(&self, params: SurfaceParameters) -> Result<Scene> {
+        match self {
+            Self::Builtin(b) => b.build(params),
+            Self::File(path) => crate::scene::load(path),
+        }
+    }
+
+    /// Whether this is one of the paper's built-in surfaces.
+    pub fn is_paper_surface(&self) -> bool {
+        matches!(self, Self::Builtin(b) if b.is_paper_surface())
+    }
+}
+
 /// Everything that defines one run.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
     /// The scene.
-    pub scene: BuiltinScene,
+    pub scene: SceneSource,
     /// (A, B, C) for the paper's surfaces.
     pub params: SurfaceParameters,
     /// Mesh kind.
@@ -133,7 +167,7 @@ impl RunConfig {
     /// The paper's setup for a scene: uniform mesh, centroid method, u = x² + y².
     pub fn paper(scene: BuiltinScene, refine: u32) -> Self {
         Self {
-            scene,
+            scene: SceneSource::Builtin(scene),
             params: SurfaceParameters::default(),
             mesh: MeshChoice::Uniform,
             refine,

@@ -47,6 +47,11 @@ pub const MIN_RELATIVE_AREA: f64 = 1e-10;
 /// Smallest face size (diameter) accepted; see [`MAX_COORDINATE`].
 pub const MIN_FACE_SIZE: f64 = 1e-50;
 
+/// Faces whose planes are this close (relative to their size) and ...
+const COPLANAR_DISTANCE: f64 = 1e-9;
+/// ... this parallel (radians) count as one plane.
+const COPLANAR_ANGLE: f64 = 1e-6;
+
 /// Relative tolerance (of the face's size) for planarity.
 const PLANARITY: f64 = 1e-9;
 
@@ -151,6 +156,16 @@ impl Face {
         Ok(())
     }
 
+    /// Whether this face and `other` lie in one plane (either orientation), up to the planarity
+    /// tolerance of a face (1e-9 of the larger size) and a 1e-6 angle between their normals.
+    /// See [`crate::scene::Scene::coplanar`].
+    pub fn is_coplanar_with(&self, other: &Face) -> bool {
+        let tol = COPLANAR_DISTANCE * self.size().max(other.size());
+        self.frame.normal.cross(other.frame.normal).length() < COPLANAR_ANGLE
+            && other.vertices.iter().all(|&v| self.frame.height(v).abs() <= tol)
+            && self.vertices.iter().all(|&v| other.frame.height(v).abs() <= tol)
+    }
+
     /// Vertices in the face frame's 2-D coordinates (counter-clockwise).
     pub fn local_polygon(&self) -> Vec<DVec2> {
         self.vertices.iter().map(|&v| self.frame.to_plane(v)).collect()
@@ -159,6 +174,15 @@ impl Face {
     /// Area.
     pub fn area(&self) -> f64 {
         crate::geometry::signed_area(&self.local_polygon())
+    }
+
+    /// Smallest and largest corner of the axis-aligned box around the face.
+    pub fn bounding_box(&self) -> (DVec3, DVec3) {
+        self.vertices
+            .iter()
+            .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            })
     }
 
     /// Largest distance between two vertices.

@@ -3,11 +3,15 @@
 
 mod builtin;
 mod face;
+mod file;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use face::{Diagonal, Face, MIN_RELATIVE_AREA};
+pub use file::{IMPORT_RHO, Side, is_scene_file, load};
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
+use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::{AABB, RTree};
 
 use crate::error::{Error, Result};
 use crate::geometry::{HalfPlane, clip_convex, signed_area, triangulate};
@@ -21,11 +25,6 @@ pub struct Scene {
     /// The faces.
     pub faces: Vec<Face>,
 }
-
-/// Faces whose planes are this close (relative to their size) and ...
-const COPLANAR_DISTANCE: f64 = 1e-9;
-/// ... this parallel (radians) count as one plane.
-const COPLANAR_ANGLE: f64 = 1e-6;
 
 /// Largest ratio of the scene's largest coordinate to its smallest face: beyond it, the kernels'
 /// fourth powers of distances in units of an element could overflow.
@@ -42,8 +41,9 @@ impl Scene {
                 reason: format!("scene '{name}' has no faces"),
             });
         }
-        for (k, f) in faces.iter().enumerate() {
-            if faces[..k].iter().any(|g| g.name == f.name) {
+        let mut names = std::collections::HashSet::new();
+        for f in &faces {
+            if !names.insert(f.name.as_str()) {
                 return Err(Error::InvalidParameter {
                     name: "face name",
                     value: f.name.clone(),
@@ -75,8 +75,21 @@ impl Scene {
     /// Two faces in one plane facing the same way must not overlap: a node would see the shared
     /// area twice. (Facing opposite ways they are the two sides of a plate, as S2 and S3.)
     fn check_no_overlap(&self) -> Result<()> {
-        for a in 0..self.faces.len() {
-            for b in a + 1..self.faces.len() {
+        // Only faces whose bounding boxes touch can overlap: an R*-tree finds those pairs.
+        let boxes: Vec<(DVec3, DVec3)> = self.faces.iter().map(Face::bounding_box).collect();
+        let tree = RTree::bulk_load(
+            boxes
+                .iter()
+                .enumerate()
+                .map(|(k, (lo, hi))| {
+                    GeomWithData::new(Rectangle::from_corners(lo.to_array(), hi.to_array()), k)
+                })
+                .collect::<Vec<_>>(),
+        );
+        for (a, (lo, hi)) in boxes.iter().enumerate() {
+            let pad = DVec3::splat(1e-9 * self.faces[a].size());
+            let near = AABB::from_corners((*lo - pad).to_array(), (*hi + pad).to_array());
+            for b in tree.locate_in_envelope_intersecting(near).map(|g| g.data).filter(|&b| b > a) {
                 let (fa, fb) = (&self.faces[a], &self.faces[b]);
                 if fa.frame.normal.dot(fb.frame.normal) <= 0.0 || !self.coplanar(a, b) {
                     continue;
@@ -107,11 +120,7 @@ impl Scene {
     /// the integrals between them have no accurate digits, so the pair plan skips them (fuzzing
     /// found a face 1e-22 in front of another, tilted 1e-9, counted as filling a hemisphere).
     pub fn coplanar(&self, a: usize, b: usize) -> bool {
-        let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        let tol = COPLANAR_DISTANCE * fa.size().max(fb.size());
-        fa.frame.normal.cross(fb.frame.normal).length() < COPLANAR_ANGLE
-            && fb.vertices.iter().all(|&v| fa.frame.height(v).abs() <= tol)
-            && fa.vertices.iter().all(|&v| fb.frame.height(v).abs() <= tol)
+        self.faces[a].is_coplanar_with(&self.faces[b])
     }
 
     /// Total area.

@@ -10,13 +10,15 @@
 //! Shadows are convex (occluders are split into convex pieces), and the visible part of an element
 //! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
 //! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates).
-//! Occluders are decided per pair of faces ([`PairPlanner::candidates`]), so a scene in which no face
-//! can come between two others never runs shadow code.
+//! Candidate occluders of a view are found in an R*-tree over the occluders' bounding boxes (those
+//! overlapping the box of the node and the face), then filtered by the planes of the two faces, so
+//! a scene in which no face can come between two others never runs shadow code, and a scene of
+//! thousands of faces does not test every occluder for every pair ([`Acceleration`]).
 
 mod occluders;
 mod stats;
 
-pub use occluders::Occluder;
+pub use occluders::{Acceleration, Occluder};
 pub use stats::PairStats;
 
 use glam::{DVec2, DVec3};
@@ -81,79 +83,87 @@ const HEIGHT_ROUNDING: f64 = 8.0 * f64::EPSILON;
 #[derive(Clone, Debug)]
 pub struct PairPlanner {
     faces: Vec<PlannerFace>,
-    occluders: Vec<Occluder>,
-    /// For faces (a, b) at `a * n + b`: occluders that may block segments from a to b.
-    candidates: Vec<Vec<usize>>,
-    coplanar: Vec<bool>,
+    occluders: occluders::OccluderIndex,
 }
 
 #[derive(Clone, Debug)]
 struct PlannerFace {
-    frame: crate::geometry::PlaneFrame,
+    face: crate::scene::Face,
     polygon: Vec<DVec2>,
     hull: Vec<DVec2>,
     size: f64,
+    lo: DVec3,
+    hi: DVec3,
 }
 
 impl PairPlanner {
-    /// Prepares the occluders of `scene` and the candidates for every pair of faces.
+    /// Prepares the occluders of `scene` and their index.
     pub fn new(scene: &Scene) -> Self {
-        let n = scene.faces.len();
-        let faces: Vec<PlannerFace> = scene
+        Self::with_acceleration(scene, Acceleration::default())
+    }
+
+    /// As [`PairPlanner::new`], choosing how candidate occluders are found (the views are the
+    /// same either way; only the time differs).
+    pub fn with_acceleration(scene: &Scene, acceleration: Acceleration) -> Self {
+        let faces = scene
             .faces
             .iter()
             .map(|f| {
                 let polygon = f.local_polygon();
-                PlannerFace { frame: f.frame, hull: convex_hull(&polygon), polygon, size: f.size() }
+                let (lo, hi) = f.bounding_box();
+                PlannerFace {
+                    face: f.clone(),
+                    hull: convex_hull(&polygon),
+                    polygon,
+                    size: f.size(),
+                    lo,
+                    hi,
+                }
             })
             .collect();
-        let occluders = occluders::convex_pieces(scene);
-        let mut coplanar = vec![false; n * n];
-        let mut candidates = vec![Vec::new(); n * n];
-        for a in 0..n {
-            for b in 0..n {
-                coplanar[a * n + b] = a == b || scene.coplanar(a, b);
-                if !coplanar[a * n + b] {
-                    candidates[a * n + b] = occluders::candidates_between(scene, a, b, &occluders);
-                }
-            }
-        }
-        Self { faces, occluders, candidates, coplanar }
+        Self { faces, occluders: occluders::OccluderIndex::new(scene, acceleration) }
     }
 
-    /// Whether any pair of faces can have an occluder between them.
+    /// Whether any pair of faces can have an occluder between them (one query per pair of faces).
     pub fn has_occlusion(&self) -> bool {
-        self.candidates.iter().any(|c| !c.is_empty())
+        let n = self.faces.len();
+        (0..n).any(|a| (0..n).any(|b| a != b && !self.candidates(a, b).is_empty()))
     }
 
-    /// Occluders that may lie between faces `a` and `b`.
-    pub fn candidates(&self, a: usize, b: usize) -> &[usize] {
-        &self.candidates[a * self.faces.len() + b]
+    /// Occluders that may lie between faces `a` and `b` (none for one face or one plane).
+    pub fn candidates(&self, a: usize, b: usize) -> Vec<usize> {
+        let (fa, fb) = (&self.faces[a], &self.faces[b]);
+        if a == b || fa.face.is_coplanar_with(&fb.face) {
+            return Vec::new();
+        }
+        let tol = 1e-12 * fa.size.max(fb.size);
+        let (lo, hi) = (fa.lo.min(fb.lo), fa.hi.max(fb.hi));
+        self.occluders.between(a, b, &fa.face.frame, &fb.face.frame, lo, hi, tol)
     }
 
     /// The convex occluder pieces of the scene.
     pub fn occluders(&self) -> &[Occluder] {
-        &self.occluders
+        &self.occluders.pieces
     }
 
     /// What the point `p` with unit normal `normal`, on face `own_face`, sees of face `face`.
     pub fn face_view(&self, p: DVec3, normal: DVec3, own_face: usize, face: usize) -> FaceView {
-        let n = self.faces.len();
-        if self.coplanar[own_face * n + face] {
+        let f = &self.faces[face];
+        let own = &self.faces[own_face];
+        if own_face == face || own.face.is_coplanar_with(&f.face) {
             return FaceView::Skip(SkipReason::SamePlane);
         }
-        let f = &self.faces[face];
         // On or behind the face's plane, up to the rounding of the height itself: G vanishes
         // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
         // limit, e.g. 1/2 beside a common edge, so no larger tolerance is right.)
-        let z = f.frame.height(p);
-        if z <= HEIGHT_ROUNDING * (p - f.frame.origin).length() {
+        let z = f.face.frame.height(p);
+        if z <= HEIGHT_ROUNDING * (p - f.face.frame.origin).length() {
             return FaceView::Skip(SkipReason::FacingAway);
         }
         // The node's tangent plane n·(Q - P) >= 0 restricted to the face's plane.
         let hp = HalfPlane {
-            normal: DVec2::new(normal.dot(f.frame.e1), normal.dot(f.frame.e2)),
-            offset: normal.dot(f.frame.origin - p),
+            normal: DVec2::new(normal.dot(f.face.frame.e1), normal.dot(f.face.frame.e2)),
+            offset: normal.dot(f.face.frame.origin - p),
         };
         let values: Vec<f64> = f.polygon.iter().map(|&q| hp.eval(q)).collect();
         let eps = PLANE_TOLERANCE * f.size;
@@ -168,10 +178,20 @@ impl PairPlanner {
             },
             None => f.hull.clone(),
         };
-        let shadows = self
-            .candidates(own_face, face)
+        // Segments from p to the face lie in the box of p and the face.
+        let tol = 1e-12 * own.size.max(f.size);
+        let candidates = self.occluders.between(
+            own_face,
+            face,
+            &own.face.frame,
+            &f.face.frame,
+            f.lo.min(p),
+            f.hi.max(p),
+            tol,
+        );
+        let shadows = candidates
             .iter()
-            .filter_map(|&o| shadow(p, z, f, &window, &self.occluders[o].polygon))
+            .filter_map(|&o| shadow(p, z, f, &window, &self.occluders.pieces[o].polygon))
             .collect();
         FaceView::Visible { clip, shadows }
     }
@@ -261,11 +281,11 @@ fn shadow(
     window: &[DVec2],
     occluder: &[DVec3],
 ) -> Option<Vec<DVec2>> {
-    let normal = f.frame.normal;
+    let normal = f.face.frame.normal;
     // In front of the face's plane.
-    let mut poly = clip_polygon_3d(occluder, normal, -normal.dot(f.frame.origin))?;
+    let mut poly = clip_polygon_3d(occluder, normal, -normal.dot(f.face.frame.origin))?;
     // Inside the pyramid: for each window edge, the plane through p and the edge.
-    let corners: Vec<DVec3> = window.iter().map(|&w| f.frame.to_global(w)).collect();
+    let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
     let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
     let m = corners.len();
     for k in 0..m {
@@ -280,8 +300,8 @@ fn shadow(
     let mut projected: Vec<DVec2> = poly
         .iter()
         .map(|&x| {
-            let t = z / (z - f.frame.height(x));
-            f.frame.to_plane(p + (x - p) * t)
+            let t = z / (z - f.face.frame.height(x));
+            f.face.frame.to_plane(p + (x - p) * t)
         })
         .collect();
     let area = signed_area(&projected);
