@@ -200,6 +200,32 @@ struct SolveArgs {
     /// Write JSON to PATH (`-` for standard output) instead of text
     #[arg(long, value_name = "PATH")]
     json: Option<String>,
+    #[command(flatten)]
+    outputs: OutputArgs,
+}
+
+/// Files written from a solution.
+#[derive(Args)]
+struct OutputArgs {
+    /// Write the mesh with u, E, rho per element and u at the vertices as VTK (.vtu, for ParaView)
+    #[arg(long, value_name = "FILE.vtu")]
+    vtu: Option<String>,
+    /// Write the nodal values (position, face, rho, E, u) as CSV
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<String>,
+    /// Render a false-colour picture of u (back faces culled: a closed room seen from outside
+    /// shows its inside)
+    #[arg(long, value_name = "FILE.png")]
+    png: Option<String>,
+    /// Picture size in pixels
+    #[arg(long, value_name = "WxH", default_value = "1200x800")]
+    png_size: String,
+    /// Eye position of the picture (default: outside the scene, from the south-west, above)
+    #[arg(long, value_name = "X,Y,Z")]
+    eye: Option<String>,
+    /// Point the picture looks at (default: the centre of the scene)
+    #[arg(long, value_name = "X,Y,Z")]
+    target: Option<String>,
 }
 
 #[derive(Args)]
@@ -229,6 +255,53 @@ struct AssembleArgs {
     /// Output file (NumPy .npy, float64, row-major dof x dof)
     #[arg(long, value_name = "FILE.npy")]
     output: String,
+}
+
+/// Three comma-separated numbers.
+fn parse_point(name: &'static str, text: &str) -> Result<glam::DVec3> {
+    let values: Vec<f64> = text.split(',').filter_map(|s| s.trim().parse().ok()).collect();
+    match values[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+            Ok(glam::DVec3::new(x, y, z))
+        }
+        _ => Err(Error::InvalidParameter {
+            name,
+            value: text.into(),
+            reason: "expected three finite numbers X,Y,Z".into(),
+        }),
+    }
+}
+
+fn write_outputs(run: &pipeline::Run, out: &OutputArgs) -> Result<()> {
+    let field = run.field();
+    if let Some(path) = &out.vtu {
+        report::write_vtu(&field, std::path::Path::new(path))?;
+    }
+    if let Some(path) = &out.csv {
+        report::write_node_csv(&field, std::path::Path::new(path))?;
+    }
+    if let Some(path) = &out.png {
+        let size = out
+            .png_size
+            .split_once('x')
+            .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "png-size",
+                value: out.png_size.clone(),
+                reason: "expected WIDTHxHEIGHT in pixels".into(),
+            })?;
+        let mut camera = report::Camera::overview(&field, report::DEFAULT_VIEW);
+        if let Some(t) = &out.target {
+            camera.target = parse_point("target", t)?;
+        }
+        if let Some(e) = &out.eye {
+            camera.eye = parse_point("eye", e)?;
+        }
+        let r = &run.report;
+        let title = format!("{}: u, {} method, n = {}", r.surface, r.method, r.n);
+        report::render_png(&field, &camera, size, &title, std::path::Path::new(path))?;
+    }
+    Ok(())
 }
 
 fn parse_params(text: &str) -> Result<SurfaceParameters> {
@@ -638,11 +711,13 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Solve(args) => {
-            let r = pipeline::run(&args.config()?)?;
+            let run = pipeline::run_keeping_mesh(&args.config()?)?;
+            write_outputs(&run, &args.outputs)?;
+            let r = &run.report;
             match &args.json {
                 Some(target) => report::write_json(&r, target),
                 None => {
-                    print_run(&r);
+                    print_run(r);
                     Ok(())
                 }
             }

@@ -267,8 +267,41 @@ pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
     Ok((scene, mesh, disc))
 }
 
+/// A finished run with what it was computed on (for outputs such as VTK files and pictures).
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// The report.
+    pub report: RunReport,
+    /// The scene.
+    pub scene: Scene,
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Nodes and method.
+    pub disc: Discretization,
+    /// E at the nodes.
+    pub emission: Vec<f64>,
+}
+
+impl Run {
+    /// The solution as the outputs see it.
+    pub fn field(&self) -> crate::report::SolutionField<'_> {
+        crate::report::SolutionField {
+            scene: &self.scene,
+            mesh: &self.mesh,
+            disc: &self.disc,
+            u: &self.report.u,
+            emission: &self.emission,
+        }
+    }
+}
+
 /// Runs one configuration.
 pub fn run(config: &RunConfig) -> Result<RunReport> {
+    Ok(run_keeping_mesh(config)?.report)
+}
+
+/// Runs one configuration and keeps the scene, mesh and emissivity.
+pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     let (scene, mesh, disc) = build(config)?;
     let u_faces = match &config.solution {
         Some(sol) => Some(sol.on_faces(&scene, &config.params)?),
@@ -340,7 +373,7 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
         u.iter().fold((f64::INFINITY, f64::NEG_INFINITY, 0.0), |(lo, hi, s), &v| {
             (lo.min(v), hi.max(v), s + v)
         });
-    Ok(RunReport {
+    let report = RunReport {
         surface: scene.name.clone(),
         mesh: config.mesh.name(),
         method: config.method.name(),
@@ -364,5 +397,6 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
         solution_range: [lo, sum / u.len() as f64, hi],
         over_surface,
         u,
-    })
+    };
+    Ok(Run { report, scene, mesh, disc, emission: rhs })
 }

@@ -1,6 +1,15 @@
 //! Reports: plain-text tables for people, JSON for programs, plots and NumPy files.
 
+mod nodes_csv;
 pub mod plot;
+mod render;
+mod solution;
+mod vtk;
+
+pub use nodes_csv::write_node_csv;
+pub use render::{Camera, DEFAULT_VIEW, render_png};
+pub use solution::SolutionField;
+pub use vtk::write_vtu;
 
 use std::io::Write;
 use std::path::Path;

@@ -67,7 +67,7 @@ const PANEL_HEIGHT: u32 = 620;
 
 static FONT: Once = Once::new();
 
-fn register_font() {
+pub(crate) fn register_font() {
     FONT.call_once(|| {
         let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
         // The bundled font is a valid TrueType file; a failure here is a build defect.
@@ -91,7 +91,7 @@ pub fn write_figure(figure: &Figure, stem: &Path) -> Result<Vec<PathBuf>> {
     Ok(vec![png, svg])
 }
 
-fn plot_error<E: std::fmt::Display>(e: E) -> crate::error::Error {
+pub(crate) fn plot_error<E: std::fmt::Display>(e: E) -> crate::error::Error {
     std::io::Error::other(format!("plotting: {e}")).into()
 }
 

@@ -1,0 +1,49 @@
+//! A computed solution on its mesh, as the outputs (VTK, CSV, pictures) see it: values per
+//! element and at element vertices.
+
+use crate::discretization::{Discretization, Method};
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+
+/// The collocation solution u_n with the emissivity E at the nodes.
+#[derive(Clone, Copy, Debug)]
+pub struct SolutionField<'a> {
+    /// The scene (face names, rho).
+    pub scene: &'a Scene,
+    /// The mesh.
+    pub mesh: &'a Mesh,
+    /// Nodes and method.
+    pub disc: &'a Discretization,
+    /// Nodal values of u_n.
+    pub u: &'a [f64],
+    /// E at the nodes.
+    pub emission: &'a [f64],
+}
+
+impl SolutionField<'_> {
+    /// u_n at the three vertices of element `j`: the element's value for the centroid method; for
+    /// the linear method the affine u_n at the vertices. Basis m of (2.12) is (λ_m - α)/(1 - 3α),
+    /// so at vertex k: u(v_k) = (u_k - α Σ_m u_m) / (1 - 3α).
+    pub fn vertex_values(&self, j: usize) -> [f64; 3] {
+        match self.disc.method {
+            Method::Centroid => [self.u[j]; 3],
+            Method::Linear { alpha } => {
+                let u = &self.u[3 * j..3 * j + 3];
+                let sum: f64 = u.iter().sum();
+                [0, 1, 2].map(|k| (u[k] - alpha * sum) / (1.0 - 3.0 * alpha))
+            }
+        }
+    }
+
+    /// Mean of u_n over element `j` (its value at the centroid).
+    pub fn element_value(&self, j: usize) -> f64 {
+        let per = self.disc.method.nodes_per_element();
+        self.u[per * j..per * (j + 1)].iter().sum::<f64>() / per as f64
+    }
+
+    /// Mean of E over the nodes of element `j`.
+    pub fn element_emission(&self, j: usize) -> f64 {
+        let per = self.disc.method.nodes_per_element();
+        self.emission[per * j..per * (j + 1)].iter().sum::<f64>() / per as f64
+    }
+}

@@ -1,0 +1,63 @@
+//! The solution as a VTK XML unstructured grid (`.vtu`) for ParaView: one triangle per element
+//! (three points of its own, since collocation meshes need not conform), u_n at the points, and
+//! u_n, E, rho and the face index per cell.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::solution::SolutionField;
+use crate::error::Result;
+
+/// Writes `field` to `path` as ASCII VTU.
+pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
+    let elements = field.mesh.elements();
+    let n = elements.len();
+    let mut points = String::new();
+    let mut point_u = String::new();
+    for (j, e) in elements.iter().enumerate() {
+        for (v, u) in e.vertices.iter().zip(field.vertex_values(j)) {
+            let _ = writeln!(points, "{:e} {:e} {:e}", v.x, v.y, v.z);
+            let _ = writeln!(point_u, "{u:e}");
+        }
+    }
+    let connectivity: String = (0..3 * n).map(|k| format!("{k} ")).collect();
+    let offsets: String = (1..=n).map(|k| format!("{} ", 3 * k)).collect();
+    let types = "5 ".repeat(n);
+    let cells = |f: &dyn Fn(usize) -> String| -> String { (0..n).map(|j| f(j) + " ").collect() };
+    let cell_u = cells(&|j| format!("{:e}", field.element_value(j)));
+    let cell_e = cells(&|j| format!("{:e}", field.element_emission(j)));
+    let cell_rho = cells(&|j| format!("{:e}", field.scene.faces[elements[j].face].rho));
+    let cell_face = cells(&|j| elements[j].face.to_string());
+    let text = format!(
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="{points_count}" NumberOfCells="{n}">
+      <Points>
+        <DataArray type="Float64" NumberOfComponents="3" format="ascii">
+{points}        </DataArray>
+      </Points>
+      <Cells>
+        <DataArray type="Int64" Name="connectivity" format="ascii">{connectivity}</DataArray>
+        <DataArray type="Int64" Name="offsets" format="ascii">{offsets}</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">{types}</DataArray>
+      </Cells>
+      <PointData Scalars="u">
+        <DataArray type="Float64" Name="u" format="ascii">
+{point_u}        </DataArray>
+      </PointData>
+      <CellData Scalars="u">
+        <DataArray type="Float64" Name="u" format="ascii">{cell_u}</DataArray>
+        <DataArray type="Float64" Name="E" format="ascii">{cell_e}</DataArray>
+        <DataArray type="Float64" Name="rho" format="ascii">{cell_rho}</DataArray>
+        <DataArray type="Int64" Name="face" format="ascii">{cell_face}</DataArray>
+      </CellData>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+"#,
+        points_count = 3 * n,
+    );
+    std::fs::write(path, text)?;
+    Ok(())
+}
