@@ -18,6 +18,7 @@ pub mod solve;
 pub mod stability;
 pub mod study;
 pub mod surface_error;
+pub mod viewfactors;
 pub mod visibility;
 
 pub use error::{Error, Result};

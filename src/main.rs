@@ -67,6 +67,8 @@ enum Command {
     Bench(BenchArgs),
     /// Assemble the collocation matrix K and write it as a NumPy .npy file
     Assemble(AssembleArgs),
+    /// Element-to-element view factors F_ij, with reciprocity and closure checks
+    Viewfactors(ViewFactorArgs),
     /// The GPU adapter, its f64 support, and the worst errors (ulp) of the WGSL math library
     GpuCheck {
         /// Samples per function
@@ -242,6 +244,21 @@ struct BenchArgs {
     #[arg(long, default_value_t = 3)]
     repeats: usize,
     /// Write JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    json: Option<String>,
+}
+
+#[derive(Args)]
+struct ViewFactorArgs {
+    #[command(flatten)]
+    geometry: GeometryArgs,
+    /// Absolute tolerance of each F_ij (outer quadrature)
+    #[arg(long, default_value_t = 1e-10)]
+    tolerance: f64,
+    /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv
+    #[arg(long, value_name = "FILE")]
+    output: Option<String>,
+    /// Write the summary as JSON to PATH (`-` for standard output) instead of text
     #[arg(long, value_name = "PATH")]
     json: Option<String>,
 }
@@ -622,13 +639,80 @@ fn run_assemble(args: &AssembleArgs) -> Result<()> {
     config.backend = backend(args.device.backend, args.device.precision);
     let (scene, mesh, disc) = pipeline::build(&config)?;
     let a = assemble_without_progress(&config, &scene, &mesh, &disc, &PairPlanner::new(&scene))?;
-    radiosity::report::write_npy(&args.output, &a.matrix)?;
+    radiosity::report::write_npy(&args.output, a.matrix.dof(), a.matrix.as_slice())?;
     eprintln!(
         "wrote K ({} x {}, float64, rho/pi included) to {}",
         a.matrix.dof(),
         a.matrix.dof(),
         args.output
     );
+    Ok(())
+}
+
+fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
+    use radiosity::viewfactors::{ViewFactorOptions, ViewFactorSummary, view_factors};
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: args.tolerance.to_string(),
+            reason: "must be positive".into(),
+        });
+    }
+    let config = args.geometry.config()?;
+    let (scene, mesh, _) = pipeline::build(&config)?;
+    let started = std::time::Instant::now();
+    let planner = PairPlanner::new(&scene);
+    let options = ViewFactorOptions { tolerance: args.tolerance, ..Default::default() };
+    let bar = pipeline::progress_bar(true, "viewfactors", mesh.len());
+    let f = view_factors(&scene, &mesh, &planner, &options, &|k| bar.inc(k as u64))?;
+    bar.finish_and_clear();
+    let (row_sum_min, row_sum_max) = f.row_sum_range();
+    let summary = ViewFactorSummary {
+        surface: scene.name.clone(),
+        n: f.len(),
+        row_sum_min,
+        row_sum_max,
+        reciprocity_error: f.reciprocity_error(),
+        error_estimate: f.error_estimate,
+        evaluations: f.evaluations,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if let Some(path) = &args.output {
+        if path.ends_with(".npy") {
+            report::write_npy(path, f.len(), &f.matrix)?;
+        } else if path.ends_with(".csv") {
+            let text: String = f
+                .matrix
+                .chunks(f.len())
+                .map(|row| {
+                    row.iter().map(|v| format!("{v:e}")).collect::<Vec<_>>().join(",") + "\n"
+                })
+                .collect();
+            std::fs::write(path, text)?;
+        } else {
+            return Err(Error::InvalidParameter {
+                name: "output",
+                value: path.clone(),
+                reason: "expected a .npy or .csv file".into(),
+            });
+        }
+    }
+    if let Some(target) = &args.json {
+        return report::write_json(&summary, target);
+    }
+    println!("{}: n = {} elements, {:.2} s", summary.surface, summary.n, summary.seconds);
+    println!("row sums of F: min {:.15}, max {:.15}", summary.row_sum_min, summary.row_sum_max);
+    println!(
+        "reciprocity: max |A_i F_ij - A_j F_ji| / max A_i F_ij = {:.2e}; quadrature error estimate {:.2e}",
+        summary.reciprocity_error, summary.error_estimate
+    );
+    if scene.faces.len() <= 12 {
+        println!("face-to-face view factors (row: from):");
+        for (a, row) in f.by_face(&mesh).iter().enumerate() {
+            let cells: Vec<String> = row.iter().map(|v| format!("{v:.10}")).collect();
+            println!("  {:>12} {}", scene.faces[a].name, cells.join(" "));
+        }
+    }
     Ok(())
 }
 
@@ -725,6 +809,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Inspect(args) => inspect(&args),
         Command::Bench(args) => run_bench(&args),
         Command::Assemble(args) => run_assemble(&args),
+        Command::Viewfactors(args) => run_viewfactors(&args),
         Command::GpuCheck { samples, precision, json } => {
             gpu_check(samples, precision, json.as_deref())
         }

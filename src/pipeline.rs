@@ -239,7 +239,8 @@ pub struct RunReport {
     pub u: Vec<f64>,
 }
 
-fn bar(enabled: bool, stage: &str, len: usize) -> ProgressBar {
+/// A progress bar on stderr for a stage of `len` steps (hidden unless `enabled`).
+pub fn progress_bar(enabled: bool, stage: &str, len: usize) -> ProgressBar {
     if !enabled {
         return ProgressBar::hidden();
     }
@@ -308,7 +309,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         None => None,
     };
     let planner = PairPlanner::new(&scene);
-    let progress = bar(config.progress, "assembly", disc.dof());
+    let progress = progress_bar(config.progress, "assembly", disc.dof());
     let mut timed = None;
     let mut setup_seconds = f64::INFINITY;
     for _ in 0..config.setup_repeats.max(1) {
@@ -332,7 +333,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     let started = Instant::now();
     let rhs: Vec<f64> = match &u_faces {
         Some(u) => {
-            let progress = bar(config.progress, "emission", disc.dof());
+            let progress = progress_bar(config.progress, "emission", disc.dof());
             let e = emission_at(&scene, &disc.nodes, &planner, u, &config.emission, &|k| {
                 progress.inc(k as u64)
             });

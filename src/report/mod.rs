@@ -262,13 +262,13 @@ pub fn stiff_table(result: &crate::stability::StiffResult, format: TableFormat) 
 }
 
 /// Writes K as a NumPy .npy file (float64, C order, dof × dof).
-pub fn write_npy(path: &str, matrix: &crate::assembly::CollocationMatrix) -> Result<()> {
+pub fn write_npy(path: &str, n: usize, values: &[f64]) -> Result<()> {
     use npyz::WriterBuilder;
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    let n = matrix.dof() as u64;
+    let n = n as u64;
     let mut writer =
         npyz::WriteOptions::<f64>::new().default_dtype().shape(&[n, n]).writer(file).begin_nd()?;
-    writer.extend(matrix.as_slice().iter().copied())?;
+    writer.extend(values.iter().copied())?;
     writer.finish()?;
     Ok(())
 }
