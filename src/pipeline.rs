@@ -101,6 +101,8 @@ pub enum SceneSource {
     Builtin(BuiltinScene),
     /// A `.toml` scene file or an `.obj` / `.stl` mesh ([`crate::scene::load`]).
     File(PathBuf),
+    /// `city:NXxNY`: the generated city of NX x NY buildings ([`crate::scene::city`]).
+    City(usize, usize),
 }
 
 impl SceneSource {
@@ -108,6 +110,15 @@ impl SceneSource {
     pub fn parse(name: &str) -> Result<Self> {
         if crate::scene::is_scene_file(name) {
             Ok(Self::File(PathBuf::from(name)))
+        } else if let Some(size) = name.strip_prefix("city:") {
+            let parsed =
+                size.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)));
+            let (nx, ny) = parsed.ok_or_else(|| Error::InvalidParameter {
+                name: "scene",
+                value: name.into(),
+                reason: "expected city:NXxNY, e.g. city:35x36".into(),
+            })?;
+            Ok(Self::City(nx, ny))
         } else {
             Ok(Self::Builtin(name.parse()?))
         }
@@ -118,6 +129,7 @@ impl SceneSource {
         match self {
             Self::Builtin(b) => b.build(params),
             Self::File(path) => crate::scene::load(path),
+            Self::City(nx, ny) => crate::scene::city(*nx, *ny),
         }
     }
 

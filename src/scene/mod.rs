@@ -2,10 +2,12 @@
 //! (paper sec. 1: S = S_1 ∪ ... ∪ S_J, each S_j a closed polygon).
 
 mod builtin;
+mod city;
 mod face;
 mod file;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
+pub use city::city;
 pub use face::{Diagonal, Face, MIN_RELATIVE_AREA};
 pub use file::{IMPORT_RHO, Side, is_scene_file, load};
 

@@ -15,9 +15,12 @@
 //! a scene in which no face can come between two others never runs shadow code, and a scene of
 //! thousands of faces does not test every occluder for every pair ([`Acceleration`]).
 
+mod bench;
 mod occluders;
 mod stats;
 
+pub use bench::{PlanBench, bench_plan};
+use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
 pub use stats::PairStats;
 
@@ -137,8 +140,11 @@ impl PairPlanner {
             return Vec::new();
         }
         let tol = 1e-12 * fa.size.max(fb.size);
-        let (lo, hi) = (fa.lo.min(fb.lo), fa.hi.max(fb.hi));
-        self.occluders.between(a, b, &fa.face.frame, &fb.face.frame, lo, hi, tol)
+        let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
+        volume.push_box(fa.lo.min(fb.lo), fa.hi.max(fb.hi), tol);
+        let mut found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
+        found.sort_unstable();
+        found
     }
 
     /// The convex occluder pieces of the scene.
@@ -178,21 +184,42 @@ impl PairPlanner {
             },
             None => f.hull.clone(),
         };
-        // Segments from p to the face lie in the box of p and the face.
+        // Segments from p to the visible window lie in the pyramid with apex p over it, in front
+        // of both faces.
+        if self.occluders.acceleration == Acceleration::BoxScan {
+            // The core solver's plan: every occluder in the box of the two faces and in front of
+            // both, each shadow computed, in index order.
+            let shadows = self
+                .candidates(own_face, face)
+                .iter()
+                .filter_map(|&o| shadow(p, z, f, &window, &self.occluders.pieces[o].polygon))
+                .collect();
+            return FaceView::Visible { clip, shadows };
+        }
         let tol = 1e-12 * own.size.max(f.size);
-        let candidates = self.occluders.between(
-            own_face,
-            face,
-            &own.face.frame,
-            &f.face.frame,
-            f.lo.min(p),
-            f.hi.max(p),
-            tol,
-        );
-        let shadows = candidates
-            .iter()
-            .filter_map(|&o| shadow(p, z, f, &window, &self.occluders.pieces[o].polygon))
-            .collect();
+        let mut volume = ViewVolume::between(&own.face.frame, &f.face.frame, tol);
+        let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
+        let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+        for k in 0..corners.len() {
+            let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+            let side = (a - p).cross(b - p).normalize_or_zero();
+            let side = if side.dot(centre - p) < 0.0 { -side } else { side };
+            if side != DVec3::ZERO {
+                volume.push(side, -side.dot(p), -tol);
+            }
+        }
+        // One shadow that covers the whole window hides the face (most faces of a large scene,
+        // seen from most nodes): the search stops there.
+        let pieces = &self.occluders.pieces;
+        let mut shadows = Vec::new();
+        for o in self.occluders.inside(own_face, face, &volume) {
+            if let Some(s) = shadow(p, z, f, &window, &pieces[o].polygon) {
+                if covers(&s, &window) {
+                    return FaceView::Skip(SkipReason::Hidden);
+                }
+                shadows.push(s);
+            }
+        }
         FaceView::Visible { clip, shadows }
     }
 
@@ -313,6 +340,19 @@ fn shadow(
         projected.reverse();
     }
     Some(projected)
+}
+
+/// Whether the convex counter-clockwise `shadow` contains every point of `window`, up to rounding
+/// (shadows are clipped to the window, so a covering shadow has the window's outline).
+fn covers(shadow: &[DVec2], window: &[DVec2]) -> bool {
+    let scale = polygon_scale(shadow);
+    let m = shadow.len();
+    (0..m).all(|k| {
+        let (a, b) = (shadow[k], shadow[(k + 1) % m]);
+        let edge = b - a;
+        let margin = 1e-12 * scale * edge.length();
+        window.iter().all(|&w| edge.perp_dot(w - a) >= -margin)
+    })
 }
 
 /// Convex hull (counter-clockwise) of a polygon's vertices, by Andrew's monotone chain.

@@ -4,7 +4,8 @@
 
 use glam::DVec3;
 use rstar::primitives::{GeomWithData, Rectangle};
-use rstar::{AABB, RTree};
+use rstar::{AABB, RTree, SelectionFunction};
+use serde::Serialize;
 
 use crate::geometry::PlaneFrame;
 use crate::scene::Scene;
@@ -20,14 +21,19 @@ pub struct Occluder {
     hi: DVec3,
 }
 
-/// How candidate occluders are found.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How candidate occluders of a view are found. All three give the same views.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Acceleration {
-    /// An R*-tree (the `rstar` crate) over the occluders' bounding boxes.
+    /// An R*-tree (the `rstar` crate) over the occluders' bounding boxes, searched with the view
+    /// pyramid (apex at the node, over the face's visible window, in front of both faces).
     #[default]
     Tree,
-    /// Every occluder tested for every query (the baseline the tree is measured against).
-    None,
+    /// Every occluder tested against the view pyramid.
+    Scan,
+    /// Every occluder tested against the box of the node and the face and the two faces' planes
+    /// (the core solver's rule, before the index).
+    BoxScan,
 }
 
 type Boxed = GeomWithData<Rectangle<[f64; 3]>, usize>;
@@ -36,6 +42,7 @@ type Boxed = GeomWithData<Rectangle<[f64; 3]>, usize>;
 #[derive(Clone, Debug)]
 pub(super) struct OccluderIndex {
     pub(super) pieces: Vec<Occluder>,
+    pub(super) acceleration: Acceleration,
     tree: Option<RTree<Boxed>>,
 }
 
@@ -53,46 +60,83 @@ impl OccluderIndex {
                     .collect(),
             )
         });
-        Self { pieces, tree }
+        Self { pieces, acceleration, tree }
     }
 
-    /// Occluders that may block a segment from a point of the box `[lo, hi]` to another point of
-    /// it, between faces `a` and `b` (planes `fa`, `fb`; `tol` a length below rounding of the
-    /// scene). Conservative: a piece is dropped only when it belongs to `a` or `b`, lies in the
-    /// plane of either or wholly behind it, or outside the box.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn between(
-        &self,
+    /// Occluders that may block a segment between faces `a` and `b` that lies in `volume`: not
+    /// part of `a` or `b`, and not wholly outside one of the volume's planes; found lazily, in
+    /// the tree's order or in index order.
+    pub(super) fn inside<'a>(
+        &'a self,
         a: usize,
         b: usize,
-        fa: &PlaneFrame,
-        fb: &PlaneFrame,
-        lo: DVec3,
-        hi: DVec3,
-        tol: f64,
-    ) -> Vec<usize> {
-        let keep = |k: usize| {
+        volume: &'a ViewVolume,
+    ) -> Box<dyn Iterator<Item = usize> + 'a> {
+        let keep = move |&k: &usize| {
             let o = &self.pieces[k];
-            if o.faces.contains(&a) || o.faces.contains(&b) {
-                return false;
+            !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(&o.polygon)
+        };
+        match &self.tree {
+            Some(tree) => {
+                Box::new(tree.locate_with_selection_function(volume).map(|g| g.data).filter(keep))
             }
-            // In the plane of a or b, or wholly behind it: no segment between a and b crosses it.
-            let in_front = |f: &PlaneFrame| o.polygon.iter().any(|&v| f.height(v) > tol);
-            in_front(fa)
-                && in_front(fb)
-                && (0..3).all(|axis| o.lo[axis] < hi[axis] - tol && o.hi[axis] > lo[axis] + tol)
-        };
-        let mut found: Vec<usize> = match &self.tree {
-            Some(tree) => tree
-                .locate_in_envelope_intersecting(AABB::from_corners(lo.into(), hi.into()))
-                .map(|g| g.data)
-                .filter(|&k| keep(k))
-                .collect(),
-            None => (0..self.pieces.len()).filter(|&k| keep(k)).collect(),
-        };
-        // The tree returns pieces in its own order; shadows are subtracted in index order.
-        found.sort_unstable();
-        found
+            None => Box::new((0..self.pieces.len()).filter(keep)),
+        }
+    }
+}
+
+/// A convex region bounded by planes: the segments from a node to a face (the pyramid over the
+/// face's window with apex at the node, in front of both faces), or between two faces (their
+/// bounding box, in front of both). Each plane is `n·x + d`, and a polygon or box is outside when
+/// that is at most `margin` at all its points.
+#[derive(Clone, Debug, Default)]
+pub(super) struct ViewVolume {
+    planes: Vec<(DVec3, f64, f64)>,
+}
+
+impl ViewVolume {
+    /// The region in front of both planes (heights above `tol`).
+    pub(super) fn between(fa: &PlaneFrame, fb: &PlaneFrame, tol: f64) -> Self {
+        let plane = |f: &PlaneFrame| (f.normal, -f.normal.dot(f.origin), tol);
+        Self { planes: vec![plane(fa), plane(fb)] }
+    }
+
+    /// Adds the half-space `n·x + d > margin`.
+    pub(super) fn push(&mut self, normal: DVec3, offset: f64, margin: f64) {
+        self.planes.push((normal, offset, margin));
+    }
+
+    /// Adds the six faces of the box `[lo, hi]`, shrunk by `shrink` (a piece touching the box
+    /// from outside blocks no segment inside it).
+    pub(super) fn push_box(&mut self, lo: DVec3, hi: DVec3, shrink: f64) {
+        for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+            self.push(axis, -axis.dot(lo), shrink);
+            self.push(-axis, axis.dot(hi), shrink);
+        }
+    }
+
+    /// Whether the polygon may reach inside.
+    fn may_hold(&self, polygon: &[DVec3]) -> bool {
+        self.planes.iter().all(|&(n, d, margin)| polygon.iter().any(|&v| n.dot(v) + d > margin))
+    }
+
+    /// Whether the box `[lo, hi]` may reach inside (its corner farthest along each normal).
+    fn may_hold_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        self.planes.iter().all(|&(n, d, margin)| {
+            let far = DVec3::select(n.cmpge(DVec3::ZERO), hi, lo);
+            n.dot(far) + d > margin
+        })
+    }
+}
+
+impl SelectionFunction<Boxed> for &ViewVolume {
+    fn should_unpack_parent(&self, envelope: &AABB<[f64; 3]>) -> bool {
+        self.may_hold_box(DVec3::from(envelope.lower()), DVec3::from(envelope.upper()))
+    }
+
+    fn should_unpack_leaf(&self, leaf: &Boxed) -> bool {
+        let r = leaf.geom();
+        self.may_hold_box(DVec3::from(r.lower()), DVec3::from(r.upper()))
     }
 }
 
@@ -145,6 +189,13 @@ fn neighbour_keys(c: glam::I64Vec3) -> Vec<[i64; 3]> {
         }
     }
     keys
+}
+
+impl Occluder {
+    /// Centre of its bounding box.
+    pub fn centre(&self) -> DVec3 {
+        0.5 * (self.lo + self.hi)
+    }
 }
 
 fn same_vertex_set(a: &[DVec3], b: &[DVec3], tol: f64) -> bool {
