@@ -10,7 +10,7 @@ use radiosity::discretization::Discretization;
 use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
-use radiosity::mesh::Mesh;
+use radiosity::mesh::{LineExtent, Mesh};
 use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport, SceneSource};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::report::TableFormat;
@@ -104,8 +104,20 @@ enum MethodArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum MeshArg {
+    /// Faces split by their diagonals, then refined
     Uniform,
+    /// The paper's hand-built discontinuity mesh (four-piece, five-piece)
     Discontinuity,
+    /// Shadow lines found automatically, faces triangulated along them (any scene)
+    AutoDiscontinuity,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ShadowLinesArg {
+    /// Each shadow line extended across its face (as the paper's mesh)
+    Chords,
+    /// Only where the visibility events are
+    Segments,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -149,6 +161,17 @@ struct GeometryArgs {
     /// Mesh
     #[arg(long, value_enum, default_value_t = MeshArg::Uniform)]
     mesh: MeshArg,
+    /// Extent of the shadow lines of --mesh auto-discontinuity: chords give the paper's mesh on
+    /// its surfaces, segments far fewer elements in scenes with many occluders
+    #[arg(long, value_enum, default_value_t = ShadowLinesArg::Segments)]
+    shadow_lines: ShadowLinesArg,
+    /// Grade the mesh toward an edge of a face: FACE:K names the edge from vertex K to K+1
+    /// (repeatable; e.g. S1:2 and S5:3, the common edge of the five-piece surface)
+    #[arg(long, value_name = "FACE:K")]
+    grade: Vec<String>,
+    /// Grading exponent q: a point at distance d from a graded edge moves to D (d/D)^q
+    #[arg(long, default_value_t = 2.0)]
+    grading: f64,
     /// Refinement levels: n = n0 * 4^refine
     #[arg(long, default_value_t = 2)]
     refine: u32,
@@ -401,8 +424,16 @@ impl GeometryArgs {
             mesh: match self.mesh {
                 MeshArg::Uniform => MeshChoice::Uniform,
                 MeshArg::Discontinuity => MeshChoice::Discontinuity,
+                MeshArg::AutoDiscontinuity => {
+                    MeshChoice::AutoDiscontinuity(match self.shadow_lines {
+                        ShadowLinesArg::Chords => LineExtent::Chords,
+                        ShadowLinesArg::Segments => LineExtent::Segments,
+                    })
+                }
             },
             refine: self.refine,
+            grade: self.grade.clone(),
+            grading_exponent: self.grading,
             method,
             solution,
             assembly: AssemblyOptions {

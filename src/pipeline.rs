@@ -11,7 +11,9 @@ use crate::assembly::{self, Assembly, AssemblyOptions, Quadrature};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
 use crate::gpu::{self, GpuAssembler, Precision};
-use crate::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
+use crate::mesh::{
+    Grading, LineExtent, Mesh, MeshKind, Sources, paper_discontinuity_cuts, shadow_lines,
+};
 use crate::problems::{EmissionOptions, TrueSolution, emission_at};
 use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
 use crate::solve::{self, SolverChoice};
@@ -24,8 +26,11 @@ use crate::visibility::{PairPlanner, PairStats};
 pub enum MeshChoice {
     /// Faces split by their diagonals, then refined.
     Uniform,
-    /// The paper's discontinuity mesh (sec. 3.1).
+    /// The paper's discontinuity mesh (sec. 3.1), built by hand for its surfaces.
     Discontinuity,
+    /// Automatic discontinuity mesh: every face triangulated along its shadow lines
+    /// ([`crate::mesh::shadow_lines`]), kept as segments or extended to chords.
+    AutoDiscontinuity(LineExtent),
 }
 
 impl MeshChoice {
@@ -34,6 +39,8 @@ impl MeshChoice {
         match self {
             Self::Uniform => "uniform",
             Self::Discontinuity => "discontinuity",
+            Self::AutoDiscontinuity(LineExtent::Chords) => "auto-discontinuity",
+            Self::AutoDiscontinuity(LineExtent::Segments) => "auto-discontinuity-segments",
         }
     }
 }
@@ -150,6 +157,10 @@ pub struct RunConfig {
     pub mesh: MeshChoice,
     /// Refinement levels (n = n_0 4^refine).
     pub refine: u32,
+    /// Edges to grade the mesh toward (`FACE:K`, [`crate::mesh::Grading`]), and the exponent.
+    pub grade: Vec<String>,
+    /// Grading exponent q.
+    pub grading_exponent: f64,
     /// Collocation method.
     pub method: Method,
     /// A true solution (its E is computed), or `None` to use the faces' emissivities.
@@ -183,6 +194,8 @@ impl RunConfig {
             params: SurfaceParameters::default(),
             mesh: MeshChoice::Uniform,
             refine,
+            grade: Vec::new(),
+            grading_exponent: 2.0,
             method: Method::Centroid,
             solution: Some(TrueSolution::X2Y2),
             assembly: AssemblyOptions::default(),
@@ -203,6 +216,8 @@ pub struct RunReport {
     pub surface: String,
     /// Mesh kind.
     pub mesh: &'static str,
+    /// Grading exponent q, when the mesh is graded toward edges.
+    pub grading: Option<f64>,
     /// Method name.
     pub method: &'static str,
     /// α of the linear method.
@@ -274,8 +289,16 @@ pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
         MeshChoice::Discontinuity => {
             MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &config.params)?)
         }
+        MeshChoice::AutoDiscontinuity(extent) => {
+            // With a true solution every face carries light (E is computed from it everywhere).
+            let sources = if config.solution.is_some() { Sources::All } else { Sources::Emitting };
+            MeshKind::Constrained(shadow_lines(&scene, sources, extent))
+        }
     };
-    let mesh = Mesh::new(&scene, &kind, config.refine)?;
+    let mut mesh = Mesh::new(&scene, &kind, config.refine)?;
+    if !config.grade.is_empty() {
+        mesh.grade(&scene, &Grading::parse(&scene, &config.grade, config.grading_exponent)?)?;
+    }
     let disc = Discretization::new(&scene, &mesh, config.method)?;
     Ok((scene, mesh, disc))
 }
@@ -389,6 +412,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     let report = RunReport {
         surface: scene.name.clone(),
         mesh: config.mesh.name(),
+        grading: (!config.grade.is_empty()).then_some(config.grading_exponent),
         method: config.method.name(),
         alpha: config.method.alpha(),
         quadrature: config.assembly.quadrature,

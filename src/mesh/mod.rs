@@ -4,9 +4,14 @@
 //! Elements are stored face by face, so the elements of one face form a contiguous range; each
 //! element keeps its face's orientation (vertices counter-clockwise about the face's normal).
 
+mod constrained;
+mod graded;
 mod grid;
+mod shadow_lines;
 
+pub use graded::Grading;
 pub use grid::{GridCuts, paper_discontinuity_cuts};
+pub use shadow_lines::{LineExtent, Segment, Sources, shadow_lines};
 
 use std::ops::Range;
 
@@ -59,6 +64,9 @@ pub enum MeshKind {
     Uniform,
     /// Faces cut along given lines first (paper's "discontinuity mesh", Fig. 3.3).
     Discontinuity(Vec<GridCuts>),
+    /// Each face triangulated (constrained Delaunay) so that no element crosses the given
+    /// segments, one list per face in face coordinates ([`shadow_lines`]).
+    Constrained(Vec<Vec<Segment>>),
 }
 
 /// A triangulation of a scene.
@@ -82,11 +90,14 @@ impl Mesh {
         for (k, face) in scene.faces.iter().enumerate() {
             let cuts = match kind {
                 MeshKind::Discontinuity(cuts) => cuts.iter().find(|c| c.face == k),
-                MeshKind::Uniform => None,
+                MeshKind::Uniform | MeshKind::Constrained(_) => None,
             };
-            let tris = match cuts {
-                Some(c) => grid::cut_quadrilateral(face, c)?,
-                None => initial_triangles(face)?,
+            let tris = match (cuts, kind) {
+                (Some(c), _) => grid::cut_quadrilateral(face, c)?,
+                (None, MeshKind::Constrained(lines)) if !lines[k].is_empty() => {
+                    constrained::triangulate_with_segments(face, &lines[k])?
+                }
+                _ => initial_triangles(face)?,
             };
             for tri in &tris {
                 let size = (0..3).map(|i| (tri[i] - tri[(i + 1) % 3]).length()).fold(0.0, f64::max);
