@@ -143,8 +143,11 @@ fn rasterize(
         }
         let lo = a.min(b).min(c).max(DVec2::ZERO).floor();
         let hi = a.max(b).max(c).min(DVec2::new(w as f64 - 1.0, h as f64 - 1.0)).ceil();
-        for y in lo.y as u32..=hi.y.max(lo.y) as u32 {
-            for x in lo.x as u32..=hi.x.max(lo.x) as u32 {
+        if lo.x > hi.x || lo.y > hi.y {
+            continue; // off the picture
+        }
+        for y in lo.y as u32..=hi.y as u32 {
+            for x in lo.x as u32..=hi.x as u32 {
                 let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
                 let l = [(c - b).perp_dot(p - b), (a - c).perp_dot(p - c), (b - a).perp_dot(p - a)]
                     .map(|v| v / area);
@@ -226,6 +229,29 @@ fn draw_colour_bar<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn elements_partly_or_wholly_off_the_picture_are_clipped() {
+        // Found by hand: an eye inside the room put elements beyond the right edge.
+        let scene = crate::scene::cube().unwrap();
+        let mesh = crate::mesh::Mesh::new(&scene, &crate::mesh::MeshKind::Uniform, 2).unwrap();
+        let disc = crate::discretization::Discretization::new(
+            &scene,
+            &mesh,
+            crate::discretization::Method::Centroid,
+        )
+        .unwrap();
+        let u: Vec<f64> = (0..disc.dof()).map(|k| k as f64).collect();
+        let field = SolutionField { scene: &scene, mesh: &mesh, disc: &disc, u: &u, emission: &u };
+        let dir = std::env::temp_dir().join(format!("radiosity-render-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for eye in
+            [DVec3::new(0.9, 0.8, 0.5), DVec3::new(0.5, 0.5, 0.5), DVec3::new(-3.0, 0.5, 0.5)]
+        {
+            let camera = Camera { eye, target: DVec3::new(0.1, 0.2, 0.4), fov_degrees: 60.0 };
+            render_png(&field, &camera, (400, 300), "t", &dir.join("cube.png")).unwrap();
+        }
+    }
 
     #[test]
     fn the_colour_map_runs_from_dark_violet_to_yellow() {

@@ -1,0 +1,235 @@
+//! Real scenes through the command line: scene files, outputs, view factors, the occluder index,
+//! automatic discontinuity meshing and graded meshes.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use serde_json::Value;
+
+fn radiosity(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_radiosity"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn json(args: &[&str]) -> Value {
+    let (ok, stdout, stderr) = radiosity(args);
+    assert!(ok, "radiosity {args:?} failed: {stderr}");
+    serde_json::from_str(&stdout)
+        .unwrap_or_else(|e| panic!("bad JSON from {args:?}: {e}\n{stdout}"))
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("radiosity-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn the_five_piece_surface_from_a_file_gives_the_built_in_numbers() {
+    for method in ["centroid", "linear"] {
+        let run = |scene: &str| {
+            json(&[
+                "solve",
+                "--scene",
+                scene,
+                "--solution",
+                "x2y2",
+                "--method",
+                method,
+                "--refine",
+                "2",
+                "--json",
+                "-",
+            ])
+        };
+        let (file, builtin) = (run("examples/five-piece.toml"), run("five-piece"));
+        assert_eq!(file["n"], builtin["n"]);
+        assert_eq!(file["error"], builtin["error"], "{method}");
+        assert_eq!(file["solution_range"], builtin["solution_range"], "{method}");
+    }
+}
+
+#[test]
+fn the_furnished_room_closes_sees_exactly_and_writes_its_outputs() {
+    let v = json(&[
+        "inspect",
+        "--scene",
+        "examples/furnished-room.toml",
+        "--refine",
+        "1",
+        "--json",
+        "-",
+    ]);
+    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
+    assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "{lo} {hi}");
+    assert!(v["pairs_partial"].as_u64().unwrap() > 0 && v["pairs_hidden"].as_u64().unwrap() > 0);
+
+    let dir = temp_dir("room");
+    let (png, vtu, csv) = (dir.join("room.png"), dir.join("room.vtu"), dir.join("room.csv"));
+    let r = json(&[
+        "solve",
+        "--scene",
+        "examples/furnished-room.toml",
+        "--refine",
+        "1",
+        "--png",
+        png.to_str().unwrap(),
+        "--png-size",
+        "600x400",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    let n = r["n"].as_u64().unwrap() as usize;
+    // The lamp emits 1 and reflects 0.2 of what it receives; everything else is lit by it.
+    let [lo, _, hi] = [0, 1, 2].map(|k| r["solution_range"][k].as_f64().unwrap());
+    assert!(lo > 0.0 && hi > 1.0 && hi < 1.2, "{lo} {hi}");
+
+    let image = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (600, 400));
+    let coloured = image.pixels().filter(|p| p.0 != [255, 255, 255]).count();
+    assert!(coloured > 600 * 400 / 5, "the room fills the picture: {coloured} pixels");
+
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    assert!(text.contains(&format!("NumberOfCells=\"{n}\"")));
+    assert!(text.contains("Name=\"u\"") && text.contains("Name=\"rho\""));
+
+    let rows: Vec<String> =
+        std::fs::read_to_string(&csv).unwrap().lines().map(String::from).collect();
+    assert_eq!(rows.len(), n + 1);
+    assert_eq!(rows[0], "node,element,face,x,y,z,rho,E,u");
+    let u_max = rows[1..]
+        .iter()
+        .map(|l| l.rsplit(',').next().unwrap().parse::<f64>().unwrap())
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(u_max, hi);
+}
+
+#[test]
+fn view_factors_of_howell_c11_and_a_closed_box() {
+    let dir = temp_dir("vf");
+    let scene = dir.join("c11.toml");
+    std::fs::write(
+        &scene,
+        "[defaults]\nrho = 0.5\n[[faces]]\nname = \"a\"\nvertices = [[0,0,0],[1,0,0],[1,1,0],[0,1,0]]\n\
+         [[faces]]\nname = \"b\"\nvertices = [[0,0,1],[0,1,1],[1,1,1],[1,0,1]]\n",
+    )
+    .unwrap();
+    let (ok, out, err) =
+        radiosity(&["viewfactors", "--scene", scene.to_str().unwrap(), "--refine", "1"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("0.1998248957"), "{out}");
+    let v = json(&["viewfactors", "--scene", "cube", "--refine", "0", "--json", "-"]);
+    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
+    assert!(lo > 1.0 - 1e-10 && hi < 1.0 + 1e-10, "{lo} {hi}");
+    assert!(v["reciprocity_error"].as_f64().unwrap() < 1e-9, "{v}");
+    let (ok, _, err) = radiosity(&["viewfactors", "--scene", "cube", "--output", "F.txt"]);
+    assert!(!ok && err.contains(".npy or .csv"), "{err}");
+}
+
+#[test]
+fn the_occluder_index_gives_the_views_of_the_core_plan() {
+    let v = json(&["bench-plan", "--scene", "city:5x4", "--nodes", "12", "--json", "-"]);
+    assert_eq!(v["faces"].as_u64().unwrap(), 4 * 20 + 11 * 9);
+    assert_eq!(v["identical"], true);
+    assert!(v["shadowed_views"].as_u64().unwrap() > 0);
+    assert_eq!(v["timings"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn automatic_discontinuity_meshing_reproduces_the_four_piece_rows() {
+    for refine in ["0", "1", "2"] {
+        let run = |mesh: &[&str]| {
+            let mut args =
+                vec!["solve", "--scene", "four-piece", "--refine", refine, "--json", "-"];
+            args.extend(mesh);
+            json(&args)
+        };
+        let hand = run(&["--mesh", "discontinuity"]);
+        let auto = run(&["--mesh", "auto-discontinuity", "--shadow-lines", "chords"]);
+        assert_eq!(hand["n"], auto["n"]);
+        let (a, b) = (hand["error"].as_f64().unwrap(), auto["error"].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-9 * a, "refine {refine}: {a} vs {b}");
+        assert_eq!(auto["mesh"], "auto-discontinuity");
+    }
+}
+
+#[test]
+fn grading_toward_the_common_edge_restores_the_rate_of_the_edge_solution() {
+    // (3.4) with beta = 0.5 is singular along y = A, the edge S1 shares with S5: O(h^0.5) on the
+    // uniform mesh (ratio 1.41), about O(h) with q = 2.
+    let error = |refine: &str, grade: &[&str]| {
+        let mut args = vec![
+            "solve",
+            "--scene",
+            "five-piece",
+            "--solution",
+            "edge",
+            "--refine",
+            refine,
+            "--json",
+            "-",
+        ];
+        args.extend(grade);
+        json(&args)["error"].as_f64().unwrap()
+    };
+    let graded = ["--grade", "S1:2", "--grade", "S5:3", "--grading", "2"];
+    let uniform_ratio = error("2", &[]) / error("3", &[]);
+    let graded_ratio = error("2", &graded) / error("3", &graded);
+    assert!((1.3..1.5).contains(&uniform_ratio), "{uniform_ratio}");
+    assert!(graded_ratio > 1.9, "{graded_ratio}");
+}
+
+#[test]
+fn bad_scene_files_and_options_name_the_culprit() {
+    let dir = temp_dir("bad");
+    let broken = dir.join("broken.toml");
+    std::fs::write(
+        &broken,
+        "[defaults]\nrho = 0.5\n[[faces]]\nname = \"a\"\nvertices = [[0,0,0],[1,0]]\n",
+    )
+    .unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["--scene".into(), broken.to_str().unwrap().into()], "broken.toml"),
+        (vec!["--scene".into(), "missing.toml".into()], "missing.toml"),
+        (vec!["--scene".into(), "city:3".into()], "city:NXxNY"),
+        (
+            vec!["--scene".into(), "five-piece".into(), "--grade".into(), "S9:0".into()],
+            "no face 'S9'",
+        ),
+        (
+            vec!["--scene".into(), "five-piece".into(), "--grade".into(), "S1:7".into()],
+            "edges 0 to 3",
+        ),
+        (
+            vec![
+                "--scene".into(),
+                "cube".into(),
+                "--png".into(),
+                "/tmp/x.png".into(),
+                "--png-size".into(),
+                "9x9".into(),
+            ],
+            "picture size",
+        ),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["solve".to_string(), "--refine".into(), "0".into()];
+        args.extend(extra);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (ok, _, err) = radiosity(&args);
+        assert!(!ok && err.contains(expect), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
