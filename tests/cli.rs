@@ -1,26 +1,10 @@
 //! The command-line contract (DESIGN.md sec. 5): JSON keys, the paper's numbers, identities and
 //! clear errors, through the real binary.
 
-use std::process::Command;
+mod common;
 
+use common::{json, radiosity};
 use serde_json::Value;
-
-fn radiosity(args: &[&str]) -> (bool, String, String) {
-    let out =
-        Command::new(env!("CARGO_BIN_EXE_radiosity")).args(args).output().expect("binary runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn json(args: &[&str]) -> Value {
-    let (ok, stdout, stderr) = radiosity(args);
-    assert!(ok, "radiosity {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout)
-        .unwrap_or_else(|e| panic!("bad JSON from {args:?}: {e}\n{stdout}"))
-}
 
 #[test]
 fn table_3_1_up_to_n_160_matches_the_paper_within_2_percent() {

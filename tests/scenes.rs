@@ -2,29 +2,10 @@
 //! automatic discontinuity meshing and graded meshes.
 
 use std::path::PathBuf;
-use std::process::Command;
 
-use serde_json::Value;
+mod common;
 
-fn radiosity(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_radiosity"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("binary runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn json(args: &[&str]) -> Value {
-    let (ok, stdout, stderr) = radiosity(args);
-    assert!(ok, "radiosity {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout)
-        .unwrap_or_else(|e| panic!("bad JSON from {args:?}: {e}\n{stdout}"))
-}
+use common::{json, radiosity};
 
 fn temp_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("radiosity-cli-{tag}-{}", std::process::id()));
