@@ -246,3 +246,30 @@ fn the_stability_study_passes_its_bounds_on_the_gpu_in_f64_and_f32() {
     }
     assert_eq!(result.failed, 0);
 }
+
+#[test]
+fn a_scene_file_with_occluders_assembles_on_the_gpu_as_on_the_cpu() {
+    let Some(_) = gpu() else { return };
+    for method in ["centroid", "linear"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_radiosity"))
+            .args([
+                "bench",
+                "--scene",
+                "examples/furnished-room.toml",
+                "--method",
+                method,
+                "--refine",
+                "1",
+                "--repeats",
+                "1",
+                "--json",
+                "-",
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-12, "{method}: {v}");
+    }
+}

@@ -197,6 +197,9 @@ pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec
     if d.iter().all(|&v| v <= 0.0) {
         return None;
     }
+    if d.iter().all(|&v| v > 0.0) {
+        return Some(poly.to_vec()); // wholly inside: nothing to cut
+    }
     let mut out = keep_nonnegative_side(poly, &d);
     out.dedup_by(|a, b| (*a - *b).length() <= ON_LINE * scale);
     while out.len() > 1 && (out[0] - out[out.len() - 1]).length() <= ON_LINE * scale {

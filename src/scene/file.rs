@@ -155,7 +155,13 @@ fn load_toml(path: &Path) -> Result<Scene> {
     let display = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::SceneFile { path: display.clone(), reason: e.to_string() })?;
-    let file: SceneFile = toml::from_str(&text)
+    parse_toml(&text, path)
+}
+
+/// A scene from the text of a TOML scene file at `path` (meshes are found relative to it).
+pub fn parse_toml(text: &str, path: &Path) -> Result<Scene> {
+    let display = path.display().to_string();
+    let file: SceneFile = toml::from_str(text)
         .map_err(|e| Error::SceneFile { path: display.clone(), reason: e.to_string() })?;
     for (group, props) in &file.groups {
         check_group(&display, group, props)?;

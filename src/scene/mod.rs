@@ -9,7 +9,7 @@ mod file;
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use city::city;
 pub use face::{Diagonal, Face, MIN_RELATIVE_AREA};
-pub use file::{IMPORT_RHO, Side, is_scene_file, load};
+pub use file::{IMPORT_RHO, Side, is_scene_file, load, parse_toml};
 
 use glam::{DVec2, DVec3};
 use rstar::primitives::{GeomWithData, Rectangle};
