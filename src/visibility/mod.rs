@@ -10,10 +10,13 @@
 //! Shadows are convex (occluders are split into convex pieces), and the visible part of an element
 //! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
 //! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates).
-//! Candidate occluders of a view are found in an R*-tree over the occluders' bounding boxes (those
-//! overlapping the box of the node and the face), then filtered by the planes of the two faces, so
-//! a scene in which no face can come between two others never runs shadow code, and a scene of
-//! thousands of faces does not test every occluder for every pair ([`Acceleration`]).
+//! Candidate occluders of a view are those that may reach into the pyramid with apex at the node
+//! over the face's visible window, in front of both faces. Scenes of more than 512 faces find
+//! them in an R*-tree over the occluders' bounding boxes; smaller ones filter a table of the
+//! occluders between each pair of faces (built with the tree). A face covered by one shadow is
+//! hidden, and the search stops. So a scene in which no face can come between two others never
+//! runs shadow code, and a scene of thousands of faces does not test every occluder for every
+//! pair ([`Acceleration`]).
 
 mod bench;
 mod occluders;
@@ -87,7 +90,14 @@ const HEIGHT_ROUNDING: f64 = 8.0 * f64::EPSILON;
 pub struct PairPlanner {
     faces: Vec<PlannerFace>,
     occluders: occluders::OccluderIndex,
+    /// For scenes of at most [`PAIR_TABLE_FACES`] faces, per ordered pair of faces (a * F + b):
+    /// whether they are coplanar, and the occluders that may lie between them, so that a view
+    /// only filters a short list.
+    pairs: Option<Vec<(bool, Vec<usize>)>>,
 }
+
+/// Largest scene whose pairs of faces are tabulated (512² entries).
+const PAIR_TABLE_FACES: usize = 512;
 
 #[derive(Clone, Debug)]
 struct PlannerFace {
@@ -124,7 +134,24 @@ impl PairPlanner {
                 }
             })
             .collect();
-        Self { faces, occluders: occluders::OccluderIndex::new(scene, acceleration) }
+        let mut planner = Self {
+            faces,
+            occluders: occluders::OccluderIndex::new(scene, acceleration),
+            pairs: None,
+        };
+        let n = planner.faces.len();
+        if n <= PAIR_TABLE_FACES && acceleration == Acceleration::Tree {
+            let table = (0..n * n)
+                .map(|k| {
+                    let (a, b) = (k / n, k % n);
+                    let coplanar =
+                        a == b || planner.faces[a].face.is_coplanar_with(&planner.faces[b].face);
+                    (coplanar, planner.candidates(a, b))
+                })
+                .collect();
+            planner.pairs = Some(table);
+        }
+        planner
     }
 
     /// Whether any pair of faces can have an occluder between them (one query per pair of faces).
@@ -156,7 +183,12 @@ impl PairPlanner {
     pub fn face_view(&self, p: DVec3, normal: DVec3, own_face: usize, face: usize) -> FaceView {
         let f = &self.faces[face];
         let own = &self.faces[own_face];
-        if own_face == face || own.face.is_coplanar_with(&f.face) {
+        let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
+        let coplanar = match pair {
+            Some((coplanar, _)) => *coplanar,
+            None => own_face == face || own.face.is_coplanar_with(&f.face),
+        };
+        if coplanar {
             return FaceView::Skip(SkipReason::SamePlane);
         }
         // On or behind the face's plane, up to the rounding of the height itself: G vanishes
@@ -212,7 +244,15 @@ impl PairPlanner {
         // seen from most nodes): the search stops there.
         let pieces = &self.occluders.pieces;
         let mut shadows = Vec::new();
-        for o in self.occluders.inside(own_face, face, &volume) {
+        // The pair's list holds every occluder in the box of the two faces, a superset of those
+        // in the pyramid; the same filter then finds the same ones as the tree.
+        let found: Box<dyn Iterator<Item = usize>> = match pair {
+            Some((_, list)) => {
+                Box::new(list.iter().copied().filter(|&k| volume.may_hold(&pieces[k].polygon)))
+            }
+            None => self.occluders.inside(own_face, face, &volume),
+        };
+        for o in found {
             if let Some(s) = shadow(p, z, f, &window, &pieces[o].polygon) {
                 if covers(&s, &window) {
                     return FaceView::Skip(SkipReason::Hidden);

@@ -116,7 +116,7 @@ impl ViewVolume {
     }
 
     /// Whether the polygon may reach inside.
-    fn may_hold(&self, polygon: &[DVec3]) -> bool {
+    pub(super) fn may_hold(&self, polygon: &[DVec3]) -> bool {
         self.planes.iter().all(|&(n, d, margin)| polygon.iter().any(|&v| n.dot(v) + d > margin))
     }
 
