@@ -1,6 +1,8 @@
 //! GPU tests (run on lavapipe in CI). Without an adapter they fail with instructions, unless
 //! RADIOSITY_GPU=skip is set.
 
+mod common;
+
 use radiosity::gpu::{self, GpuContext, INSTALL_HINT, Precision, math};
 
 fn gpu() -> Option<&'static GpuContext> {
@@ -197,24 +199,19 @@ fn tiles_and_a_full_near_list_give_the_same_matrix() {
 #[test]
 fn bench_prints_per_backend_timings_and_differences_as_json() {
     let Some(_) = gpu() else { return };
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_radiosity"))
-        .args([
-            "bench",
-            "--scene",
-            "five-piece",
-            "--method",
-            "linear",
-            "--refine",
-            "1",
-            "--repeats",
-            "1",
-            "--json",
-            "-",
-        ])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = common::json(&[
+        "bench",
+        "--scene",
+        "five-piece",
+        "--method",
+        "linear",
+        "--refine",
+        "1",
+        "--repeats",
+        "1",
+        "--json",
+        "-",
+    ]);
     for backend in ["cpu", "gpu"] {
         for key in ["setup_seconds", "pairs_per_second"] {
             assert!(v[backend][key].as_f64().unwrap() > 0.0, "{backend}.{key}: {v}");
@@ -251,25 +248,19 @@ fn the_stability_study_passes_its_bounds_on_the_gpu_in_f64_and_f32() {
 fn a_scene_file_with_occluders_assembles_on_the_gpu_as_on_the_cpu() {
     let Some(_) = gpu() else { return };
     for method in ["centroid", "linear"] {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_radiosity"))
-            .args([
-                "bench",
-                "--scene",
-                "examples/furnished-room.toml",
-                "--method",
-                method,
-                "--refine",
-                "1",
-                "--repeats",
-                "1",
-                "--json",
-                "-",
-            ])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .output()
-            .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let v = common::json(&[
+            "bench",
+            "--scene",
+            "examples/furnished-room.toml",
+            "--method",
+            method,
+            "--refine",
+            "1",
+            "--repeats",
+            "1",
+            "--json",
+            "-",
+        ]);
         assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-12, "{method}: {v}");
     }
 }

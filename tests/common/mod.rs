@@ -1,4 +1,6 @@
 //! Running the real binary from the integration tests.
+// Each test crate uses what it needs of this module.
+#![allow(dead_code)]
 
 use std::process::Command;
 
