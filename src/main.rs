@@ -291,6 +291,10 @@ struct ViewFactorArgs {
     /// Absolute tolerance of each F_ij (outer quadrature)
     #[arg(long, default_value_t = 1e-10)]
     tolerance: f64,
+    /// Most times an element is split into four where the outer rule's levels disagree (shadow
+    /// lines crossing it); each split costs up to 4x the time of the element
+    #[arg(long, default_value_t = 1)]
+    max_depth: u32,
     /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv
     #[arg(long, value_name = "FILE")]
     output: Option<String>,
@@ -706,7 +710,18 @@ fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     let (scene, mesh, _) = pipeline::build(&config)?;
     let started = std::time::Instant::now();
     let planner = PairPlanner::new(&scene);
-    let options = ViewFactorOptions { tolerance: args.tolerance, ..Default::default() };
+    if args.max_depth > 6 {
+        return Err(Error::InvalidParameter {
+            name: "max-depth",
+            value: args.max_depth.to_string(),
+            reason: "at most 6 (4^6 parts of an element)".into(),
+        });
+    }
+    let options = ViewFactorOptions {
+        tolerance: args.tolerance,
+        max_depth: args.max_depth,
+        ..Default::default()
+    };
     let bar = pipeline::progress_bar(true, "viewfactors", mesh.len());
     let f = view_factors(&scene, &mesh, &planner, &options, &|k| bar.inc(k as u64))?;
     bar.finish_and_clear();
