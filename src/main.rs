@@ -537,6 +537,14 @@ fn assemble_without_progress(
 }
 
 fn inspect(args: &SolveArgs) -> Result<()> {
+    let o = &args.outputs;
+    if o.vtu.is_some() || o.csv.is_some() || o.png.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "vtu/csv/png",
+            value: "given".into(),
+            reason: "inspect solves nothing; the outputs belong to solve".into(),
+        });
+    }
     let config = args.config()?;
     let (scene, mesh, disc) = pipeline::build(&config)?;
     let started = std::time::Instant::now();

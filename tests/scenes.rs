@@ -205,6 +205,8 @@ fn bad_scene_files_and_options_name_the_culprit() {
             "picture size",
         ),
     ];
+    let (ok, _, err) = radiosity(&["inspect", "--scene", "cube", "--png", "x.png"]);
+    assert!(!ok && err.contains("belong to solve"), "{err}");
     for (extra, expect) in cases {
         let mut args = vec!["solve".to_string(), "--refine".into(), "0".into()];
         args.extend(extra);
