@@ -144,9 +144,8 @@ impl PairPlanner {
             let table = (0..n * n)
                 .map(|k| {
                     let (a, b) = (k / n, k % n);
-                    let coplanar =
-                        a == b || planner.faces[a].face.is_coplanar_with(&planner.faces[b].face);
-                    (coplanar, planner.candidates(a, b))
+                    let coplanar = planner.same_plane(a, b);
+                    (coplanar, if coplanar { Vec::new() } else { planner.occluders_between(a, b) })
                 })
                 .collect();
             planner.pairs = Some(table);
@@ -162,10 +161,17 @@ impl PairPlanner {
 
     /// Occluders that may lie between faces `a` and `b` (none for one face or one plane).
     pub fn candidates(&self, a: usize, b: usize) -> Vec<usize> {
+        if self.same_plane(a, b) { Vec::new() } else { self.occluders_between(a, b) }
+    }
+
+    /// Whether faces `a` and `b` are one face or lie in one plane.
+    fn same_plane(&self, a: usize, b: usize) -> bool {
+        a == b || self.faces[a].face.is_coplanar_with(&self.faces[b].face)
+    }
+
+    /// Occluders in the box of faces `a` and `b` and in front of both, in index order.
+    fn occluders_between(&self, a: usize, b: usize) -> Vec<usize> {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        if a == b || fa.face.is_coplanar_with(&fb.face) {
-            return Vec::new();
-        }
         let tol = 1e-12 * fa.size.max(fb.size);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
         volume.push_box(fa.lo.min(fb.lo), fa.hi.max(fb.hi), tol);
@@ -186,7 +192,7 @@ impl PairPlanner {
         let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
         let coplanar = match pair {
             Some((coplanar, _)) => *coplanar,
-            None => own_face == face || own.face.is_coplanar_with(&f.face),
+            None => self.same_plane(own_face, face),
         };
         if coplanar {
             return FaceView::Skip(SkipReason::SamePlane);
@@ -218,26 +224,25 @@ impl PairPlanner {
         };
         // Segments from p to the visible window lie in the pyramid with apex p over it, in front
         // of both faces.
+        let sides = pyramid_sides(p, f, &window);
         if self.occluders.acceleration == Acceleration::BoxScan {
             // The core solver's plan: every occluder in the box of the two faces and in front of
             // both, each shadow computed, in index order.
             let shadows = self
                 .candidates(own_face, face)
                 .iter()
-                .filter_map(|&o| shadow(p, z, f, &window, &self.occluders.pieces[o].polygon))
+                .filter_map(|&o| {
+                    shadow(p, z, f, &window, &sides, &self.occluders.pieces[o].polygon)
+                })
                 .collect();
             return FaceView::Visible { clip, shadows };
         }
         let tol = 1e-12 * own.size.max(f.size);
         let mut volume = ViewVolume::between(&own.face.frame, &f.face.frame, tol);
-        let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
-        let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
-        for k in 0..corners.len() {
-            let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
-            let side = (a - p).cross(b - p).normalize_or_zero();
-            let side = if side.dot(centre - p) < 0.0 { -side } else { side };
-            if side != DVec3::ZERO {
-                volume.push(side, -side.dot(p), -tol);
+        for side in &sides {
+            let unit = side.normalize_or_zero();
+            if unit != DVec3::ZERO {
+                volume.push(unit, -unit.dot(p), -tol);
             }
         }
         // One shadow that covers the whole window hides the face (most faces of a large scene,
@@ -253,7 +258,7 @@ impl PairPlanner {
             None => self.occluders.inside(own_face, face, &volume),
         };
         for o in found {
-            if let Some(s) = shadow(p, z, f, &window, &pieces[o].polygon) {
+            if let Some(s) = shadow(p, z, f, &window, &sides, &pieces[o].polygon) {
                 if covers(&s, &window) {
                     return FaceView::Skip(SkipReason::Hidden);
                 }
@@ -338,29 +343,37 @@ fn polygon_scale(poly: &[DVec2]) -> f64 {
     (hi - lo).length()
 }
 
+/// The inward normals (not normalised) of the planes through `p` and each edge of the convex
+/// `window` of face `f`: the sides of the pyramid with apex `p` over the window.
+fn pyramid_sides(p: DVec3, f: &PlannerFace, window: &[DVec2]) -> Vec<DVec3> {
+    let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
+    let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+    let m = corners.len();
+    (0..m)
+        .map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % m]);
+            let side = (a - p).cross(b - p);
+            if side.dot(centre - p) < 0.0 { -side } else { side }
+        })
+        .collect()
+}
+
 /// The shadow on face `f` (at height `z` below `p`) of a convex occluder polygon, as seen from `p`
 /// through the convex `window` of the face: the occluder clipped to the pyramid with apex `p` over
-/// the window, centrally projected onto the face's plane.
+/// the window (its `sides`, [`pyramid_sides`]), centrally projected onto the face's plane.
 fn shadow(
     p: DVec3,
     z: f64,
     f: &PlannerFace,
     window: &[DVec2],
+    sides: &[DVec3],
     occluder: &[DVec3],
 ) -> Option<Vec<DVec2>> {
     let normal = f.face.frame.normal;
     // In front of the face's plane.
     let mut poly = clip_polygon_3d(occluder, normal, -normal.dot(f.face.frame.origin))?;
-    // Inside the pyramid: for each window edge, the plane through p and the edge.
-    let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
-    let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
-    let m = corners.len();
-    for k in 0..m {
-        let (a, b) = (corners[k], corners[(k + 1) % m]);
-        let mut side = (a - p).cross(b - p);
-        if side.dot(centre - p) < 0.0 {
-            side = -side;
-        }
+    // Inside the pyramid.
+    for &side in sides {
         poly = clip_polygon_3d(&poly, side, -side.dot(p))?;
     }
     // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
