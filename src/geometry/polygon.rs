@@ -59,6 +59,15 @@ pub fn bounding_box(points: &[DVec2]) -> (DVec2, DVec2) {
         })
 }
 
+/// Smallest and largest corner of the axis-aligned box around 3-D points.
+pub fn bounding_box_3d(points: &[DVec3]) -> (DVec3, DVec3) {
+    points
+        .iter()
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        })
+}
+
 fn scale_of(poly: &[DVec2]) -> f64 {
     let (lo, hi) = bounding_box(poly);
     (hi - lo).length()
@@ -180,11 +189,7 @@ where
 /// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`.
 /// For a convex polygon the result is convex; returns `None` when nothing with area is left.
 pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec<DVec3>> {
-    let (lo, hi) = poly
-        .iter()
-        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+    let (lo, hi) = bounding_box_3d(poly);
     let scale = (hi - lo).length();
     let eps = ON_LINE * scale * normal.length();
     let d: Vec<f64> = poly

@@ -178,11 +178,7 @@ impl Face {
 
     /// Smallest and largest corner of the axis-aligned box around the face.
     pub fn bounding_box(&self) -> (DVec3, DVec3) {
-        self.vertices
-            .iter()
-            .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            })
+        crate::geometry::bounding_box_3d(&self.vertices)
     }
 
     /// Largest distance between two vertices.

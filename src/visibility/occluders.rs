@@ -157,10 +157,7 @@ fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
         };
         for polygon in polygons {
             let tol = 1e-12 * face.size();
-            let (lo, hi) = polygon.iter().fold(
-                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-                |(lo, hi), &p| (lo.min(p), hi.max(p)),
-            );
+            let (lo, hi) = crate::geometry::bounding_box_3d(&polygon);
             let key = |c: DVec3| (c / (64.0 * tol).max(f64::MIN_POSITIVE)).round().as_i64vec3();
             let near: Vec<[i64; 3]> = neighbour_keys(key(lo));
             let same = near
