@@ -17,12 +17,12 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairIntegrator};
-use crate::discretization::{Discretization, Method};
+use crate::assembly::{AssemblyOptions, PairIntegrator, assemble_row};
+use crate::discretization::{Discretization, Method, Node};
 use crate::error::Result;
 use crate::mesh::{Element, Mesh};
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner};
+use crate::visibility::PairPlanner;
 
 /// Accuracy settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,32 +152,23 @@ pub fn view_factors(
         .into_par_iter()
         .map(|i| {
             let el = &mesh.elements()[i];
-            let normal = scene.faces[el.face].frame.normal;
-            let seen: Vec<usize> =
-                (0..mesh.face_count()).filter(|&b| can_see(scene, el, b)).collect();
-            // The whole row at one point: Σ_j of it is 1 inside a closed scene at every point, so
-            // the rows of F sum to 1 to rounding whatever the outer rule's error.
+            let sees_something = (0..mesh.face_count()).any(|b| can_see(scene, el, b));
+            // The whole row of K (with rho = 1) at one point: Σ_j of it is 1 inside a closed
+            // scene at every point, so the rows of F sum to 1 to rounding whatever the outer
+            // rule's error.
             let integrand = |p: DVec3, out: &mut [f64]| {
+                let node = Node {
+                    position: p,
+                    normal: scene.faces[el.face].frame.normal,
+                    face: el.face,
+                    element: i,
+                    rho: 1.0,
+                };
                 out.fill(0.0);
-                for &b in &seen {
-                    let view = planner.face_view(p, normal, el.face, b);
-                    if let FaceView::Skip(_) = view {
-                        continue;
-                    }
-                    let unobstructed = view.is_unobstructed();
-                    for j in mesh.face_range(b) {
-                        let e = &disc.elements[j];
-                        let vis = if unobstructed {
-                            crate::visibility::Visibility::Full
-                        } else {
-                            planner.visible(&view, &e.in_face())
-                        };
-                        out[j] = integrator.integrate(e, &disc.bases[j], p, normal, &vis)[0] / PI;
-                    }
-                }
+                assemble_row(&node, out, mesh, &disc, planner, &integrator);
             };
             let mut outer = Outer { rule: &rule, options, integrand, evaluations: 0 };
-            let (row, error) = if seen.is_empty() {
+            let (row, error) = if !sees_something {
                 (vec![0.0; n], 0.0)
             } else {
                 outer.integrate(el.vertices, n, 0)

@@ -236,8 +236,9 @@ pub fn apply_at(
         .collect())
 }
 
-/// The row of K for a point `node` of S against every element.
-fn assemble_row(
+/// The row of K for a point `node` of S against every element (entries of elements it does not
+/// see are left as they are).
+pub(crate) fn assemble_row(
     node: &Node,
     row: &mut [f64],
     mesh: &Mesh,
