@@ -196,22 +196,27 @@ fn tiles_and_a_full_near_list_give_the_same_matrix() {
     }
 }
 
-#[test]
-fn bench_prints_per_backend_timings_and_differences_as_json() {
-    let Some(_) = gpu() else { return };
-    let v = common::json(&[
+/// `radiosity bench` of `scene` at refine 1, one repetition, as JSON.
+fn bench_once(scene: &str, method: &str) -> serde_json::Value {
+    common::json(&[
         "bench",
         "--scene",
-        "five-piece",
+        scene,
         "--method",
-        "linear",
+        method,
         "--refine",
         "1",
         "--repeats",
         "1",
         "--json",
         "-",
-    ]);
+    ])
+}
+
+#[test]
+fn bench_prints_per_backend_timings_and_differences_as_json() {
+    let Some(_) = gpu() else { return };
+    let v = bench_once("five-piece", "linear");
     for backend in ["cpu", "gpu"] {
         for key in ["setup_seconds", "pairs_per_second"] {
             assert!(v[backend][key].as_f64().unwrap() > 0.0, "{backend}.{key}: {v}");
@@ -248,19 +253,7 @@ fn the_stability_study_passes_its_bounds_on_the_gpu_in_f64_and_f32() {
 fn a_scene_file_with_occluders_assembles_on_the_gpu_as_on_the_cpu() {
     let Some(_) = gpu() else { return };
     for method in ["centroid", "linear"] {
-        let v = common::json(&[
-            "bench",
-            "--scene",
-            "examples/furnished-room.toml",
-            "--method",
-            method,
-            "--refine",
-            "1",
-            "--repeats",
-            "1",
-            "--json",
-            "-",
-        ]);
+        let v = bench_once("examples/furnished-room.toml", method);
         assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-12, "{method}: {v}");
     }
 }

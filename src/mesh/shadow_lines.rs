@@ -261,7 +261,8 @@ fn clip_to_polygon(polygon: &[DVec2], start: DVec2, dir: DVec2, length: f64) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{SurfaceParameters, four_piece};
+    use crate::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
+    use crate::scene::{SurfaceParameters, five_piece, four_piece};
 
     #[test]
     fn the_four_piece_surface_has_the_papers_shadow_lines_on_s1() {
@@ -294,13 +295,6 @@ mod tests {
         // Nothing else on the other faces: S4 sees S1 past the square only along its outline.
         assert!(chords[1..].iter().all(Vec::is_empty), "{chords:?}");
     }
-}
-
-#[cfg(test)]
-mod mesh_tests {
-    use super::*;
-    use crate::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
-    use crate::scene::{SurfaceParameters, five_piece, four_piece};
 
     #[test]
     fn automatic_meshing_of_the_four_piece_surface_is_the_papers_mesh() {
