@@ -236,14 +236,18 @@ pub enum Error {
         /// What showed it.
         reason: String,
     },
-    /// An iterative solver did not converge.
+    /// The iterative solver stopped without reaching the residual asked for.
     #[error(
-        "the iterative solver did not converge: residual {residual:e} after {iterations} iterations"
+        "the iterative solver (GMRES) stopped: {reason}; relative residual {residual:.2e} after \
+         {iterations} iterations. Ask for a larger --tolerance if that residual is enough, or use \
+         --solver lu where the matrix fits in memory twice"
     )]
     NotConverged {
-        /// Final relative residual.
+        /// Why it stopped.
+        reason: IterationFailure,
+        /// Relative residual reached (2-norm).
         residual: f64,
-        /// Iterations done.
+        /// Matrix-vector products done.
         iterations: usize,
     },
     /// GPU backend failures.
@@ -261,6 +265,28 @@ pub enum Error {
     /// Reading or writing a file failed.
     #[error(transparent)]
     Io(#[from] std::io::Error),
+}
+
+/// Why an iterative solve stopped short.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IterationFailure {
+    /// A whole restart cycle failed to halve the residual: the tolerance lies below what f64
+    /// reaches for this system, or the system is (nearly) singular.
+    Stagnation,
+    /// The iteration limit was reached while the residual was still falling.
+    IterationLimit,
+    /// The residual is no longer a finite number.
+    NotFinite,
+}
+
+impl std::fmt::Display for IterationFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Stagnation => "stagnation (a restart cycle did not halve the residual)",
+            Self::IterationLimit => "iteration limit reached while the residual was still falling",
+            Self::NotFinite => "the residual is not finite",
+        })
+    }
 }
 
 /// Result alias of the library.

@@ -10,13 +10,13 @@ use radiosity::discretization::Discretization;
 use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
-use radiosity::mesh::{LineExtent, Mesh};
+use radiosity::mesh::{LineExtent, Mesh, S5Diagonals};
 use radiosity::pipeline::{self, Backend, MeshChoice, RunConfig, RunReport, SceneSource};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::report::TableFormat;
 use radiosity::scene::Scene;
 use radiosity::scene::SurfaceParameters;
-use radiosity::solve::SolverChoice;
+use radiosity::solve::{SolverChoice, SolverOptions};
 use radiosity::study::{self, StudyDevice, StudyOptions};
 use radiosity::visibility::PairPlanner;
 use radiosity::{bench, report};
@@ -108,6 +108,8 @@ enum MeshArg {
     Uniform,
     /// The paper's hand-built discontinuity mesh (four-piece, five-piece)
     Discontinuity,
+    /// The same, with S5's cells split by the uniform mesh's diagonal instead of the paper's
+    DiscontinuityUniformDiagonals,
     /// Shadow lines found automatically, faces triangulated along them (any scene)
     AutoDiscontinuity,
 }
@@ -228,9 +230,12 @@ struct SolveArgs {
     /// gamma of the shadow solution (3.3)
     #[arg(long)]
     gamma: Option<f64>,
-    /// Linear solver: LU up to 6000 unknowns and BiCGSTAB beyond (auto), or forced
+    /// Linear solver: LU up to 6000 unknowns and GMRES beyond (auto), or forced
     #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
     solver: SolverArg,
+    /// Relative residual ||E - (I - K) u||_2 / ||E||_2 at which the iterative solver stops
+    #[arg(long, default_value_t = radiosity::solve::DEFAULT_TOLERANCE)]
+    tolerance: f64,
     /// Also report the largest errors over all of S, of u_n and of the iterated solution E + K u_n,
     /// at the interior points of a barycentric lattice of spacing 1/M in every element
     #[arg(long, value_name = "M")]
@@ -427,7 +432,10 @@ impl GeometryArgs {
             params: parse_params(&self.params)?,
             mesh: match self.mesh {
                 MeshArg::Uniform => MeshChoice::Uniform,
-                MeshArg::Discontinuity => MeshChoice::Discontinuity,
+                MeshArg::Discontinuity => MeshChoice::Discontinuity(S5Diagonals::Paper),
+                MeshArg::DiscontinuityUniformDiagonals => {
+                    MeshChoice::Discontinuity(S5Diagonals::AsUniform)
+                }
                 MeshArg::AutoDiscontinuity => {
                     MeshChoice::AutoDiscontinuity(match self.shadow_lines {
                         ShadowLinesArg::Chords => LineExtent::Chords,
@@ -447,7 +455,7 @@ impl GeometryArgs {
             },
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
-            solver: SolverChoice::Auto,
+            solver: SolverOptions::default(),
             progress: true,
             setup_repeats: 1,
             surface_lattice: None,
@@ -484,10 +492,13 @@ impl SolveArgs {
             }
         }
         config.surface_lattice = self.surface_lattice;
-        config.solver = match self.solver {
-            SolverArg::Auto => SolverChoice::Auto,
-            SolverArg::Lu => SolverChoice::Lu,
-            SolverArg::Iterative => SolverChoice::Iterative,
+        config.solver = SolverOptions {
+            choice: match self.solver {
+                SolverArg::Auto => SolverChoice::Auto,
+                SolverArg::Lu => SolverChoice::Lu,
+                SolverArg::Iterative => SolverChoice::Iterative,
+            },
+            tolerance: self.tolerance,
         };
         Ok(config)
     }
@@ -624,10 +635,13 @@ fn print_run(r: &RunReport) {
         "solution at the nodes: min {:.6}, mean {:.6}, max {:.6}",
         r.solution_range[0], r.solution_range[1], r.solution_range[2]
     );
-    let iterations = match r.condition_estimate {
+    let mut iterations = match r.condition_estimate {
         Some(k) => format!(", condition ~{k:.1e}, {} refinement steps", r.refinement_steps),
         None => format!(", {} iterations", r.iterations),
     };
+    if r.rows_eliminated > 0 {
+        iterations += &format!(", {} unknowns known as u = E (rho = 0)", r.rows_eliminated);
+    }
     println!(
         "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",
         r.setup_seconds, r.emission_seconds, r.solve_seconds, r.solver, r.residual

@@ -12,11 +12,12 @@ use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
 use crate::gpu::{self, GpuAssembler, Precision};
 use crate::mesh::{
-    Grading, LineExtent, Mesh, MeshKind, Sources, paper_discontinuity_cuts, shadow_lines,
+    Grading, LineExtent, Mesh, MeshKind, S5Diagonals, Sources, paper_discontinuity_cuts,
+    shadow_lines,
 };
 use crate::problems::{EmissionOptions, TrueSolution, emission_at};
 use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
-use crate::solve::{self, SolverChoice};
+use crate::solve::{self, SolverOptions};
 use crate::surface_error::{SurfaceErrors, surface_errors};
 use crate::visibility::{PairPlanner, PairStats};
 
@@ -26,8 +27,9 @@ use crate::visibility::{PairPlanner, PairStats};
 pub enum MeshChoice {
     /// Faces split by their diagonals, then refined.
     Uniform,
-    /// The paper's discontinuity mesh (sec. 3.1), built by hand for its surfaces.
-    Discontinuity,
+    /// The paper's discontinuity mesh (sec. 3.1), built by hand for its surfaces, with the given
+    /// split of S5's cells.
+    Discontinuity(S5Diagonals),
     /// Automatic discontinuity mesh: every face triangulated along its shadow lines
     /// ([`crate::mesh::shadow_lines`]), kept as segments or extended to chords.
     AutoDiscontinuity(LineExtent),
@@ -38,7 +40,8 @@ impl MeshChoice {
     pub fn name(&self) -> &'static str {
         match self {
             Self::Uniform => "uniform",
-            Self::Discontinuity => "discontinuity",
+            Self::Discontinuity(S5Diagonals::Paper) => "discontinuity",
+            Self::Discontinuity(S5Diagonals::AsUniform) => "discontinuity-uniform-diagonals",
             Self::AutoDiscontinuity(LineExtent::Chords) => "auto-discontinuity",
             Self::AutoDiscontinuity(LineExtent::Segments) => "auto-discontinuity-segments",
         }
@@ -171,8 +174,8 @@ pub struct RunConfig {
     pub emission: EmissionOptions,
     /// Where the matrix is assembled.
     pub backend: Backend,
-    /// Linear solver.
-    pub solver: SolverChoice,
+    /// Linear solver and its tolerance.
+    pub solver: SolverOptions,
     /// Show progress bars on stderr.
     pub progress: bool,
     /// Assemble up to this many times and report the fastest (timings of small runs are noisy);
@@ -201,7 +204,7 @@ impl RunConfig {
             assembly: AssemblyOptions::default(),
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
-            solver: SolverChoice::Auto,
+            solver: SolverOptions::default(),
             progress: false,
             setup_repeats: 1,
             surface_lattice: None,
@@ -231,7 +234,7 @@ pub struct RunReport {
     pub precision: &'static str,
     /// The GPU adapter, when the GPU assembled the matrix.
     pub device: Option<String>,
-    /// Linear solver used (`lu` or `bicgstab`).
+    /// Linear solver used (`lu` or `gmres`).
     pub solver: &'static str,
     /// Iterations of the iterative solver.
     pub iterations: usize,
@@ -239,6 +242,8 @@ pub struct RunReport {
     pub condition_estimate: Option<f64>,
     /// Steps of iterative refinement after LU.
     pub refinement_steps: usize,
+    /// Unknowns known without solving (zero rows of K: rho = 0 or nothing in view; u = E).
+    pub rows_eliminated: usize,
     /// Number of elements.
     pub n: usize,
     /// Number of unknowns.
@@ -286,8 +291,8 @@ pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
     let scene = config.scene.build(config.params)?;
     let kind = match config.mesh {
         MeshChoice::Uniform => MeshKind::Uniform,
-        MeshChoice::Discontinuity => {
-            MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &config.params)?)
+        MeshChoice::Discontinuity(s5) => {
+            MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &config.params, s5)?)
         }
         MeshChoice::AutoDiscontinuity(extent) => {
             // With a true solution every face carries light (E is computed from it everywhere).
@@ -423,6 +428,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         iterations: outcome.iterations,
         condition_estimate: outcome.condition_estimate,
         refinement_steps: outcome.refinement_steps,
+        rows_eliminated: outcome.rows_eliminated,
         n: mesh.len(),
         dof: disc.dof(),
         error,

@@ -100,7 +100,7 @@ mod tests {
     use crate::mesh::MeshKind;
     use crate::problems::TrueSolution;
     use crate::scene::{SurfaceParameters, five_piece};
-    use crate::solve::{SolverChoice, solve};
+    use crate::solve::{SolverChoice, SolverOptions, solve};
 
     #[test]
     fn lattice_points_lie_inside_their_elements() {
@@ -131,7 +131,7 @@ mod tests {
             let emission = EmissionOptions::default();
             let k = assembly::assemble(&mesh, &disc, &planner, &options, &|_| {}).unwrap();
             let e = emission_at(&scene, &disc.nodes, &planner, &truth, &emission, &|_| {});
-            let u = solve(&k.matrix, &e, SolverChoice::Lu).unwrap().u;
+            let u = solve(&k.matrix, &e, SolverOptions::with(SolverChoice::Lu)).unwrap().u;
             let ku = assembly::apply_at(&disc.nodes, &mesh, &disc, &planner, &options, &u).unwrap();
             let scale = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (i, node) in disc.nodes.iter().enumerate() {

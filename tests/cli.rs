@@ -361,6 +361,25 @@ fn the_stiff_study_shows_conditioning_and_refuses_singular_systems() {
         assert!(e <= b, "rho {rho}: refined error {e} above its bound {b}");
         assert!(e <= r["error_lu"].as_f64().unwrap() + 1e-16, "refinement must not lose digits");
     }
+    // GMRES agrees with LU on every solved row, to its tolerance (1e-13) times the condition.
+    let solved: Vec<&Value> = rows.iter().filter(|r| r["status"] == "solved").collect();
+    assert!(solved.len() >= 30, "{} solved rows", solved.len());
+    for r in &solved {
+        let kappa = r["condition_estimate"].as_f64().unwrap();
+        let diff = r["gmres_vs_lu"].as_f64().unwrap_or_else(|| panic!("no GMRES in {r}"));
+        assert!(diff <= 1e-13 * kappa.max(10.0), "{r}");
+        assert!(r["gmres_iterations"].as_u64().unwrap() <= 60, "{r}");
+    }
+    // A black lamp (rho = 0) among faces with rho -> 1: its rows are taken out, and GMRES agrees
+    // with LU to 1e-12 whatever rho the other faces have, rho = 1 included.
+    let black: Vec<&Value> =
+        rows.iter().filter(|r| r["case"].as_str().unwrap().contains("black")).collect();
+    assert_eq!(black.len(), 14);
+    for r in &black {
+        assert_eq!(r["status"], "solved", "{r}");
+        assert!(r["rows_eliminated"].as_u64().unwrap() > 0, "{r}");
+        assert!(r["gmres_vs_lu"].as_f64().unwrap() <= 1e-12, "{r}");
+    }
     // An open box stays regular at rho = 1.
     let open = rows
         .iter()

@@ -36,7 +36,7 @@ fn f64_math_library_is_within_2_ulp_everywhere() {
 
 use radiosity::assembly::{AssemblyOptions, CollocationMatrix, assemble};
 use radiosity::discretization::{Discretization, Method};
-use radiosity::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
+use radiosity::mesh::{Mesh, MeshKind, S5Diagonals, paper_discontinuity_cuts};
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
 use radiosity::visibility::PairPlanner;
 
@@ -73,7 +73,9 @@ fn gpu_and_cpu_matrices_agree_to_1e_12_in_f64() {
     for (which, discontinuity, method, refine) in cases {
         let scene = which.build(p).unwrap();
         let kind = if discontinuity {
-            MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &p).unwrap())
+            MeshKind::Discontinuity(
+                paper_discontinuity_cuts(&scene, &p, S5Diagonals::Paper).unwrap(),
+            )
         } else {
             MeshKind::Uniform
         };

@@ -7,7 +7,7 @@
 mod matrix;
 mod options;
 
-pub use matrix::CollocationMatrix;
+pub use matrix::{CollocationMatrix, available_memory};
 pub use options::{AssemblyOptions, Quadrature};
 
 use std::f64::consts::PI;
@@ -195,6 +195,9 @@ pub fn recompute_thin_columns(
     let per = disc.method.nodes_per_element();
     assembly.matrix.rows_mut().enumerate().for_each(|(i, row)| {
         let node = &disc.nodes[i];
+        if node.rho == 0.0 {
+            return;
+        }
         let scale = node.rho / PI;
         for &j in &thin {
             let el = &disc.elements[j];
@@ -247,6 +250,9 @@ pub(crate) fn assemble_row(
     integrator: &PairIntegrator,
 ) -> PairStats {
     let per = disc.method.nodes_per_element() as u64;
+    if node.rho == 0.0 {
+        return PairStats::not_reflecting_row(disc.elements.len());
+    }
     let scale = node.rho / PI;
     let mut stats = PairStats::default();
     for face in 0..mesh.face_count() {

@@ -38,7 +38,12 @@ fn baffled_box_rows_sum_to_one_with_exact_visibility() {
         assert!(stats.partial > 0 && stats.hidden > 0, "{stats:?}");
         assert_eq!(
             stats.total,
-            stats.same_plane + stats.facing_away + stats.hidden + stats.full + stats.partial
+            stats.same_plane
+                + stats.facing_away
+                + stats.hidden
+                + stats.not_reflecting
+                + stats.full
+                + stats.partial
         );
     }
 }

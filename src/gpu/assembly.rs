@@ -103,6 +103,11 @@ fn plan_row(
         exceptions: Vec::new(),
         stats: PairStats::default(),
     };
+    if node.rho == 0.0 {
+        // A zero row: every view stays "skipped" (all zeros), nothing is evaluated.
+        plan.stats = PairStats::not_reflecting_row(disc.elements.len());
+        return plan;
+    }
     for face in 0..faces {
         let range = mesh.face_range(face);
         let view = planner.face_view(node.position, node.normal, node.face, face);

@@ -10,7 +10,7 @@ mod grid;
 mod shadow_lines;
 
 pub use graded::Grading;
-pub use grid::{GridCuts, paper_discontinuity_cuts};
+pub use grid::{GridCuts, S5Diagonals, paper_discontinuity_cuts};
 pub use shadow_lines::{LineExtent, Segment, Sources, shadow_lines};
 
 use std::ops::Range;

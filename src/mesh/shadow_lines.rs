@@ -261,7 +261,7 @@ fn clip_to_polygon(polygon: &[DVec2], start: DVec2, dir: DVec2, length: f64) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Mesh, MeshKind, paper_discontinuity_cuts};
+    use crate::mesh::{Mesh, MeshKind, S5Diagonals, paper_discontinuity_cuts};
     use crate::scene::{SurfaceParameters, five_piece, four_piece};
 
     #[test]
@@ -302,7 +302,7 @@ mod tests {
         let scene = four_piece(p).unwrap();
         let lines = shadow_lines(&scene, Sources::All, LineExtent::Chords);
         let auto = Mesh::new(&scene, &MeshKind::Constrained(lines), 1).unwrap();
-        let cuts = paper_discontinuity_cuts(&scene, &p).unwrap();
+        let cuts = paper_discontinuity_cuts(&scene, &p, S5Diagonals::Paper).unwrap();
         let hand = Mesh::new(&scene, &MeshKind::Discontinuity(cuts), 1).unwrap();
         assert_eq!(auto.len(), hand.len());
         // The same triangles, in any order and with any starting vertex.

@@ -237,6 +237,9 @@ pub fn stiff_table(result: &crate::stability::StiffResult, format: TableFormat) 
                 opt(r.error_refined),
                 r.refinement_steps.map_or("-".into(), |k| k.to_string()),
                 opt(r.bound),
+                opt(r.error_gmres),
+                opt(r.gmres_vs_lu),
+                r.gmres_iterations.map_or("-".into(), |k| k.to_string()),
                 r.status.clone(),
             ]
         })
@@ -251,6 +254,9 @@ pub fn stiff_table(result: &crate::stability::StiffResult, format: TableFormat) 
         "refined",
         "steps",
         "bound",
+        "GMRES error",
+        "vs LU",
+        "its",
         "status",
     ];
     let mut s =

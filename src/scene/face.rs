@@ -15,6 +15,16 @@ pub enum Diagonal {
     FromSecond,
 }
 
+impl Diagonal {
+    /// The other diagonal of the quadrilateral.
+    pub fn other(self) -> Self {
+        match self {
+            Self::FromFirst => Self::FromSecond,
+            Self::FromSecond => Self::FromFirst,
+        }
+    }
+}
+
 /// A planar polygon whose vertices run counter-clockwise about its normal; the normal points to the
 /// side that radiates and receives (the paper's inner normal).
 #[derive(Clone, Debug)]

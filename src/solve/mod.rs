@@ -1,15 +1,23 @@
-//! Solving (I - K) u = E with faer: LU with partial pivoting for moderate sizes, BiCGSTAB (faer's,
-//! over K applied row by row, so the matrix is never copied) for large ones. ||K|| < 1 for open
-//! surfaces with rho < 1 (paper (2.17)), so the iteration converges in few steps.
+//! Solving (I - K) u = E with faer: zero rows of K taken out first ([`system`]), then LU with
+//! partial pivoting for moderate sizes ([`lu`]) or restarted GMRES over K applied row by row
+//! ([`gmres`]) for large ones.
+//!
+//! What is guaranteed: for rho < 1 the continuous operator has ||K|| <= max rho < 1 (paper
+//! (2.17)), and so has the centroid method's discrete K (non-negative entries, row sums <= rho).
+//! The linear method's discrete K has negative entries and its norm can exceed 1, so nothing
+//! bounds the iteration count a priori; GMRES still never breaks down and its residual never
+//! grows. Either way a solution is accepted only on its true residual, which is computed again at
+//! the end and reported.
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::matrix_free::{
-    InitialGuessStatus, LinOp,
-    bicgstab::{BicgParams, bicgstab, bicgstab_scratch},
-};
-use faer::prelude::*;
-use faer::{MatMut, MatRef, Par};
+mod gmres;
+mod lu;
+mod system;
+
 use serde::Serialize;
+
+pub use gmres::{MAX_ITERATIONS, RESTART};
+pub use lu::{LuSolution, inverse_norm_1_estimate};
+pub use system::ReducedSystem;
 
 use crate::assembly::CollocationMatrix;
 use crate::error::{Error, Result};
@@ -18,12 +26,12 @@ use crate::error::{Error, Result};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SolverChoice {
-    /// LU up to [`LU_LIMIT`] unknowns, BiCGSTAB beyond.
+    /// LU up to [`LU_LIMIT`] unknowns, GMRES beyond.
     #[default]
     Auto,
     /// Dense LU with partial pivoting.
     Lu,
-    /// BiCGSTAB.
+    /// Restarted GMRES.
     Iterative,
 }
 
@@ -31,57 +39,99 @@ pub enum SolverChoice {
 /// dense copy of the matrix.
 pub const LU_LIMIT: usize = 6000;
 
+/// Default relative residual `||E - (I - K) u||_2 / ||E||_2` at which GMRES stops.
+pub const DEFAULT_TOLERANCE: f64 = 1e-13;
+
+/// How to solve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SolverOptions {
+    /// Which solver.
+    pub choice: SolverChoice,
+    /// Relative residual (2-norm, of the system without its zero rows) at which GMRES stops.
+    pub tolerance: f64,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        Self { choice: SolverChoice::Auto, tolerance: DEFAULT_TOLERANCE }
+    }
+}
+
+impl SolverOptions {
+    /// The given solver with the default tolerance.
+    pub fn with(choice: SolverChoice) -> Self {
+        Self { choice, ..Self::default() }
+    }
+}
+
 /// A solution and how it was found.
 #[derive(Clone, Debug, Serialize)]
 pub struct SolveOutcome {
     /// Nodal values.
     #[serde(skip)]
     pub u: Vec<f64>,
-    /// `lu` or `bicgstab`.
+    /// `lu` or `gmres`.
     pub solver: &'static str,
-    /// Iterations (0 for LU).
+    /// Iterations (matrix-vector products; 0 for LU).
     pub iterations: usize,
-    /// Relative residual `||(I - K) u - E||_∞ / ||E||_∞`.
+    /// Relative residual `||(I - K) u - E||_∞ / ||E||_∞` of the whole system.
     pub residual: f64,
-    /// Estimated 1-norm condition number of I - K (LU only).
+    /// Estimated 1-norm condition number of the system without its zero rows (LU only).
     pub condition_estimate: Option<f64>,
     /// Steps of iterative refinement with a compensated residual (LU only).
     pub refinement_steps: usize,
+    /// Unknowns known without solving: zero rows of K (rho = 0, or nothing in view), u = E.
+    pub rows_eliminated: usize,
 }
 
 /// Largest estimated condition number accepted: beyond it fewer than two digits of the solution
 /// could be trusted (κ ε > 1e-2), so the system is reported as singular instead.
 pub const CONDITION_LIMIT: f64 = 1e-2 / f64::EPSILON;
 
-/// Solves `(I - K) u = rhs`. A closed surface with rho = 1 everywhere (every row of K sums to 1,
-/// so I - K annihilates constants) and, for LU, an estimated condition number above
-/// [`CONDITION_LIMIT`] are reported as [`Error::SingularSystem`].
-pub fn solve(k: &CollocationMatrix, rhs: &[f64], choice: SolverChoice) -> Result<SolveOutcome> {
+/// Solves `(I - K) u = rhs`. Zero rows of K are taken out first. A closed surface with rho = 1
+/// everywhere (every row of K sums to 1, so I - K annihilates constants) and, for LU, an
+/// estimated condition number above [`CONDITION_LIMIT`] are reported as
+/// [`Error::SingularSystem`]; GMRES that stagnates or runs out of iterations as
+/// [`Error::NotConverged`], with the residual it reached.
+pub fn solve(k: &CollocationMatrix, rhs: &[f64], options: SolverOptions) -> Result<SolveOutcome> {
     reject_constant_null_vector(k)?;
-    let use_lu = match choice {
+    if !(options.tolerance > 0.0 && options.tolerance < 1.0) {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: options.tolerance.to_string(),
+            reason: "the relative residual must lie in (0, 1)".into(),
+        });
+    }
+    let sys = ReducedSystem::without_zero_rows(k);
+    let reduced_rhs = sys.reduce_rhs(rhs);
+    let use_lu = match options.choice {
         SolverChoice::Lu => true,
         SolverChoice::Iterative => false,
-        SolverChoice::Auto => k.dof() <= LU_LIMIT,
+        SolverChoice::Auto => sys.dim() <= LU_LIMIT,
     };
     let outcome = if use_lu {
-        let lu = LuSolution::new(k, rhs, REFINEMENT_STEPS)?;
+        let lu = LuSolution::of_system(&sys, &reduced_rhs, REFINEMENT_STEPS)?;
+        let u = sys.expand(&lu.u, rhs);
         SolveOutcome {
-            residual: relative_residual(k, &lu.u, rhs),
-            u: lu.u,
+            residual: relative_residual(k, &u, rhs),
+            u,
             solver: "lu",
             iterations: 0,
             condition_estimate: Some(lu.condition),
             refinement_steps: lu.refinement_steps,
+            rows_eliminated: sys.eliminated(),
         }
     } else {
-        let (u, iterations) = solve_bicgstab(k, rhs)?;
+        let g = gmres::gmres(&sys, &reduced_rhs, options.tolerance)?;
+        let u = sys.expand(&g.x, rhs);
         SolveOutcome {
             residual: relative_residual(k, &u, rhs),
             u,
-            solver: "bicgstab",
-            iterations,
+            solver: "gmres",
+            iterations: g.iterations,
             condition_estimate: None,
             refinement_steps: 0,
+            rows_eliminated: sys.eliminated(),
         }
     };
     clear_upper_vector_state();
@@ -128,63 +178,6 @@ fn clear_upper_vector_state() {
     }
 }
 
-/// An LU solution of `(I - K) u = rhs` with its condition estimate.
-#[derive(Clone, Debug)]
-pub struct LuSolution {
-    /// The solution.
-    pub u: Vec<f64>,
-    /// Estimated 1-norm condition number of I - K.
-    pub condition: f64,
-    /// Refinement steps taken.
-    pub refinement_steps: usize,
-}
-
-impl LuSolution {
-    /// LU with partial pivoting, the condition estimate (Hager–Higham), then up to `max_steps`
-    /// steps of iterative refinement whose residual is computed with compensated dot products
-    /// (Ogita–Rump–Oishi Dot2), so that refinement gains digits beyond plain f64 and the forward
-    /// error approaches ε instead of κ ε. Fails with [`Error::SingularSystem`] above
-    /// [`CONDITION_LIMIT`].
-    pub fn new(k: &CollocationMatrix, rhs: &[f64], max_steps: usize) -> Result<Self> {
-        let a = k.system_matrix();
-        let lu = a.partial_piv_lu();
-        let n = rhs.len();
-        let solve = |b: &[f64], transpose: bool| -> Vec<f64> {
-            let b = Col::from_fn(n, |i| b[i]);
-            let x = if transpose { lu.solve_transpose(&b) } else { lu.solve(&b) };
-            (0..n).map(|i| x[i]).collect()
-        };
-        let norm_a =
-            (0..n).map(|j| (0..n).map(|i| a[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-        let condition = norm_a * inverse_norm_1_estimate(n, &solve);
-        if condition.is_nan() || condition > CONDITION_LIMIT {
-            return Err(Error::SingularSystem {
-                condition,
-                reason: format!("LU condition estimate above {CONDITION_LIMIT:.1e}"),
-            });
-        }
-        let mut u = solve(rhs, false);
-        let mut refinement_steps = 0;
-        for _ in 0..max_steps {
-            let r = compensated_residual(k, &u, rhs);
-            let d = solve(&r, false);
-            let (dn, un) = (max_abs(&d), max_abs(&u));
-            u.iter_mut().zip(&d).for_each(|(x, dx)| *x += dx);
-            refinement_steps += 1;
-            if dn <= f64::EPSILON * un {
-                break;
-            }
-        }
-        if u.iter().any(|v| !v.is_finite()) {
-            return Err(Error::SingularSystem {
-                condition: f64::INFINITY,
-                reason: "the LU solution is not finite".into(),
-            });
-        }
-        Ok(Self { u, condition, refinement_steps })
-    }
-}
-
 /// Solves `(I - K) u = rhs` by LU with partial pivoting (no refinement); see [`LuSolution`].
 pub fn solve_lu(k: &CollocationMatrix, rhs: &[f64]) -> Result<Vec<f64>> {
     Ok(LuSolution::new(k, rhs, 0)?.u)
@@ -194,146 +187,9 @@ fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
-/// Estimate of `||A⁻¹||₁` from solves with A and Aᵀ (Hager 1984 with Higham's 1988 safeguards:
-/// at most five sign vectors, and the alternating test vector whose estimate catches the cases
-/// Hager's iteration misses). A lower bound, usually within a factor 3 of the truth.
-pub fn inverse_norm_1_estimate(n: usize, solve: &dyn Fn(&[f64], bool) -> Vec<f64>) -> f64 {
-    if n == 0 {
-        return 0.0;
-    }
-    let mut x = vec![1.0 / n as f64; n];
-    let mut estimate = 0.0f64;
-    let mut last_j = usize::MAX;
-    for _ in 0..5 {
-        let y = solve(&x, false);
-        let norm_y: f64 = y.iter().map(|v| v.abs()).sum();
-        if !norm_y.is_finite() {
-            return f64::INFINITY;
-        }
-        if norm_y <= estimate {
-            break;
-        }
-        estimate = norm_y;
-        let signs: Vec<f64> = y.iter().map(|v| if *v >= 0.0 { 1.0 } else { -1.0 }).collect();
-        let z = solve(&signs, true);
-        let (j, zmax) = z.iter().enumerate().fold((0, 0.0f64), |(bj, bm), (j, v)| {
-            if v.abs() > bm { (j, v.abs()) } else { (bj, bm) }
-        });
-        let ztx: f64 = z.iter().zip(&x).map(|(a, b)| a * b).sum();
-        if zmax <= ztx || j == last_j {
-            break;
-        }
-        last_j = j;
-        x = vec![0.0; n];
-        x[j] = 1.0;
-    }
-    let alternating: Vec<f64> = (0..n)
-        .map(|i| {
-            let s = if i % 2 == 0 { 1.0 } else { -1.0 };
-            s * (1.0 + i as f64 / (n.max(2) - 1) as f64)
-        })
-        .collect();
-    let y = solve(&alternating, false);
-    let alt = 2.0 * y.iter().map(|v| v.abs()).sum::<f64>() / (3.0 * n as f64);
-    estimate.max(alt)
-}
-
-/// `rhs - (I - K) u`, each entry a compensated dot product (error-free TwoSum/TwoProduct
-/// accumulation), i.e. as if computed in twice the working precision and rounded once.
+/// `rhs - (I - K) u` computed with compensated dot products ([`ReducedSystem::compensated_residual`]).
 pub fn compensated_residual(k: &CollocationMatrix, u: &[f64], rhs: &[f64]) -> Vec<f64> {
-    use rayon::prelude::*;
-    (0..u.len())
-        .into_par_iter()
-        .map(|i| {
-            let (mut s, mut c) = two_sum(rhs[i], -u[i]);
-            for (kij, uj) in k.row(i).iter().zip(u) {
-                let p = kij * uj;
-                let pe = kij.mul_add(*uj, -p);
-                let (t, e) = two_sum(s, p);
-                s = t;
-                c += e + pe;
-            }
-            s + c
-        })
-        .collect()
-}
-
-/// Knuth's error-free sum: `a + b = s + e` exactly.
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bb = s - a;
-    (s, (a - (s - bb)) + (b - bb))
-}
-
-/// `I - K` as a faer operator.
-#[derive(Debug)]
-struct SystemOperator<'a>(&'a CollocationMatrix);
-
-impl LinOp<f64> for SystemOperator<'_> {
-    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
-        StackReq::EMPTY
-    }
-    fn nrows(&self) -> usize {
-        self.0.dof()
-    }
-    fn ncols(&self) -> usize {
-        self.0.dof()
-    }
-    fn apply(
-        &self,
-        mut out: MatMut<'_, f64>,
-        rhs: MatRef<'_, f64>,
-        _par: Par,
-        _stack: &mut MemStack,
-    ) {
-        for c in 0..rhs.ncols() {
-            let x: Vec<f64> = (0..rhs.nrows()).map(|i| rhs[(i, c)]).collect();
-            let kx = self.0.apply(&x);
-            for i in 0..x.len() {
-                out[(i, c)] = x[i] - kx[i];
-            }
-        }
-    }
-    fn conj_apply(
-        &self,
-        out: MatMut<'_, f64>,
-        rhs: MatRef<'_, f64>,
-        par: Par,
-        stack: &mut MemStack,
-    ) {
-        self.apply(out, rhs, par, stack)
-    }
-}
-
-/// Most BiCGSTAB iterations before giving up.
-const MAX_ITERATIONS: usize = 1000;
-
-fn solve_bicgstab(k: &CollocationMatrix, rhs: &[f64]) -> Result<(Vec<f64>, usize)> {
-    let n = k.dof();
-    let op = SystemOperator(k);
-    let identity = faer::matrix_free::IdentityPrecond { dim: n };
-    let par = Par::Seq;
-    let mut buffer = MemBuffer::new(bicgstab_scratch(identity, identity, &op, 1, par));
-    let stack = MemStack::new(&mut buffer);
-    let b = Mat::from_fn(n, 1, |i, _| rhs[i]);
-    let mut x = Mat::<f64>::zeros(n, 1);
-    // faer 0.24's bicgstab forms r = b - A x only for `MaybeNonZero` and leaves r uninitialised for
-    // `Zero`, so the zero start vector is passed as "maybe non-zero".
-    let params = BicgParams {
-        initial_guess: InitialGuessStatus::MaybeNonZero,
-        abs_tolerance: 0.0,
-        rel_tolerance: 1e-14,
-        max_iters: MAX_ITERATIONS,
-        ..Default::default()
-    };
-    let result =
-        bicgstab(x.as_mut(), identity, identity, &op, b.as_ref(), params, |_| {}, par, stack);
-    match result {
-        Ok(info) => Ok(((0..n).map(|i| x[(i, 0)]).collect(), info.iter_count)),
-        Err(faer::matrix_free::bicgstab::BicgError::NoConvergence { rel_residual, .. }) => {
-            Err(Error::NotConverged { residual: rel_residual, iterations: MAX_ITERATIONS })
-        }
-    }
+    ReducedSystem::full(k).compensated_residual(u, rhs)
 }
 
 /// Relative residual `||(I - K) u - rhs||_∞ / ||rhs||_∞`.
@@ -347,6 +203,7 @@ pub fn relative_residual(k: &CollocationMatrix, u: &[f64], rhs: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::prelude::*;
 
     fn radiosity_like(n: usize) -> CollocationMatrix {
         let data: Vec<f64> = (0..n * n)
@@ -362,24 +219,24 @@ mod tests {
     }
 
     #[test]
-    fn lu_and_bicgstab_agree_and_have_small_residuals() {
+    fn lu_and_gmres_agree_and_have_small_residuals() {
         for n in [1, 2, 3, 17, 64, 255, 256, 257] {
             let k = radiosity_like(n);
             let norm_k =
                 (0..n).map(|i| k.row(i).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
             assert!(norm_k < 1.0);
             // ||(I - K)^-1||_inf <= 1/(1 - ||K||): LU's backward error is a modest multiple of
-            // n eps, so its residual stays below 16 n eps / (1 - ||K||); BiCGSTAB stops at
-            // ||r||_2 <= 1e-14 ||b||_2, so ||r||_inf <= 1e-14 sqrt(n) ||b||_inf.
+            // n eps, so its residual stays below 16 n eps / (1 - ||K||); GMRES stops at
+            // ||r||_2 <= tol ||b||_2, so ||r||_inf <= tol sqrt(n) ||b||_inf.
             let lu_bound = 16.0 * n as f64 * f64::EPSILON / (1.0 - norm_k);
-            let it_bound = 1e-14 * (n as f64).sqrt() + lu_bound;
+            let it_bound = DEFAULT_TOLERANCE * (n as f64).sqrt() + lu_bound;
             let rhs: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
-            let lu = solve(&k, &rhs, SolverChoice::Lu).unwrap();
-            let it = solve(&k, &rhs, SolverChoice::Iterative).unwrap();
+            let lu = solve(&k, &rhs, SolverOptions::with(SolverChoice::Lu)).unwrap();
+            let it = solve(&k, &rhs, SolverOptions::with(SolverChoice::Iterative)).unwrap();
             assert!(lu.residual < lu_bound, "n {n}: LU residual {:e} > {lu_bound:e}", lu.residual);
             assert!(
                 it.residual < it_bound,
-                "n {n}: BiCGSTAB residual {:e} > {it_bound:e}",
+                "n {n}: GMRES residual {:e} > {it_bound:e}",
                 it.residual
             );
             let scale = lu.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -421,7 +278,7 @@ mod tests {
     fn a_closed_enclosure_with_rho_1_is_refused_by_both_solvers() {
         let k = enclosure(30, 1.0);
         for choice in [SolverChoice::Lu, SolverChoice::Iterative, SolverChoice::Auto] {
-            match solve(&k, &vec![1.0; 30], choice) {
+            match solve(&k, &vec![1.0; 30], SolverOptions::with(choice)) {
                 Err(Error::SingularSystem { condition, .. }) => assert!(condition.is_infinite()),
                 other => panic!("{choice:?}: expected a singular system, got {other:?}"),
             }
@@ -466,5 +323,60 @@ mod tests {
         let r = compensated_residual(&k, &u, &[1.0, 0.0]);
         // Row 0: 1 - (1e16 - (1e16 + 2)) = 3.
         assert_eq!(r[0], 3.0);
+    }
+
+    /// A lamp that reflects nothing: E lives only on zero rows of K. BiCGSTAB's shadow residual
+    /// (E) is then orthogonal to every later residual; GMRES on the reduced system must agree
+    /// with LU on the full one.
+    #[test]
+    fn a_black_emitter_is_taken_out_and_gmres_agrees_with_lu() {
+        let n = 40;
+        let mut k = radiosity_like(n);
+        let lamp = 5..9;
+        let mut data = k.as_slice().to_vec();
+        for i in lamp.clone() {
+            data[i * n..(i + 1) * n].fill(0.0);
+        }
+        k = CollocationMatrix::from_rows(n, data);
+        let rhs: Vec<f64> = (0..n).map(|i| if lamp.contains(&i) { 1.0 } else { 0.0 }).collect();
+        let full_lu = LuSolution::new(&k, &rhs, REFINEMENT_STEPS).unwrap().u;
+        let scale = max_abs(&full_lu);
+        for choice in [SolverChoice::Lu, SolverChoice::Iterative] {
+            let s = solve(&k, &rhs, SolverOptions::with(choice)).unwrap();
+            assert_eq!(s.rows_eliminated, lamp.len(), "{choice:?}");
+            for i in lamp.clone() {
+                assert_eq!(s.u[i], 1.0, "{choice:?}: u = E on the lamp");
+            }
+            let diff = s.u.iter().zip(&full_lu).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(diff <= 1e-12 * scale, "{choice:?}: differs from LU by {diff:e}");
+            if choice == SolverChoice::Iterative {
+                assert!(s.iterations < 30, "{} iterations", s.iterations);
+            }
+        }
+    }
+
+    #[test]
+    fn gmres_stops_on_stagnation_and_says_how_far_it_got() {
+        let k = radiosity_like(50);
+        let rhs: Vec<f64> = (0..50).map(|i| 1.0 + i as f64).collect();
+        // Far below rounding: no cycle can halve a residual already at the rounding level.
+        let options = SolverOptions { choice: SolverChoice::Iterative, tolerance: 1e-30 };
+        match solve(&k, &rhs, options) {
+            Err(Error::NotConverged { reason, residual, iterations }) => {
+                assert_eq!(reason, crate::error::IterationFailure::Stagnation);
+                assert!(residual < 1e-14, "residual reached {residual:e}");
+                assert!(iterations <= 3 * RESTART, "stopped only after {iterations} iterations");
+            }
+            other => panic!("expected stagnation, got {other:?}"),
+        }
+        // And the tolerance asked for is the one met.
+        for tolerance in [1e-4, 1e-8, 1e-12] {
+            let s = solve(&k, &rhs, SolverOptions { choice: SolverChoice::Iterative, tolerance })
+                .unwrap();
+            let r = compensated_residual(&k, &s.u, &rhs);
+            let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            assert!(norm(&r) <= tolerance * norm(&rhs), "tolerance {tolerance:e}");
+            assert!(norm(&r) > 1e-6 * tolerance * norm(&rhs), "{tolerance:e}: solved far past it");
+        }
     }
 }

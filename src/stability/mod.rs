@@ -83,7 +83,10 @@ pub fn run_stiff(device: StudyDevice) -> Result<StiffResult> {
     let notes = vec![
         "u* = 1 + x/2 + y/4 + z/8 at the nodes, E = (I - K) u* with compensated dot products; \
          error_lu: plain LU; error_refined: the solver (condition estimate, refinement with \
-         compensated residuals, singular systems refused)"
+         compensated residuals, singular systems refused); GMRES: the iterative solver at its \
+         default tolerance (relative residual 1e-13), vs LU its difference from the refined LU \
+         solution, its: its matrix-vector products; 'black top': the top face has rho = 0 (a \
+         lamp), its rows taken out as u = E"
             .to_string(),
     ];
     Ok(StiffResult { study: "stiff", rows: stiff::run(backend)?, notes })

@@ -3,9 +3,11 @@
 //!
 //! For each scene and rho the study assembles K, takes a known discrete solution u* (an affine
 //! function of position at the nodes), forms E = (I − K) u* with compensated dot products, and
-//! solves: plain LU (the "before") and [`crate::solve::solve`] (singularity checks, condition
-//! estimate, refinement with compensated residuals). K scales with rho when every face has the
-//! same rho, so each scene is assembled once.
+//! solves: plain LU (the "before"), [`crate::solve::solve`] with LU (singularity checks,
+//! condition estimate, refinement with compensated residuals) and with GMRES, checked against LU.
+//! Each row of K scales with the rho of its node's face, so each scene is assembled once, with
+//! rho = 1, and scaled. Scenes with a black lamp (a face with rho = 0 among faces with rho → 1)
+//! check that zero rows are taken out and that GMRES survives them.
 
 use glam::DVec3;
 use serde::Serialize;
@@ -16,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::mesh::{Mesh, MeshKind};
 use crate::pipeline::{Backend, assemble_on};
 use crate::scene::{Face, Scene, baffled_box, cube};
-use crate::solve::{LuSolution, SolverChoice, compensated_residual, solve};
+use crate::solve::{LuSolution, SolverChoice, SolverOptions, compensated_residual, solve};
 use crate::visibility::PairPlanner;
 
 /// The reflectivities of the study.
@@ -41,6 +43,14 @@ pub struct StiffRow {
     pub error_refined: Option<f64>,
     /// Refinement steps taken.
     pub refinement_steps: Option<usize>,
+    /// `max |u − u*| / max |u*|` of GMRES (default tolerance).
+    pub error_gmres: Option<f64>,
+    /// `max |u_GMRES − u_LU| / max |u_LU|`.
+    pub gmres_vs_lu: Option<f64>,
+    /// GMRES iterations (matrix-vector products).
+    pub gmres_iterations: Option<usize>,
+    /// Unknowns taken out as u = E (rows of the black face).
+    pub rows_eliminated: usize,
     /// The bound claimed for the refined error: 4 ε, plus the effect of rounding E to f64 once,
     /// 3 κ ε ||E|| / ||u*|| (3: the condition estimate is a lower bound, usually within 3).
     pub bound: Option<f64>,
@@ -65,17 +75,29 @@ fn with_rho(mut scene: Scene, rho: f64) -> Scene {
     scene
 }
 
+/// Row scales: the row of a node on face `black` gets 0, every other row `rho`.
+fn row_rhos(disc: &Discretization, black: Option<usize>, rho: f64) -> Vec<f64> {
+    disc.nodes.iter().map(|n| if Some(n.face) == black { 0.0 } else { rho }).collect()
+}
+
 /// Runs the study on `backend` (the assembly; the solves run on the CPU).
 pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
     let scenes = [
-        (slit_cube(0.1)?, Method::Centroid, 2),
-        (slit_cube(0.1)?, Method::Linear { alpha: 1.0 / 6.0 }, 1),
-        (cube()?, Method::Centroid, 2),
-        (baffled_box()?, Method::Centroid, 2),
+        (slit_cube(0.1)?, Method::Centroid, 2, None),
+        (slit_cube(0.1)?, Method::Linear { alpha: 1.0 / 6.0 }, 1, None),
+        (cube()?, Method::Centroid, 2, None),
+        (baffled_box()?, Method::Centroid, 2, None),
+        (cube()?, Method::Centroid, 2, Some("top")),
+        (cube()?, Method::Linear { alpha: 1.0 / 6.0 }, 1, Some("top")),
     ];
     let mut rows = Vec::new();
-    for (scene, method, refine) in scenes {
+    for (scene, method, refine, black) in scenes {
         let scene = with_rho(scene, 1.0);
+        let black = black.map(|name| scene.face_index(name).expect("the black face exists"));
+        let case = match black {
+            Some(f) => format!("{}, black {}", scene.name, scene.faces[f].name),
+            None => scene.name.clone(),
+        };
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine)?;
         let disc = Discretization::new(&scene, &mesh, method)?;
         let planner = PairPlanner::new(&scene);
@@ -83,9 +105,16 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
         let (k1, _) = assemble_on(backend, &scene, &mesh, &disc, &planner, &options, &|_| {})?;
         let exact: Vec<f64> =
             disc.nodes.iter().map(|n| 1.0 + n.position.dot(DVec3::new(0.5, 0.25, 0.125))).collect();
+        let dof = disc.dof();
         for rho in RHOS {
-            let dof = disc.dof();
-            let data = k1.matrix.as_slice().iter().map(|v| v * rho).collect();
+            let scales = row_rhos(&disc, black, rho);
+            let data = k1
+                .matrix
+                .as_slice()
+                .chunks_exact(dof)
+                .zip(&scales)
+                .flat_map(|(row, r)| row.iter().map(move |v| v * r))
+                .collect();
             let k = CollocationMatrix::from_rows(dof, data);
             let zero = vec![0.0; dof];
             let rhs: Vec<f64> =
@@ -93,7 +122,7 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
             let error_of = |u: &[f64]| relative_difference(u, &exact);
             let error_lu = LuSolution::new(&k, &rhs, 0).ok().map(|s| error_of(&s.u));
             let mut row = StiffRow {
-                case: scene.name.clone(),
+                case: case.clone(),
                 method: method.name(),
                 rho,
                 dof,
@@ -101,17 +130,33 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
                 error_lu,
                 error_refined: None,
                 refinement_steps: None,
+                error_gmres: None,
+                gmres_vs_lu: None,
+                gmres_iterations: None,
+                rows_eliminated: 0,
                 bound: None,
                 status: "solved".into(),
             };
-            match solve(&k, &rhs, SolverChoice::Lu) {
+            match solve(&k, &rhs, SolverOptions::with(SolverChoice::Lu)) {
                 Ok(s) => {
                     let kappa = s.condition_estimate.unwrap_or(f64::INFINITY);
                     row.condition_estimate = Some(kappa);
                     row.error_refined = Some(error_of(&s.u));
                     row.refinement_steps = Some(s.refinement_steps);
+                    row.rows_eliminated = s.rows_eliminated;
                     let ratio = max_abs(&rhs) / max_abs(&exact);
                     row.bound = Some(4.0 * f64::EPSILON + 3.0 * kappa * f64::EPSILON * ratio);
+                    match solve(&k, &rhs, SolverOptions::with(SolverChoice::Iterative)) {
+                        Ok(g) => {
+                            row.error_gmres = Some(error_of(&g.u));
+                            row.gmres_vs_lu = Some(relative_difference(&g.u, &s.u));
+                            row.gmres_iterations = Some(g.iterations);
+                        }
+                        Err(e @ Error::NotConverged { .. }) => {
+                            row.status = format!("LU solved; {e}")
+                        }
+                        Err(e) => return Err(e),
+                    }
                 }
                 Err(Error::SingularSystem { condition, reason }) => {
                     row.condition_estimate = condition.is_finite().then_some(condition);

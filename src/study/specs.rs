@@ -4,6 +4,7 @@ use crate::assembly::Quadrature;
 use crate::discretization::Method;
 use crate::gpu::Precision;
 use crate::kernels::graded::DEFAULT_NEAR;
+use crate::mesh::S5Diagonals;
 use crate::pipeline::MeshChoice;
 use crate::problems::TrueSolution;
 use crate::quadrature::ImtRule;
@@ -140,7 +141,7 @@ const LINEAR: Method = Method::Linear { alpha: Method::PAPER_ALPHA };
 const FOUR: BuiltinScene = BuiltinScene::FourPiece;
 const FIVE: BuiltinScene = BuiltinScene::FivePiece;
 const UNIFORM: MeshChoice = MeshChoice::Uniform;
-const DISCONTINUITY: MeshChoice = MeshChoice::Discontinuity;
+const DISCONTINUITY: MeshChoice = MeshChoice::Discontinuity(S5Diagonals::Paper);
 
 /// Uniform and discontinuity meshes of one surface.
 fn both_meshes(scene: BuiltinScene, method: Method, solution: TrueSolution) -> Vec<Series> {
@@ -192,7 +193,12 @@ fn table_3_3() -> StudySpec {
     StudySpec {
         id: "table-3.3",
         title: "Table 3.3: centroid method errors for u of (3.4) with beta = 0.5, 5-piece surface",
-        series: both_meshes(FIVE, Method::Centroid, TrueSolution::Edge { beta: 0.5 }),
+        series: {
+            let mut s = both_meshes(FIVE, Method::Centroid, TrueSolution::Edge { beta: 0.5 });
+            s[0].paper = &[(10, 0.286), (40, 0.174), (160, 0.124), (640, 0.0879), (2560, 0.0622)];
+            s[1].paper = &[(30, 0.0749), (120, 0.0255), (480, 0.0177), (1920, 0.0125)];
+            s
+        },
         default_max_n: 2560,
         kind: Kind::Table,
         surface_lattice: None,

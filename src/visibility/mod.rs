@@ -43,6 +43,8 @@ pub enum SkipReason {
     FacingAway,
     /// Occluders hide the whole element.
     Hidden,
+    /// The node's face reflects nothing (rho = 0): its row of K is zero, u = E there.
+    NotReflecting,
 }
 
 /// What a node sees of one face.

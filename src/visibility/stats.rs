@@ -17,6 +17,8 @@ pub struct PairStats {
     pub facing_away: u64,
     /// Fully hidden by occluders.
     pub hidden: u64,
+    /// The node reflects nothing (rho = 0): not evaluated.
+    pub not_reflecting: u64,
     /// Fully visible.
     pub full: u64,
     /// Partly visible (clipped or partly shadowed): evaluated over exact visible pieces.
@@ -24,9 +26,16 @@ pub struct PairStats {
 }
 
 impl PairStats {
+    /// The pairs of one node that reflects nothing (rho = 0): a zero row, nothing evaluated.
+    pub fn not_reflecting_row(elements: usize) -> Self {
+        let mut s = Self::default();
+        s.record(&Visibility::Skip(SkipReason::NotReflecting), elements as u64);
+        s
+    }
+
     /// Pairs that contribute nothing.
     pub fn skipped(&self) -> u64 {
-        self.same_plane + self.facing_away + self.hidden
+        self.same_plane + self.facing_away + self.hidden + self.not_reflecting
     }
 
     /// Records `count` pairs of one class.
@@ -36,6 +45,7 @@ impl PairStats {
             Visibility::Skip(SkipReason::SamePlane) => self.same_plane += count,
             Visibility::Skip(SkipReason::FacingAway) => self.facing_away += count,
             Visibility::Skip(SkipReason::Hidden) => self.hidden += count,
+            Visibility::Skip(SkipReason::NotReflecting) => self.not_reflecting += count,
             Visibility::Full => self.full += count,
             Visibility::Partial(_) => self.partial += count,
         }
@@ -48,6 +58,7 @@ impl AddAssign for PairStats {
         self.same_plane += o.same_plane;
         self.facing_away += o.facing_away;
         self.hidden += o.hidden;
+        self.not_reflecting += o.not_reflecting;
         self.full += o.full;
         self.partial += o.partial;
     }
