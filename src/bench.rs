@@ -104,7 +104,7 @@ pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<B
         let gpu_assembler = match backend {
             Backend::Cpu => None,
             Backend::Gpu(precision) => {
-                let ctx = gpu::shared_context()?;
+                let ctx = gpu::context_for(precision)?;
                 report.device = Some(format!(
                     "{} ({}, {})",
                     ctx.adapter.name, ctx.adapter.backend, ctx.adapter.device_type

@@ -275,9 +275,10 @@ struct OutputArgs {
 struct BenchArgs {
     #[command(flatten)]
     geometry: GeometryArgs,
-    /// Backends to run, comma separated
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu,gpu")]
-    backends: Vec<BackendArg>,
+    /// Backends to run, comma separated [default: cpu, and gpu where an adapter can run the
+    /// precision asked for]
+    #[arg(long, value_enum, value_delimiter = ',')]
+    backends: Option<Vec<BackendArg>>,
     /// Precision of the GPU kernels
     #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
     precision: PrecisionArg,
@@ -659,8 +660,21 @@ fn print_run(r: &RunReport) {
 fn run_bench(args: &BenchArgs) -> Result<()> {
     let mut config = args.geometry.config()?;
     config.progress = false;
+    let named = match &args.backends {
+        Some(named) => named.clone(),
+        None => {
+            match radiosity::gpu::context_for(backend(BackendArg::Gpu, args.precision).precision())
+            {
+                Ok(_) => vec![BackendArg::Cpu, BackendArg::Gpu],
+                Err(e) => {
+                    eprintln!("note: the GPU is left out: {e}");
+                    vec![BackendArg::Cpu]
+                }
+            }
+        }
+    };
     let mut backends: Vec<Backend> = Vec::new();
-    for &b in &args.backends {
+    for &b in &named {
         let b = backend(b, args.precision);
         if backends.iter().any(|x| x.name() == b.name()) {
             return Err(Error::InvalidParameter {
@@ -805,11 +819,11 @@ struct GpuCheck {
 }
 
 fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Result<()> {
-    let ctx = radiosity::gpu::shared_context()?;
     let precision = match precision {
         PrecisionArg::F64 => Precision::F64,
         PrecisionArg::F32 => Precision::F32,
     };
+    let ctx = radiosity::gpu::context_for(precision)?;
     let functions = radiosity::gpu::math::measure(ctx, precision, samples)?;
     let out = GpuCheck { adapter: ctx.adapter.clone(), functions };
     if let Some(target) = json {

@@ -95,7 +95,7 @@ pub fn assemble_on(
             })
         }
         Backend::Gpu(precision) => {
-            let ctx = gpu::shared_context()?;
+            let ctx = gpu::context_for(precision)?;
             let assembler = GpuAssembler::new(ctx, precision, disc.method)?;
             let mut a = assembler.assemble(scene, mesh, disc, planner, options, progress)?;
             assembly::recompute_thin_columns(&mut a, disc, planner, options);

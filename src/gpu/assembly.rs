@@ -260,8 +260,9 @@ impl<'a> GpuAssembler<'a> {
     pub fn new(ctx: &'a GpuContext, precision: Precision, method: Method) -> Result<Self> {
         if precision == Precision::F64 && !ctx.adapter.f64 {
             return Err(Error::Gpu(format!(
-                "adapter '{}' has no SHADER_F64; use --precision f32 or another adapter",
-                ctx.adapter.name
+                "adapter '{}' has no SHADER_F64; use --precision f32, or {}",
+                ctx.adapter.name,
+                super::INSTALL_HINT
             )));
         }
         let source = shaders::collocation(

@@ -29,3 +29,18 @@ pub fn shared_context() -> Result<&'static GpuContext> {
         .as_ref()
         .map_err(|e| Error::Gpu(e.trim_start_matches("GPU: ").to_string()))
 }
+
+/// The shared context when it can run kernels of `precision`: an adapter without `SHADER_F64`
+/// does not count as available for f64 work (Mesa's GL llvmpipe, for one, has none), and the
+/// error says how to get one that has it.
+pub fn context_for(precision: Precision) -> Result<&'static GpuContext> {
+    let ctx = shared_context()?;
+    if precision == Precision::F64 && !ctx.adapter.f64 {
+        return Err(Error::Gpu(format!(
+            "adapter '{}' has no SHADER_F64 (double precision in shaders); use --precision f32, \
+             or {INSTALL_HINT}",
+            ctx.adapter.name
+        )));
+    }
+    Ok(ctx)
+}

@@ -44,16 +44,19 @@ fn backends(device: StudyDevice, notes: &mut Vec<String>) -> Result<Vec<Backend>
     Ok(match device {
         StudyDevice::Cpu => vec![Backend::Cpu],
         StudyDevice::Gpu(_) => {
-            crate::gpu::shared_context()?;
+            crate::gpu::context_for(Precision::F64)?;
             vec![Backend::Cpu, Backend::Gpu(Precision::F64), Backend::Gpu(Precision::F32)]
         }
-        StudyDevice::Auto => match crate::gpu::shared_context() {
-            Ok(_) => vec![Backend::Cpu, Backend::Gpu(Precision::F64), Backend::Gpu(Precision::F32)],
-            Err(e) => {
-                notes.push(format!("GPU rows left out: {e}"));
-                vec![Backend::Cpu]
+        StudyDevice::Auto => {
+            let mut backends = vec![Backend::Cpu];
+            for precision in [Precision::F64, Precision::F32] {
+                match crate::gpu::context_for(precision) {
+                    Ok(_) => backends.push(Backend::Gpu(precision)),
+                    Err(e) => notes.push(format!("GPU {} rows left out: {e}", precision.name())),
+                }
             }
-        },
+            backends
+        }
     })
 }
 

@@ -139,7 +139,7 @@ fn backend_for(series: &Series, device: StudyDevice) -> std::result::Result<Back
         (Placement::Selected | Placement::Cpu, _) => Ok(Backend::Cpu),
         (Placement::Gpu(_), StudyDevice::Cpu) => Err("left out: --backend cpu".into()),
         (Placement::Gpu(p), StudyDevice::Gpu(_)) => Ok(Backend::Gpu(p)),
-        (Placement::Gpu(p), StudyDevice::Auto) => match gpu::shared_context() {
+        (Placement::Gpu(p), StudyDevice::Auto) => match gpu::context_for(p) {
             Ok(_) => Ok(Backend::Gpu(p)),
             Err(e) => Err(format!("left out: {e}")),
         },
