@@ -354,11 +354,13 @@ fn write_outputs(run: &pipeline::Run, out: &OutputArgs) -> Result<()> {
                 reason: "expected WIDTHxHEIGHT in pixels".into(),
             })?;
         let mut camera = report::Camera::overview(&field, report::DEFAULT_VIEW);
+        // The user gives points in their coordinates; the scene is drawn in its local frame.
+        let origin = run.scene.origin;
         if let Some(t) = &out.target {
-            camera.target = parse_point("target", t)?;
+            camera.target = parse_point("target", t)? - origin;
         }
         if let Some(e) = &out.eye {
-            camera.eye = parse_point("eye", e)?;
+            camera.eye = parse_point("eye", e)? - origin;
         }
         let r = &run.report;
         let title = format!("{}: u, {} method, n = {}", r.surface, r.method, r.n);

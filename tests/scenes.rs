@@ -3,9 +3,11 @@
 
 use std::path::PathBuf;
 
+use serde_json::Value;
+
 mod common;
 
-use common::{json, radiosity};
+use common::{json, radiosity, translated_scene};
 
 fn temp_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("radiosity-cli-{tag}-{}", std::process::id()));
@@ -252,4 +254,79 @@ fn a_black_lamp_solves_iteratively_as_with_lu() {
     let scale = lu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let diff = lu.iter().zip(&gmres).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(diff <= 1e-12 * scale, "GMRES differs from LU by {diff:e} (scale {scale})");
+}
+
+/// Survey coordinates: the scene moved rigidly far from the origin gives the same u, to the
+/// rounding of the moved input itself (1000 ε |offset| / size), for both methods.
+#[test]
+fn scenes_far_from_the_origin_give_the_same_solution() {
+    let dir = temp_dir("far-from-origin");
+    let eps = f64::EPSILON;
+    let nodal = |scene: &std::path::Path, method: &str, refine: &str| -> (Vec<f64>, Value) {
+        let csv = dir.join("u.csv");
+        let v = json(&[
+            "solve",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--method",
+            method,
+            "--refine",
+            refine,
+            "--csv",
+            csv.to_str().unwrap(),
+            "--json",
+            "-",
+        ]);
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let u = text.lines().skip(1).map(|l| l.rsplit(',').next().unwrap().parse().unwrap());
+        (u.collect(), v)
+    };
+    let cases = [
+        ("examples/occluded-box.toml", 2.0 * 3f64.sqrt(), "centroid", "2"),
+        ("examples/occluded-box.toml", 2.0 * 3f64.sqrt(), "linear", "1"),
+        ("examples/furnished-room.toml", 31.25f64.sqrt(), "centroid", "1"),
+    ];
+    for (file, size, method, refine) in cases {
+        let (base, _) = nodal(&translated_scene(file, [0.0; 3], &dir), method, refine);
+        let scale = base.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for offset in [[1e6, 1e6, 1e6], [5e5, 4.2e6, 100.0], [-3e7, 0.0, 2e3]] {
+            let (u, _) = nodal(&translated_scene(file, offset, &dir), method, refine);
+            let change = base.iter().zip(&u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            let bound = 1000.0 * eps * offset.iter().fold(0.0f64, |m, o| m.max(o.abs())) / size;
+            assert!(
+                change <= bound * scale,
+                "{file} {method} at {offset:?}: u changed by {:.2e} (bound {bound:.1e})",
+                change / scale
+            );
+        }
+    }
+    // Coordinates that stay exact when moved (multiples of 1/4, offsets of 2^10 and more): the
+    // same scene, computed in another frame. Node positions round differently there, so a pair
+    // on an exact tie (an element edge on a shadow line) may fall on the other side of it; u
+    // stays the same to rounding.
+    let box_with_plate = "name = \"plate-box\"\n[defaults]\nrho = 0.5\n\
+        [[faces]]\nname = \"bottom\"\nvertices = [[1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]]\n\
+        [[faces]]\nname = \"top\"\nvertices = [[0, 1, 1], [1, 1, 1], [1, 0, 1], [0, 0, 1]]\nemission = 1.0\n\
+        [[faces]]\nname = \"front\"\nvertices = [[0, 0, 1], [1, 0, 1], [1, 0, 0], [0, 0, 0]]\n\
+        [[faces]]\nname = \"back\"\nvertices = [[1, 1, 0], [1, 1, 1], [0, 1, 1], [0, 1, 0]]\n\
+        [[faces]]\nname = \"left\"\nvertices = [[0, 1, 0], [0, 1, 1], [0, 0, 1], [0, 0, 0]]\n\
+        [[faces]]\nname = \"right\"\nvertices = [[1, 0, 1], [1, 1, 1], [1, 1, 0], [1, 0, 0]]\n\
+        [[faces]]\nname = \"plate\"\nvertices = [[0.25, 0.25, 0.5], [0.75, 0.25, 0.5], [0.75, 0.75, 0.5], [0.25, 0.75, 0.5]]\nradiates = \"both\"\n";
+    std::fs::write(dir.join("plate-box.toml"), box_with_plate).unwrap();
+    let original = dir.join("plate-box.toml");
+    let (base, v0) = nodal(&original, "centroid", "2");
+    let scale = base.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for offset in [[1048576.0, -2097152.0, 1024.0], [8388608.0, 0.0, -4194304.0]] {
+        // An absolute path: `translated_scene` joins it to the crate's root, which keeps it.
+        let moved = translated_scene(original.to_str().unwrap(), offset, &dir);
+        let (u, v) = nodal(&moved, "centroid", "2");
+        let class = |v: &Value, key: &str| v["pairs"][key].as_i64().unwrap();
+        for key in ["same_plane", "facing_away", "hidden", "total"] {
+            assert_eq!(class(&v, key), class(&v0, key), "{key} at {offset:?}");
+        }
+        let moved_classes = (class(&v, "full") - class(&v0, "full")).abs();
+        assert!(moved_classes <= 8, "{moved_classes} pairs changed between full and partial");
+        let change = base.iter().zip(&u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(change <= 1e-13 * scale, "plate box at {offset:?}: {:.2e}", change / scale);
+    }
 }

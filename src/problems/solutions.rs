@@ -151,16 +151,17 @@ impl TrueSolution {
     /// u on each face of `scene`, which must be one of the paper's surfaces for (3.3) and (3.4).
     pub fn on_faces(&self, scene: &Scene, p: &SurfaceParameters) -> Result<Vec<FaceFunction>> {
         if let Self::X2Y2 = self {
+            // x² + y² in the user's coordinates, x = x' + o_x in the scene's local ones.
             let a = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]];
-            return Ok(scene
-                .faces
-                .iter()
-                .map(|_| FaceFunction::Quadratic { a, b: DVec3::ZERO, c: 0.0 })
-                .collect());
+            let o = scene.origin;
+            let (b, c) = (DVec3::new(2.0 * o.x, 2.0 * o.y, 0.0), o.x * o.x + o.y * o.y);
+            return Ok(scene.faces.iter().map(|_| FaceFunction::Quadratic { a, b, c }).collect());
         }
+        // (3.3) and (3.4) are written in the paper's coordinates, where its surfaces stay.
         let paper =
             scene.faces.iter().all(|f| matches!(f.name.as_str(), "S1" | "S2" | "S3" | "S4" | "S5"))
-                && scene.face_index("S1").is_some();
+                && scene.face_index("S1").is_some()
+                && scene.origin == DVec3::ZERO;
         if !paper {
             return Err(Error::SolutionNeedsPaperSurface {
                 solution: self.name().into(),

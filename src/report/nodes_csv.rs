@@ -5,13 +5,15 @@ use std::path::Path;
 use super::solution::SolutionField;
 use crate::error::Result;
 
-/// Writes `node, element, face, x, y, z, rho, E, u` for every node to `path`.
+/// Writes `node, element, face, x, y, z, rho, E, u` for every node to `path` (positions in the
+/// user's coordinates).
 pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
     let mut out = csv::Writer::from_path(path).map_err(csv_error)?;
     out.write_record(["node", "element", "face", "x", "y", "z", "rho", "E", "u"])
         .map_err(csv_error)?;
     for (i, node) in field.disc.nodes.iter().enumerate() {
-        let p = node.position;
+        // In the user's coordinates.
+        let p = node.position + field.scene.origin;
         out.write_record([
             i.to_string(),
             node.element.to_string(),

@@ -16,6 +16,8 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
     let mut point_u = String::new();
     for (j, e) in elements.iter().enumerate() {
         for (v, u) in e.vertices.iter().zip(field.vertex_values(j)) {
+            // In the user's coordinates.
+            let v = *v + field.scene.origin;
             let _ = writeln!(points, "{:e} {:e} {:e}", v.x, v.y, v.z);
             let _ = writeln!(point_u, "{u:e}");
         }

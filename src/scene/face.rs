@@ -123,15 +123,29 @@ impl Face {
                 return Err(Error::NonPlanarFace { face: name, vertex: k, distance, tolerance });
             }
         }
-        let first_edge = (1..n)
-            .map(|k| vertices[k] - vertices[0])
-            .find(|d| d.length() > 1e-12 * size)
-            .ok_or(Error::DegenerateFace { face: name.clone(), area, size })?;
-        let frame = PlaneFrame::new(vertices[0], normal, first_edge);
+        let frame = plane_frame(&vertices, normal, size).ok_or(Error::DegenerateFace {
+            face: name.clone(),
+            area,
+            size,
+        })?;
         let face =
             Self { name, vertices, frame, rho, emission: 0.0, diagonal: Diagonal::default() };
         face.check_simple()?;
         Ok(face)
+    }
+
+    /// The same face moved by `-offset`, its frame computed anew from the moved vertices. With an
+    /// offset chosen as in [`crate::scene::Scene::new`] the subtraction is exact, so the face is
+    /// the same one, described in coordinates whose rounding is relative to the scene's size.
+    pub(crate) fn moved_by(&self, offset: DVec3) -> Self {
+        let vertices: Vec<DVec3> = self.vertices.iter().map(|v| *v - offset).collect();
+        let centre = vertices.iter().sum::<DVec3>() / vertices.len() as f64;
+        let n = vertices.len();
+        let twice_area: DVec3 =
+            (0..n).map(|k| (vertices[k] - centre).cross(vertices[(k + 1) % n] - centre)).sum();
+        let frame = plane_frame(&vertices, twice_area.normalize(), self.size())
+            .expect("a validated face keeps its first edge when moved");
+        Self { vertices, frame, ..self.clone() }
     }
 
     /// Sets the emissivity (finite, non-negative).
@@ -226,6 +240,15 @@ impl Face {
         }
         Ok(())
     }
+}
+
+/// The frame of a face's plane: origin at vertex 0, first axis along the first edge that is not
+/// negligibly short.
+fn plane_frame(vertices: &[DVec3], normal: DVec3, size: f64) -> Option<PlaneFrame> {
+    let first_edge = (1..vertices.len())
+        .map(|k| vertices[k] - vertices[0])
+        .find(|d| d.length() > 1e-12 * size)?;
+    Some(PlaneFrame::new(vertices[0], normal, first_edge))
 }
 
 fn diameter(points: &[DVec3]) -> f64 {

@@ -24,8 +24,11 @@ use crate::geometry::{HalfPlane, clip_convex, signed_area, triangulate};
 pub struct Scene {
     /// Name, for reports.
     pub name: String,
-    /// The faces.
+    /// The faces, in the scene's local frame: the user's coordinates minus [`Scene::origin`].
     pub faces: Vec<Face>,
+    /// Where the local frame's origin lies in the user's coordinates (zero unless the scene lies
+    /// far from the origin for its size; [`local_origin`]).
+    pub origin: DVec3,
 }
 
 /// Largest ratio of the scene's largest coordinate to its smallest face: beyond it, the kernels'
@@ -69,7 +72,13 @@ impl Scene {
                 });
             }
         }
-        let scene = Self { name, faces };
+        let origin = local_origin(&faces);
+        let faces = if origin == DVec3::ZERO {
+            faces
+        } else {
+            faces.iter().map(|f| f.moved_by(origin)).collect()
+        };
+        let scene = Self { name, faces, origin };
         scene.check_no_overlap()?;
         Ok(scene)
     }
@@ -151,6 +160,37 @@ fn overlap_area(a: &[DVec2], b: &[DVec2]) -> f64 {
     area
 }
 
+/// A scene farther than this many of its sizes from the origin is moved to a local frame.
+const FAR_FROM_ORIGIN: f64 = 16.0;
+
+/// The origin of a scene's local frame. Survey and city models arrive in projected coordinates
+/// (eastings of 5e5 m, northings of 1e7 m) where every difference of coordinates and every plane
+/// offset carries a rounding error of ε |offset|, enough to flip the pair plan's visibility and
+/// coplanarity tests. Computing in a frame centred on the scene makes the errors relative to its
+/// size again. Per axis on which the scene lies farther than [`FAR_FROM_ORIGIN`] sizes from 0, the
+/// origin is the bounding box's centre rounded to a multiple of a power of two `s` at least the
+/// scene's size; every coordinate x on that axis then lies within `s` of the origin c, closer than
+/// x to 0, and both are multiples of x's last bit, so `x - c` is exact and the moved scene is the
+/// same scene. Other axes, and scenes near the origin (the paper's, the examples), stay put.
+fn local_origin(faces: &[Face]) -> DVec3 {
+    let points = faces.iter().flat_map(|f| f.vertices.iter());
+    let (lo, hi) =
+        points.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+    let size = (hi - lo).max_element();
+    if size.is_nan() || size <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let step = 2f64.powi(size.log2().ceil() as i32);
+    let axis = |lo: f64, hi: f64| {
+        if lo.abs().max(hi.abs()) <= FAR_FROM_ORIGIN * size {
+            0.0
+        } else {
+            ((lo + hi) * 0.5 / step).round() * step
+        }
+    };
+    DVec3::new(axis(lo.x, hi.x), axis(lo.y, hi.y), axis(lo.z, hi.z))
+}
+
 #[cfg(test)]
 mod tests {
     use glam::DVec3;
@@ -179,5 +219,28 @@ mod tests {
         // Side by side, or the two sides of one plate: fine.
         assert!(Scene::new("s", vec![square("a", 0.0, false), square("b", 1.0, false)]).is_ok());
         assert!(Scene::new("s", vec![square("a", 0.0, false), square("b", 0.0, true)]).is_ok());
+    }
+
+    #[test]
+    fn scenes_far_from_the_origin_move_to_a_local_frame_exactly() {
+        for offset in [DVec3::new(-3e7, 0.3, 2e3), DVec3::new(5e5 + 0.1, 4.2e6, 100.3)] {
+            let faces: Vec<Face> = [square("a", 0.0, false), square("b", 0.0, true)]
+                .into_iter()
+                .map(|f| {
+                    Face::new(f.name.clone(), f.vertices.iter().map(|v| *v + offset).collect(), 0.5)
+                        .unwrap()
+                })
+                .collect();
+            let scene = Scene::new("far", faces.clone()).unwrap();
+            assert!(scene.origin.length() > 1e2, "{offset}: origin {}", scene.origin);
+            for (moved, original) in scene.faces.iter().zip(&faces) {
+                for (m, o) in moved.vertices.iter().zip(&original.vertices) {
+                    assert!(m.abs().max_element() <= 2.0, "{m}: not local");
+                    assert_eq!(*m + scene.origin, *o, "the move must be exact");
+                }
+            }
+        }
+        // Near the origin nothing moves.
+        assert_eq!(Scene::new("near", vec![square("a", 3.0, false)]).unwrap().origin, DVec3::ZERO);
     }
 }
