@@ -895,6 +895,9 @@ fn run(cli: Cli) -> Result<()> {
             let run = pipeline::run_keeping_mesh(&args.config()?)?;
             write_outputs(&run, &args.outputs)?;
             let r = &run.report;
+            for w in &r.warnings {
+                eprintln!("warning: {w}");
+            }
             match &args.json {
                 Some(target) => report::write_json(&r, target),
                 None => {

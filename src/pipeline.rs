@@ -244,6 +244,9 @@ pub struct RunReport {
     pub refinement_steps: usize,
     /// Unknowns known without solving (zero rows of K: rho = 0 or nothing in view; u = E).
     pub rows_eliminated: usize,
+    /// What the user should know about the scene or the run (no emitter, faces lying on one
+    /// another); the binary prints them as warnings.
+    pub warnings: Vec<String>,
     /// Number of elements.
     pub n: usize,
     /// Number of unknowns.
@@ -336,6 +339,27 @@ impl Run {
     }
 }
 
+/// What the user should be told about a scene before trusting its solution.
+fn run_warnings(scene: &Scene, emission: &[f64]) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if emission.iter().all(|&e| e == 0.0) {
+        warnings.push(format!(
+            "no face of '{}' emits (E = 0 everywhere), so the solution is zero: give a light \
+             source `emission = ...` in the scene file (per face, group or material; OBJ: Ke)",
+            scene.name
+        ));
+    }
+    for (a, b, area) in scene.faces_in_contact() {
+        warnings.push(format!(
+            "faces '{a}' and '{b}' lie on one another facing each other (shared area {area:.3e}) \
+             without covering each other as the two sides of a plate do: no light passes between \
+             them, and the part of the larger one under the smaller stays dark; lift one off the \
+             other if they should exchange light"
+        ));
+    }
+    warnings
+}
+
 /// Runs one configuration.
 pub fn run(config: &RunConfig) -> Result<RunReport> {
     Ok(run_keeping_mesh(config)?.report)
@@ -383,6 +407,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         None => disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(),
     };
     let emission_seconds = started.elapsed().as_secs_f64();
+    let warnings = run_warnings(&scene, &rhs);
 
     let started = Instant::now();
     let outcome = solve::solve(&assembled.matrix, &rhs, config.solver)?;
@@ -429,6 +454,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         condition_estimate: outcome.condition_estimate,
         refinement_steps: outcome.refinement_steps,
         rows_eliminated: outcome.rows_eliminated,
+        warnings,
         n: mesh.len(),
         dof: disc.dof(),
         error,

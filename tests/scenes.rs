@@ -330,3 +330,39 @@ fn scenes_far_from_the_origin_give_the_same_solution() {
         assert!(change <= 1e-13 * scale, "plate box at {offset:?}: {:.2e}", change / scale);
     }
 }
+
+#[test]
+fn imperfect_scenes_are_named_where_they_go_wrong() {
+    let dir = temp_dir("imperfect");
+    // An OBJ face that refers to a vertex the file lacks: the line is named.
+    let obj = dir.join("bad.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n").unwrap();
+    let (ok, _, err) = radiosity(&["solve", "--scene", obj.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("bad.obj: line 5: face vertex 9") && err.contains("3 vertices"),
+        "{err}"
+    );
+    // A coordinate beyond f64: file, line and column.
+    let big = dir.join("big.toml");
+    let text = std::fs::read_to_string("examples/occluded-box.toml").unwrap();
+    std::fs::write(&big, text.replacen("[2, 2, 0]", "[2, 1e400, 0]", 1)).unwrap();
+    let (ok, _, err) = radiosity(&["solve", "--scene", big.to_str().unwrap()]);
+    assert!(!ok && err.contains("big.toml") && err.contains("line 10"), "{err}");
+    // A lid lying on the floor: warned, naming both faces; the two sides of a plate are not.
+    let lid = dir.join("lid.toml");
+    let lid_text = "name = \"lid\"\n[defaults]\nrho = 0.5\n\
+        [[faces]]\nname = \"floor\"\nvertices = [[1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]]\n\
+        [[faces]]\nname = \"ceiling\"\nvertices = [[0, 1, 1], [1, 1, 1], [1, 0, 1], [0, 0, 1]]\nemission = 1.0\n\
+        [[faces]]\nname = \"lid\"\nvertices = [[0.2, 0.2, 0], [0.2, 0.6, 0], [0.6, 0.6, 0], [0.6, 0.2, 0]]\n";
+    std::fs::write(&lid, lid_text).unwrap();
+    let (ok, _, err) = radiosity(&["solve", "--scene", lid.to_str().unwrap(), "--refine", "0"]);
+    assert!(ok && err.contains("warning: faces 'floor' and 'lid' lie on one another"), "{err}");
+    let (ok, _, err) = radiosity(&["solve", "--scene", "baffled-box", "--refine", "0"]);
+    assert!(ok && !err.contains("warning"), "{err}");
+    // Nothing emits: said, with how to set emission.
+    let (ok, _, err) = radiosity(&["solve", "--scene", "city:1x1", "--refine", "0"]);
+    assert!(
+        ok && err.contains("no face of 'city-1x1' emits") && err.contains("emission ="),
+        "{err}"
+    );
+}

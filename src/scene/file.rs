@@ -278,8 +278,10 @@ fn read_mesh(path: &Path) -> Result<Vec<Polygon>> {
                 ignore_points: true,
                 ignore_lines: true,
             };
-            let (models, materials) =
-                tobj::load_obj(path, &options).map_err(|e| fail(e.to_string()))?;
+            let (models, materials) = tobj::load_obj(path, &options).map_err(|e| {
+                let place = std::fs::read_to_string(path).ok().and_then(|t| obj_bad_index(&t));
+                fail(place.unwrap_or_else(|| e.to_string()))
+            })?;
             // A missing or broken .mtl leaves the faces to the scene's properties.
             let materials = materials.unwrap_or_default();
             let mut polygons = Vec::new();
@@ -341,6 +343,26 @@ fn read_mesh(path: &Path) -> Result<Vec<Polygon>> {
 }
 
 /// rho and emission from an OBJ material: the means of its diffuse colour Kd and emission Ke.
+/// Where an OBJ file's face refers to a vertex it does not have (tobj says only that one does):
+/// "line L: face vertex V, but the file has N vertices".
+fn obj_bad_index(text: &str) -> Option<String> {
+    let vertices = text.lines().filter(|l| l.trim_start().starts_with("v ")).count() as i64;
+    text.lines().enumerate().find_map(|(k, line)| {
+        let rest = line.trim_start().strip_prefix("f ")?;
+        rest.split_whitespace().find_map(|corner| {
+            let v: i64 = corner.split('/').next()?.parse().ok()?;
+            let in_range = (1..=vertices).contains(&v) || (-vertices..=-1).contains(&v);
+            (!in_range).then(|| {
+                format!(
+                    "line {}: face vertex {v}, but the file has {vertices} vertices (OBJ indices \
+                     count from 1, negative ones from the end)",
+                    k + 1
+                )
+            })
+        })
+    })
+}
+
 fn material_properties(m: &tobj::Material) -> Properties {
     let mean = |c: [f32; 3]| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0;
     Properties { rho: m.diffuse.map(mean), emission: m.emissive.map(mean), radiates: None }

@@ -86,6 +86,31 @@ impl Scene {
     /// Two faces in one plane facing the same way must not overlap: a node would see the shared
     /// area twice. (Facing opposite ways they are the two sides of a plate, as S2 and S3.)
     fn check_no_overlap(&self) -> Result<()> {
+        match self.coplanar_overlaps().into_iter().find(|o| o.same_facing) {
+            Some(o) => Err(Error::OverlappingFaces {
+                first: self.faces[o.first].name.clone(),
+                second: self.faces[o.second].name.clone(),
+                area: o.area,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Faces that lie on one another facing each other but are not the two sides of one plate (a
+    /// lid lying on a floor): every pair between them is skipped, which is right for a plate, whose
+    /// two faces cover each other exactly, and a modelling mistake otherwise. Returns the two names
+    /// and the area they share.
+    pub fn faces_in_contact(&self) -> Vec<(String, String, f64)> {
+        let covers = |area: f64, face: usize| area >= (1.0 - 1e-9) * self.faces[face].area();
+        self.coplanar_overlaps()
+            .into_iter()
+            .filter(|o| !o.same_facing && !(covers(o.area, o.first) && covers(o.area, o.second)))
+            .map(|o| (self.faces[o.first].name.clone(), self.faces[o.second].name.clone(), o.area))
+            .collect()
+    }
+
+    /// Pairs of faces in one plane that overlap, either orientation.
+    fn coplanar_overlaps(&self) -> Vec<CoplanarOverlap> {
         // Only faces whose bounding boxes touch can overlap: an R*-tree finds those pairs.
         let boxes: Vec<(DVec3, DVec3)> = self.faces.iter().map(Face::bounding_box).collect();
         let tree = RTree::bulk_load(
@@ -97,27 +122,30 @@ impl Scene {
                 })
                 .collect::<Vec<_>>(),
         );
+        let mut overlaps = Vec::new();
         for (a, (lo, hi)) in boxes.iter().enumerate() {
             let pad = DVec3::splat(1e-9 * self.faces[a].size());
             let near = AABB::from_corners((*lo - pad).to_array(), (*hi + pad).to_array());
             for b in tree.locate_in_envelope_intersecting(near).map(|g| g.data).filter(|&b| b > a) {
                 let (fa, fb) = (&self.faces[a], &self.faces[b]);
-                if fa.frame.normal.dot(fb.frame.normal) <= 0.0 || !self.coplanar(a, b) {
+                if !self.coplanar(a, b) {
                     continue;
                 }
                 let pa = fa.local_polygon();
-                let pb: Vec<DVec2> = fb.vertices.iter().map(|&v| fa.frame.to_plane(v)).collect();
+                let mut pb: Vec<DVec2> =
+                    fb.vertices.iter().map(|&v| fa.frame.to_plane(v)).collect();
+                let same_facing = fa.frame.normal.dot(fb.frame.normal) > 0.0;
+                if !same_facing {
+                    // Counter-clockwise in a's plane, as the overlap's triangulation needs.
+                    pb.reverse();
+                }
                 let area = overlap_area(&pa, &pb);
                 if area > 1e-9 * fa.area().min(fb.area()) {
-                    return Err(Error::OverlappingFaces {
-                        first: fa.name.clone(),
-                        second: fb.name.clone(),
-                        area,
-                    });
+                    overlaps.push(CoplanarOverlap { first: a, second: b, area, same_facing });
                 }
             }
         }
-        Ok(())
+        overlaps
     }
 
     /// Index of the face with this name.
@@ -158,6 +186,14 @@ fn overlap_area(a: &[DVec2], b: &[DVec2]) -> f64 {
         }
     }
     area
+}
+
+/// Two faces of a scene in one plane that overlap.
+struct CoplanarOverlap {
+    first: usize,
+    second: usize,
+    area: f64,
+    same_facing: bool,
 }
 
 /// A scene farther than this many of its sizes from the origin is moved to a local frame.
