@@ -104,7 +104,8 @@ impl Scene {
         let covers = |area: f64, face: usize| area >= (1.0 - 1e-9) * self.faces[face].area();
         self.coplanar_overlaps()
             .into_iter()
-            .filter(|o| !o.same_facing && !(covers(o.area, o.first) && covers(o.area, o.second)))
+            .filter(|o| !o.same_facing)
+            .filter(|o| !(covers(o.area, o.first) && covers(o.area, o.second)))
             .map(|o| (self.faces[o.first].name.clone(), self.faces[o.second].name.clone(), o.area))
             .collect()
     }
