@@ -259,3 +259,28 @@ fn a_scene_file_with_occluders_assembles_on_the_gpu_as_on_the_cpu() {
         assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-12, "{method}: {v}");
     }
 }
+
+#[test]
+fn a_scene_far_from_the_origin_assembles_on_the_gpu_within_the_usual_tolerance() {
+    let Some(_) = gpu() else { return };
+    let dir = std::env::temp_dir().join(format!("radiosity-gpu-far-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = common::translated_scene("examples/occluded-box.toml", [-3e7, 0.0, 2e3], &dir);
+    // The f32 bound is the one of the paper's surfaces at the origin (centroid method).
+    for (precision, bound) in [("f64", 1e-12), ("f32", 2e-5)] {
+        let v = common::json(&[
+            "bench",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--refine",
+            "1",
+            "--repeats",
+            "1",
+            "--precision",
+            precision,
+            "--json",
+            "-",
+        ]);
+        assert!(v["max_rel_diff"].as_f64().unwrap() <= bound, "{precision}: {v}");
+    }
+}
