@@ -322,9 +322,10 @@ struct AssembleArgs {
 
 /// Three comma-separated numbers.
 fn parse_point(name: &'static str, text: &str) -> Result<glam::DVec3> {
-    let values: Vec<f64> = text.split(',').filter_map(|s| s.trim().parse().ok()).collect();
-    match values[..] {
-        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+    // Every component must parse: "1,x,2,3" is refused, not read as (1, 2, 3).
+    let values: Option<Vec<f64>> = text.split(',').map(|s| s.trim().parse().ok()).collect();
+    match values.as_deref().unwrap_or_default() {
+        &[x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
             Ok(glam::DVec3::new(x, y, z))
         }
         _ => Err(Error::InvalidParameter {

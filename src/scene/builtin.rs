@@ -94,7 +94,11 @@ impl FromStr for BuiltinScene {
         Self::ALL.into_iter().find(|b| b.name() == s).ok_or_else(|| Error::UnknownName {
             kind: "scene",
             name: s.to_string(),
-            expected: Self::ALL.map(|b| b.name()).join(", "),
+            expected: format!(
+                "{}, city:NXxNY (a generated city), or a scene file FILE.toml, FILE.obj or \
+                 FILE.stl",
+                Self::ALL.map(|b| b.name()).join(", ")
+            ),
         })
     }
 }

@@ -125,6 +125,7 @@ pub fn is_scene_file(name: &str) -> bool {
 /// `GROUP/k`, rho from the OBJ material or [`IMPORT_RHO`], no emission).
 pub fn load(path: &Path) -> Result<Scene> {
     let display = path.display().to_string();
+    check_readable(path)?;
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => load_toml(path),
@@ -145,6 +146,21 @@ pub fn load(path: &Path) -> Result<Scene> {
             reason: "expected a .toml scene file, or an .obj or .stl mesh".into(),
         }),
     }
+}
+
+/// A clear error for a path that is not there, instead of the reader's own ("open file failed").
+fn check_readable(path: &Path) -> Result<()> {
+    if path.is_file() {
+        return Ok(());
+    }
+    let reason = if path.exists() { "not a file" } else { "no such file" };
+    Err(Error::SceneFile {
+        path: path.display().to_string(),
+        reason: format!(
+            "{reason} (paths are relative to the current directory; mesh files in a \
+                         scene file, to the scene file's)"
+        ),
+    })
 }
 
 fn stem(path: &Path) -> String {
@@ -267,6 +283,7 @@ fn push_faces(
 
 /// The polygons of an OBJ (groups and materials kept) or STL file.
 fn read_mesh(path: &Path) -> Result<Vec<Polygon>> {
+    check_readable(path)?;
     let display = path.display().to_string();
     let fail = |reason: String| Error::SceneFile { path: display.clone(), reason };
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
