@@ -238,6 +238,15 @@ impl Face {
                 }
             }
         }
+        // Visibility splits non-convex faces into triangles: a face must have a triangulation,
+        // so that no later step can lose its pieces.
+        if !self.is_convex() && crate::geometry::triangulate(&p).is_none() {
+            return Err(Error::DegenerateFace {
+                face: self.name.clone(),
+                area: self.area(),
+                size: self.size(),
+            });
+        }
         Ok(())
     }
 }

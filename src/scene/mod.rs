@@ -169,10 +169,14 @@ impl Scene {
     }
 }
 
+/// Why triangulating a face's polygon cannot fail: [`Face::new`] refuses faces without a
+/// triangulation.
+pub(crate) const TRIANGULABLE: &str = "a valid face triangulates (checked in Face::new)";
+
 /// Area common to two simple counter-clockwise polygons (triangulated, then clipped pairwise).
 fn overlap_area(a: &[DVec2], b: &[DVec2]) -> f64 {
     let triangles = |p: &[DVec2]| -> Vec<[DVec2; 3]> {
-        triangulate(p).unwrap_or_default().iter().map(|t| [p[t[0]], p[t[1]], p[t[2]]]).collect()
+        triangulate(p).expect(TRIANGULABLE).iter().map(|t| [p[t[0]], p[t[1]], p[t[2]]]).collect()
     };
     let (ta, tb) = (triangles(a), triangles(b));
     let mut area = 0.0;

@@ -324,7 +324,7 @@ impl PairPlanner {
             vec![f.polygon.clone()]
         } else {
             crate::geometry::triangulate(&f.polygon)
-                .unwrap_or_default()
+                .expect(crate::scene::TRIANGULABLE)
                 .into_iter()
                 .map(|t| t.map(|k| f.polygon[k]).to_vec())
                 .collect()

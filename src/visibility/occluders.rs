@@ -150,7 +150,7 @@ fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
             vec![face.vertices.clone()]
         } else {
             crate::geometry::triangulate(&face.local_polygon())
-                .unwrap_or_default()
+                .expect(crate::scene::TRIANGULABLE)
                 .into_iter()
                 .map(|t| t.map(|i| face.vertices[i]).to_vec())
                 .collect()
