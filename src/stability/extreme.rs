@@ -238,10 +238,6 @@ impl ExtremeCase {
         p * self.scale + self.offset
     }
 
-    fn to_nominal(&self, p: DVec3) -> DVec3 {
-        (p - self.offset) / self.scale
-    }
-
     /// The two-face scene: receiver (face 0) and element (face 1).
     fn scene(&self) -> Result<Scene> {
         // Receiver: a small triangle in the node's tangent plane whose first node is the node.
@@ -269,8 +265,12 @@ impl ExtremeCase {
     /// Reference entries `K[node, element's dofs]` (rho/π with rho = 1) for the discretized node.
     fn reference(&self, scene: &Scene, disc: &Discretization) -> Vec<f64> {
         let node = &disc.nodes[0];
-        let p = self.to_nominal(node.position);
-        let v = scene.faces[1].vertices.iter().map(|&v| self.to_nominal(v)).collect::<Vec<_>>();
+        // The scene may have been moved (exactly) to a local frame; the shift between the two
+        // frames is small and exact, so nothing is rounded at the offset's magnitude.
+        let shift = scene.origin - self.offset;
+        let nominal = |q: DVec3| (q + shift) / self.scale;
+        let p = nominal(node.position);
+        let v = scene.faces[1].vertices.iter().map(|&v| nominal(v)).collect::<Vec<_>>();
         let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
         let e1 = (v[1] - v[0]).normalize();
         let e2 = normal.cross(e1);
