@@ -14,6 +14,7 @@ pub mod problems;
 pub mod quadrature;
 pub mod report;
 pub mod scene;
+pub mod solution;
 pub mod solve;
 pub mod stability;
 pub mod study;

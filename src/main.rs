@@ -885,9 +885,10 @@ fn run(cli: Cli) -> Result<()> {
                     emit(&result, json, || report::stiff_table(&result, format))
                 }
                 _ => {
-                    let figure_dir = Some(figures.into());
-                    let options = StudyOptions { max_n, device, progress: true, figure_dir };
-                    let result = study::run_study(&id, &options)?;
+                    let options = StudyOptions { max_n, device, progress: true };
+                    let mut result = study::run_study(&id, &options)?;
+                    result.figures =
+                        report::write_study_figures(&result, std::path::Path::new(&figures))?;
                     emit(&result, json, || report::study_table(&result, format))
                 }
             }

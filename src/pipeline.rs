@@ -104,6 +104,18 @@ pub fn assemble_on(
     }
 }
 
+/// Where a study's series run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StudyDevice {
+    /// CPU, plus the studies' GPU series where an adapter is found.
+    Auto,
+    /// CPU only; GPU series are left out.
+    Cpu,
+    /// Everything that can run on the GPU runs there, in this precision (GPU series keep theirs);
+    /// a missing adapter is an error.
+    Gpu(Precision),
+}
+
 /// Where the scene comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SceneSource {
@@ -328,8 +340,8 @@ pub struct Run {
 
 impl Run {
     /// The solution as the outputs see it.
-    pub fn field(&self) -> crate::report::SolutionField<'_> {
-        crate::report::SolutionField {
+    pub fn field(&self) -> crate::solution::SolutionField<'_> {
+        crate::solution::SolutionField {
             scene: &self.scene,
             mesh: &self.mesh,
             disc: &self.disc,

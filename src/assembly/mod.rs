@@ -39,8 +39,8 @@ impl PairIntegrator {
     /// An integrator for `method`.
     pub fn new(method: Method, options: &AssemblyOptions) -> Self {
         let graded = options.quadrature.graded_rule();
-        let far_field =
-            (graded.is_none() && options.far_field).then(|| FarFieldRule::for_method(method));
+        let far_field = (graded.is_none() && options.far_field)
+            .then(|| FarFieldRule::for_weights(method.nodes_per_element()));
         Self {
             method,
             imt: ImtRule::new(options.imt_nodes.max(2)),

@@ -120,6 +120,22 @@ pub fn convex_contains(poly: &[DVec2], x: DVec2) -> bool {
     })
 }
 
+/// Whether `p` lies inside the simple polygon `polygon`, convex or not (crossing number).
+pub fn polygon_contains(polygon: &[DVec2], p: DVec2) -> bool {
+    let n = polygon.len();
+    let mut inside = false;
+    for k in 0..n {
+        let (a, b) = (polygon[k], polygon[(k + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if p.x < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
 /// Distance from a point to a counter-clockwise convex polygon (0 inside).
 pub fn distance_to_convex(poly: &[DVec2], x: DVec2) -> f64 {
     let n = poly.len();

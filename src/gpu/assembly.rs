@@ -198,7 +198,7 @@ struct RuleCounts {
 fn far_field_rule(precision: Precision, method: Method, enabled: bool) -> Option<FarFieldRule> {
     match precision {
         Precision::F32 => Some(FarFieldRule::single_precision()),
-        Precision::F64 => enabled.then(|| FarFieldRule::for_method(method)),
+        Precision::F64 => enabled.then(|| FarFieldRule::for_weights(method.nodes_per_element())),
     }
 }
 

@@ -53,10 +53,11 @@ impl FarFieldRule {
         Self::from_bands(&BANDS)
     }
 
-    /// The rule the exact method uses for `method`'s weights: [`BANDS`] for the affine weights of
-    /// the linear method, [`CONSTANT_WEIGHT_BANDS`] for the centroid method.
-    pub fn for_method(method: crate::discretization::Method) -> Self {
-        match method.nodes_per_element() {
+    /// The rule the exact method uses for elements with `basis_functions` weights: [`BANDS`] for
+    /// the affine weights of the linear method (3), [`CONSTANT_WEIGHT_BANDS`] for the centroid
+    /// method (1).
+    pub fn for_weights(basis_functions: usize) -> Self {
+        match basis_functions {
             1 => Self::constant_weight(),
             _ => Self::standard(),
         }

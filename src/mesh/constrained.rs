@@ -8,7 +8,7 @@ use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 use super::shadow_lines::Segment;
 use crate::error::{Error, Result};
-use crate::geometry::{HalfPlane, clip_convex};
+use crate::geometry::{HalfPlane, clip_convex, polygon_contains};
 use crate::scene::{Diagonal, Face};
 
 /// Triangles (3-D, counter-clockwise about the face's normal) of `face` such that no segment of
@@ -164,27 +164,11 @@ fn constrained_delaunay(face: &Face, segments: &[Segment]) -> Result<Vec<[DVec3;
             DVec2::new(p.x, p.y)
         });
         // Triangles of the convex hull outside a non-convex face are dropped.
-        if !inside(&polygon, (a + b + c) / 3.0) {
+        if !polygon_contains(&polygon, (a + b + c) / 3.0) {
             continue;
         }
         let t = if (b - a).perp_dot(c - a) >= 0.0 { [a, b, c] } else { [a, c, b] };
         triangles.push(t.map(|p| face.frame.to_global(p)));
     }
     Ok(triangles)
-}
-
-/// Whether `p` lies inside the simple polygon (crossing number).
-pub(crate) fn inside(polygon: &[DVec2], p: DVec2) -> bool {
-    let n = polygon.len();
-    let mut inside = false;
-    for k in 0..n {
-        let (a, b) = (polygon[k], polygon[(k + 1) % n]);
-        if (a.y > p.y) != (b.y > p.y) {
-            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-            if p.x < x {
-                inside = !inside;
-            }
-        }
-    }
-    inside
 }

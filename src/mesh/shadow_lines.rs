@@ -11,7 +11,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::constrained::inside;
+use crate::geometry::polygon_contains;
 use crate::scene::{Face, Scene};
 use crate::visibility::PairPlanner;
 
@@ -253,7 +253,7 @@ fn clip_to_polygon(polygon: &[DVec2], start: DVec2, dir: DVec2, length: f64) -> 
     }
     cuts.sort_by(f64::total_cmp);
     cuts.windows(2)
-        .filter(|w| w[1] > w[0] && inside(polygon, start + dir * (0.5 * (w[0] + w[1]))))
+        .filter(|w| w[1] > w[0] && polygon_contains(polygon, start + dir * (0.5 * (w[0] + w[1]))))
         .map(|w| (w[0], w[1]))
         .collect()
 }

@@ -3,12 +3,12 @@
 mod nodes_csv;
 pub mod plot;
 mod render;
-mod solution;
+mod study_figures;
 mod vtk;
 
 pub use nodes_csv::write_node_csv;
 pub use render::{Camera, DEFAULT_VIEW, render_png};
-pub use solution::SolutionField;
+pub use study_figures::write_study_figures;
 pub use vtk::write_vtu;
 
 use std::io::Write;

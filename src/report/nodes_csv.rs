@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use super::solution::SolutionField;
 use crate::error::Result;
+use crate::solution::SolutionField;
 
 /// Writes `node, element, face, x, y, z, rho, E, u` for every node to `path` (positions in the
 /// user's coordinates).

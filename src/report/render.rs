@@ -8,8 +8,8 @@ use glam::{DVec2, DVec3};
 use plotters::prelude::*;
 
 use super::plot::{plot_error, register_font};
-use super::solution::SolutionField;
 use crate::error::{Error, Result};
+use crate::solution::SolutionField;
 
 /// Where the picture is taken from.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -5,8 +5,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::solution::SolutionField;
 use crate::error::Result;
+use crate::solution::SolutionField;
 
 /// Writes `field` to `path` as ASCII VTU.
 pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {

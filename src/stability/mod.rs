@@ -9,7 +9,7 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::gpu::Precision;
 use crate::pipeline::Backend;
-use crate::study::StudyDevice;
+use crate::pipeline::StudyDevice;
 
 /// The study ids this module answers.
 pub const STUDY_IDS: [&str; 2] = ["stability", "stiff"];

@@ -2,34 +2,22 @@
 //! [`crate::pipeline::run`], with the paper's printed value beside ours where it has one.
 
 mod analysis;
-mod figures;
 mod specs;
 
 pub use analysis::{fit_rate, pareto_front};
 pub use specs::{Kind, Placement, Series, StudySpec, study_ids};
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 
 use serde::Serialize;
 
 use crate::assembly::Quadrature;
 use crate::error::{Error, Result};
-use crate::gpu::{self, Precision};
+use crate::gpu;
 use crate::pipeline::{self, Backend, RunConfig};
 use crate::quadrature::ImtRule;
 
-/// Where a study's series run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StudyDevice {
-    /// CPU, plus the studies' GPU series where an adapter is found.
-    Auto,
-    /// CPU only; GPU series are left out.
-    Cpu,
-    /// Everything that can run on the GPU runs there, in this precision (GPU series keep theirs);
-    /// a missing adapter is an error.
-    Gpu(Precision),
-}
+pub use crate::pipeline::StudyDevice;
 
 /// Options shared by all studies.
 #[derive(Clone, Debug)]
@@ -40,8 +28,6 @@ pub struct StudyOptions {
     pub device: StudyDevice,
     /// Show progress on stderr.
     pub progress: bool,
-    /// Where plots are written (PNG and SVG), for the studies that draw them; `None`: no plots.
-    pub figure_dir: Option<PathBuf>,
 }
 
 /// One row of a study.
@@ -269,18 +255,14 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             }
         }
     }
-    let mut result = StudyResult {
+    Ok(StudyResult {
         study: spec.id.into(),
         title: spec.title.into(),
         rows,
         series: summaries,
         notes: spec.notes.iter().map(|s| s.to_string()).collect(),
         figures: Vec::new(),
-    };
-    if let Some(dir) = &options.figure_dir {
-        result.figures = figures::write(&spec, &result, dir)?;
-    }
-    Ok(result)
+    })
 }
 
 fn lookup(table: &[(usize, f64)], n: usize) -> Option<f64> {

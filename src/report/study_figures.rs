@@ -3,12 +3,14 @@
 
 use std::path::Path;
 
-use super::{Kind, SeriesSummary, StudyResult, StudyRow, StudySpec};
+use super::plot::{Figure, Line, Panel, write_figure};
 use crate::error::Result;
-use crate::report::plot::{Figure, Line, Panel, write_figure};
+use crate::study::{Kind, SeriesSummary, StudyResult, StudyRow, StudySpec};
 
-/// Writes the study's plots into `dir` as `<id>.png` and `<id>.svg`; returns their paths.
-pub(super) fn write(spec: &StudySpec, result: &StudyResult, dir: &Path) -> Result<Vec<String>> {
+/// Writes the plots of `result` into `dir` as `<id>.png` and `<id>.svg`, for the studies that
+/// draw them; returns their paths.
+pub fn write_study_figures(result: &StudyResult, dir: &Path) -> Result<Vec<String>> {
+    let Some(spec) = StudySpec::find(&result.study) else { return Ok(Vec::new()) };
     let figure = match spec.kind {
         Kind::Table | Kind::Timing { plot: false } => return Ok(Vec::new()),
         Kind::Convergence => convergence(result),
