@@ -1,0 +1,68 @@
+//! `radiosity bench`: the same matrix on each backend, timed and compared.
+
+use radiosity::error::{Error, Result};
+use radiosity::pipeline::Backend;
+use radiosity::report;
+
+use super::*;
+
+pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
+    let mut config = args.geometry.config()?;
+    config.progress = false;
+    let named = match &args.backends {
+        Some(named) => named.clone(),
+        None => {
+            match radiosity::gpu::context_for(backend(BackendArg::Gpu, args.precision).precision())
+            {
+                Ok(_) => vec![BackendArg::Cpu, BackendArg::Gpu],
+                Err(e) => {
+                    eprintln!("note: the GPU is left out: {e}");
+                    vec![BackendArg::Cpu]
+                }
+            }
+        }
+    };
+    let mut backends: Vec<Backend> = Vec::new();
+    for &b in &named {
+        let b = backend(b, args.precision);
+        if backends.iter().any(|x| x.name() == b.name()) {
+            return Err(Error::InvalidParameter {
+                name: "backends",
+                value: b.name().into(),
+                reason: "each backend may be named once".into(),
+            });
+        }
+        backends.push(b);
+    }
+    let r = radiosity::bench::run(&config, &backends, args.repeats)?;
+    if let Some(target) = &args.json {
+        return report::write_json(&r, target);
+    }
+    println!(
+        "{} ({} mesh, {} method): n = {}, dof = {}, {} pairs ({} evaluated)",
+        r.scene, r.mesh, r.method, r.n, r.dof, r.pairs, r.pairs_evaluated
+    );
+    for (name, t) in [("cpu", &r.cpu), ("gpu", &r.gpu)] {
+        if let Some(t) = t {
+            println!(
+                "{name} ({}): setup {:.3} s, {:.3e} pairs/s (preparation {:.3} s, best of {})",
+                t.precision, t.setup_seconds, t.pairs_per_second, t.preparation_seconds, r.repeats
+            );
+            if let Some(b) = &t.breakdown {
+                println!(
+                    "    {} tiles: host planning {:.3} s, waiting for the device {:.3} s, read-back {:.3} s",
+                    b.tiles, b.planning_seconds, b.device_wait_seconds, b.readback_seconds
+                );
+            }
+        }
+    }
+    if let Some(d) = &r.device {
+        println!("device: {d}");
+    }
+    if let (Some(s), Some(a), Some(rel)) = (r.speedup, r.max_abs_diff, r.max_rel_diff) {
+        println!(
+            "speedup (cpu time / gpu time): {s:.2}; max |difference| {a:.2e}, row-relative {rel:.2e}"
+        );
+    }
+    Ok(())
+}

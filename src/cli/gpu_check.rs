@@ -1,0 +1,45 @@
+//! `radiosity gpu-check`: the adapter and the WGSL math library's worst ulp errors.
+
+use serde::Serialize;
+
+use radiosity::error::Result;
+use radiosity::gpu::Precision;
+use radiosity::report;
+
+use super::*;
+
+/// What `gpu-check` prints.
+#[derive(Serialize)]
+pub(crate) struct GpuCheck {
+    adapter: radiosity::gpu::AdapterSummary,
+    functions: Vec<radiosity::gpu::math::UlpReport>,
+}
+
+pub(crate) fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Result<()> {
+    let precision = match precision {
+        PrecisionArg::F64 => Precision::F64,
+        PrecisionArg::F32 => Precision::F32,
+    };
+    let ctx = radiosity::gpu::context_for(precision)?;
+    let functions = radiosity::gpu::math::measure(ctx, precision, samples)?;
+    let out = GpuCheck { adapter: ctx.adapter.clone(), functions };
+    if let Some(target) = json {
+        return report::write_json(&out, target);
+    }
+    let a = &out.adapter;
+    println!("adapter: {} ({}, {}), SHADER_F64: {}", a.name, a.backend, a.device_type, a.f64);
+    println!(
+        "math library in {}, {} samples per function, against Rust's f64 functions:",
+        precision.name(),
+        samples
+    );
+    for r in &out.functions {
+        println!(
+            "  {:<6} worst {:>6.2} ulp at {:?}",
+            format!("{:?}", r.function).to_lowercase(),
+            r.worst_ulp,
+            r.worst_at
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,123 @@
+//! `radiosity inspect`: row sums of K/rho and pair classes.
+
+use serde::Serialize;
+
+use radiosity::assembly::Assembly;
+use radiosity::discretization::Discretization;
+use radiosity::error::{Error, Result};
+use radiosity::mesh::Mesh;
+use radiosity::pipeline::{self, RunConfig};
+use radiosity::report;
+use radiosity::scene::Scene;
+use radiosity::visibility::PairPlanner;
+
+use super::*;
+
+/// What `inspect` prints.
+#[derive(Serialize)]
+pub(crate) struct Inspection {
+    surface: String,
+    mesh: &'static str,
+    method: &'static str,
+    alpha: Option<f64>,
+    backend: &'static str,
+    n: usize,
+    dof: usize,
+    row_sum_min: f64,
+    row_sum_max: f64,
+    pairs_total: u64,
+    pairs_skipped: u64,
+    pairs_full: u64,
+    pairs_partial: u64,
+    pairs_same_plane: u64,
+    pairs_facing_away: u64,
+    pairs_hidden: u64,
+    occluders_possible: bool,
+    setup_seconds: f64,
+}
+
+/// K for `config` on its backend.
+pub(crate) fn assemble_without_progress(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+) -> Result<Assembly> {
+    let (assembled, _) = pipeline::assemble_on(
+        config.backend,
+        scene,
+        mesh,
+        disc,
+        planner,
+        &config.assembly,
+        &|_| {},
+    )?;
+    Ok(assembled)
+}
+
+pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
+    let o = &args.outputs;
+    if o.vtu.is_some() || o.csv.is_some() || o.png.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "vtu/csv/png",
+            value: "given".into(),
+            reason: "inspect solves nothing; the outputs belong to solve".into(),
+        });
+    }
+    let config = args.config()?;
+    let (scene, mesh, disc) = pipeline::build(&config)?;
+    let started = std::time::Instant::now();
+    let planner = PairPlanner::new(&scene);
+    let assembled = assemble_without_progress(&config, &scene, &mesh, &disc, &planner)?;
+    let setup_seconds = started.elapsed().as_secs_f64();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, node) in disc.nodes.iter().enumerate() {
+        if node.rho > 0.0 {
+            let s = assembled.matrix.row(i).iter().sum::<f64>() / node.rho;
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+    }
+    let p = assembled.stats;
+    let out = Inspection {
+        surface: scene.name.clone(),
+        mesh: config.mesh.name(),
+        method: config.method.name(),
+        alpha: config.method.alpha(),
+        backend: config.backend.name(),
+        n: mesh.len(),
+        dof: disc.dof(),
+        row_sum_min: lo,
+        row_sum_max: hi,
+        pairs_total: p.total,
+        pairs_skipped: p.skipped(),
+        pairs_full: p.full,
+        pairs_partial: p.partial,
+        pairs_same_plane: p.same_plane,
+        pairs_facing_away: p.facing_away,
+        pairs_hidden: p.hidden,
+        occluders_possible: planner.has_occlusion(),
+        setup_seconds,
+    };
+    if let Some(target) = &args.json {
+        return report::write_json(&out, target);
+    }
+    println!(
+        "{} ({} mesh, {} method): n = {}, dof = {}",
+        out.surface, out.mesh, out.method, out.n, out.dof
+    );
+    println!("row sums of K/rho: min {:.15}, max {:.15}", out.row_sum_min, out.row_sum_max);
+    println!(
+        "pairs: {} total, {} skipped ({} same plane, {} facing away, {} hidden), {} full, {} partial",
+        out.pairs_total,
+        out.pairs_skipped,
+        out.pairs_same_plane,
+        out.pairs_facing_away,
+        out.pairs_hidden,
+        out.pairs_full,
+        out.pairs_partial
+    );
+    println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);
+    Ok(())
+}

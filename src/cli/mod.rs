@@ -1,0 +1,460 @@
+//! The command line: the arguments (clap), and one module per command with what it prints.
+
+pub(crate) mod assemble;
+pub(crate) mod bench;
+pub(crate) mod bench_plan;
+pub(crate) mod gpu_check;
+pub(crate) mod inspect;
+pub(crate) mod output;
+pub(crate) mod solve;
+pub(crate) mod study;
+pub(crate) mod viewfactors;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use radiosity::assembly::{AssemblyOptions, Quadrature};
+use radiosity::discretization::Method;
+use radiosity::error::{Error, Result};
+use radiosity::gpu::Precision;
+use radiosity::mesh::{LineExtent, S5Diagonals};
+use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
+use radiosity::problems::{EmissionOptions, TrueSolution};
+use radiosity::scene::SurfaceParameters;
+use radiosity::solve::{SolverChoice, SolverOptions};
+
+#[derive(Parser)]
+#[command(
+    name = "radiosity",
+    version,
+    about = "Collocation solver for the occluded radiosity equation (Atkinson, Chien & Seol 2000)"
+)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Command,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// Reproduce a table or figure of the paper, or run a study (ids: table-3.1 .. table-3.5,
+    /// table-4.1, table-4.2, figure-3.4 .. figure-3.7, error-vs-time, grading)
+    Study {
+        /// Study id
+        id: String,
+        /// Largest number of elements n to run (default: the paper's largest)
+        #[arg(long)]
+        max_n: Option<usize>,
+        /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
+        /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
+        #[arg(long, value_enum)]
+        backend: Option<BackendArg>,
+        /// Precision of the GPU kernels with --backend gpu
+        #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+        precision: PrecisionArg,
+        /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
+        #[arg(long, value_name = "DIR", default_value = "figures")]
+        figures: String,
+        /// Also write JSON to PATH; `-`: JSON on standard output instead of the text table
+        #[arg(long, value_name = "PATH")]
+        json: Option<String>,
+        /// Print Markdown tables instead of aligned text
+        #[arg(long)]
+        markdown: bool,
+    },
+    /// Solve one problem and report its error and timings
+    Solve(SolveArgs),
+    /// Matrix statistics: row sums of K/rho and pair-class counts
+    Inspect(SolveArgs),
+    /// Assemble the same matrix on several backends: timings, pairs per second, differences
+    Bench(BenchArgs),
+    /// Assemble the collocation matrix K and write it as a NumPy .npy file
+    Assemble(AssembleArgs),
+    /// Element-to-element view factors F_ij, with reciprocity and closure checks
+    Viewfactors(ViewFactorArgs),
+    /// Time the pair plan (views of sampled nodes against every face) with and without the
+    /// occluder index (R*-tree), and check that both give the same views
+    BenchPlan {
+        /// Scene (e.g. city:35x36, about 10 000 faces)
+        #[arg(long, default_value = "city:35x36")]
+        scene: String,
+        /// Nodes sampled (face centres spread over the scene)
+        #[arg(long, default_value_t = 100)]
+        nodes: usize,
+        /// Write JSON to PATH (`-` for standard output) instead of text
+        #[arg(long, value_name = "PATH")]
+        json: Option<String>,
+    },
+    /// The GPU adapter, its f64 support, and the worst errors (ulp) of the WGSL math library
+    GpuCheck {
+        /// Samples per function
+        #[arg(long, default_value_t = 1_000_000)]
+        samples: usize,
+        /// Precision of the math library to test
+        #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+        precision: PrecisionArg,
+        /// Write JSON to PATH (`-` for standard output) instead of text
+        #[arg(long, value_name = "PATH")]
+        json: Option<String>,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum MethodArg {
+    Centroid,
+    Linear,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum MeshArg {
+    /// Faces split by their diagonals, then refined
+    Uniform,
+    /// The paper's hand-built discontinuity mesh (four-piece, five-piece)
+    Discontinuity,
+    /// The same, with S5's cells split by the uniform mesh's diagonal instead of the paper's
+    DiscontinuityUniformDiagonals,
+    /// Shadow lines found automatically, faces triangulated along them (any scene)
+    AutoDiscontinuity,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum ShadowLinesArg {
+    /// Each shadow line extended across its face (as the paper's mesh)
+    Chords,
+    /// Only where the visibility events are
+    Segments,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum BackendArg {
+    Cpu,
+    Gpu,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum PrecisionArg {
+    F64,
+    F32,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SolverArg {
+    Auto,
+    Lu,
+    Iterative,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum QuadratureArg {
+    Exact,
+    SevenPoint,
+    Gauss,
+}
+
+/// The scene, its mesh and the collocation method.
+#[derive(Args)]
+pub(crate) struct GeometryArgs {
+    /// Scene: four-piece, five-piece, cube, baffled-box, or a scene file (.toml, .obj, .stl)
+    #[arg(long)]
+    pub(crate) scene: String,
+    /// Collocation method
+    #[arg(long, value_enum, default_value_t = MethodArg::Centroid)]
+    pub(crate) method: MethodArg,
+    /// Node parameter alpha of the linear method, in [0, 1/3) (default 1/6)
+    #[arg(long)]
+    pub(crate) alpha: Option<f64>,
+    /// Mesh
+    #[arg(long, value_enum, default_value_t = MeshArg::Uniform)]
+    pub(crate) mesh: MeshArg,
+    /// Extent of the shadow lines of --mesh auto-discontinuity: chords give the paper's mesh on
+    /// its surfaces, segments far fewer elements in scenes with many occluders
+    #[arg(long, value_enum, default_value_t = ShadowLinesArg::Segments)]
+    pub(crate) shadow_lines: ShadowLinesArg,
+    /// Grade the mesh toward an edge of a face: FACE:K names the edge from vertex K to K+1
+    /// (repeatable; e.g. S1:2 and S5:3, the common edge of the five-piece surface)
+    #[arg(long, value_name = "FACE:K")]
+    pub(crate) grade: Vec<String>,
+    /// Grading exponent q: a point at distance d from a graded edge moves to D (d/D)^q
+    #[arg(long, default_value_t = 2.0)]
+    pub(crate) grading: f64,
+    /// Refinement levels: n = n0 * 4^refine
+    #[arg(long, default_value_t = 2)]
+    pub(crate) refine: u32,
+    /// Surface parameters A,B,C of the paper's surfaces
+    #[arg(long, value_name = "A,B,C", default_value = "5,2,1")]
+    pub(crate) params: String,
+    /// How the collocation integrals are evaluated: closed forms (+ IMT), or the paper's graded
+    /// 7-point or collapsed-Gauss rules (sec. 4.2)
+    #[arg(long, value_enum, default_value_t = QuadratureArg::Exact)]
+    pub(crate) quadrature: QuadratureArg,
+    /// MaxLev of the seven-point and gauss quadratures: 4^MaxLev subtriangles, or 2^(IBase+MaxLev)
+    /// Gauss points per dimension, next to the node
+    #[arg(long, default_value_t = 3)]
+    pub(crate) max_level: u32,
+    /// IBase of the gauss quadrature: 2^IBase points per dimension far from the node
+    #[arg(long, default_value_t = 1)]
+    pub(crate) ibase: u32,
+    /// The quadrature level is MaxLev within this many element diameters of the node, and falls by
+    /// one per doubling of the distance
+    #[arg(long, default_value_t = radiosity::kernels::graded::DEFAULT_NEAR)]
+    pub(crate) near_ratio: f64,
+    /// IMT subintervals for the linear method's 1-D integrals
+    #[arg(long, default_value_t = 128)]
+    pub(crate) imt_nodes: usize,
+    /// Use the paper's closed forms for every pair, also far from the node and on thin elements
+    /// (slower, and less accurate there, where the closed forms cancel)
+    #[arg(long)]
+    pub(crate) no_far_field: bool,
+}
+
+/// Where the matrix is assembled.
+#[derive(Args)]
+pub(crate) struct DeviceArgs {
+    /// Where the collocation matrix is assembled
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub(crate) backend: BackendArg,
+    /// Precision of the GPU kernels
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    pub(crate) precision: PrecisionArg,
+}
+
+#[derive(Args)]
+pub(crate) struct SolveArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    #[command(flatten)]
+    pub(crate) device: DeviceArgs,
+    /// True solution (x2y2, shadow, edge, none); default x2y2 on the paper's surfaces, none elsewhere
+    #[arg(long)]
+    pub(crate) solution: Option<String>,
+    /// beta of the shadow (3.3) or edge (3.4) solution
+    #[arg(long)]
+    pub(crate) beta: Option<f64>,
+    /// gamma of the shadow solution (3.3)
+    #[arg(long)]
+    pub(crate) gamma: Option<f64>,
+    /// Linear solver: LU up to 6000 unknowns and GMRES beyond (auto), or forced
+    #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
+    pub(crate) solver: SolverArg,
+    /// Relative residual ||E - (I - K) u||_2 / ||E||_2 at which the iterative solver stops
+    #[arg(long, default_value_t = radiosity::solve::DEFAULT_TOLERANCE)]
+    pub(crate) tolerance: f64,
+    /// Also report the largest errors over all of S, of u_n and of the iterated solution E + K u_n,
+    /// at the interior points of a barycentric lattice of spacing 1/M in every element
+    #[arg(long, value_name = "M")]
+    pub(crate) surface_lattice: Option<usize>,
+    /// Write JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+    #[command(flatten)]
+    pub(crate) outputs: OutputArgs,
+}
+
+/// Files written from a solution.
+#[derive(Args)]
+pub(crate) struct OutputArgs {
+    /// Write the mesh with u, E, rho per element and u at the vertices as VTK (.vtu, for ParaView)
+    #[arg(long, value_name = "FILE.vtu")]
+    pub(crate) vtu: Option<String>,
+    /// Write the nodal values (position, face, rho, E, u) as CSV
+    #[arg(long, value_name = "FILE.csv")]
+    pub(crate) csv: Option<String>,
+    /// Render a false-colour picture of u (back faces culled: a closed room seen from outside
+    /// shows its inside)
+    #[arg(long, value_name = "FILE.png")]
+    pub(crate) png: Option<String>,
+    /// Picture size in pixels
+    #[arg(long, value_name = "WxH", default_value = "1200x800")]
+    pub(crate) png_size: String,
+    /// Eye position of the picture (default: outside the scene, from the south-west, above)
+    #[arg(long, value_name = "X,Y,Z")]
+    pub(crate) eye: Option<String>,
+    /// Point the picture looks at (default: the centre of the scene)
+    #[arg(long, value_name = "X,Y,Z")]
+    pub(crate) target: Option<String>,
+}
+
+#[derive(Args)]
+pub(crate) struct BenchArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    /// Backends to run, comma separated [default: cpu, and gpu where an adapter can run the
+    /// precision asked for]
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub(crate) backends: Option<Vec<BackendArg>>,
+    /// Precision of the GPU kernels
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    pub(crate) precision: PrecisionArg,
+    /// Repetitions per backend (the best time counts)
+    #[arg(long, default_value_t = 3)]
+    pub(crate) repeats: usize,
+    /// Write JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+}
+
+#[derive(Args)]
+pub(crate) struct ViewFactorArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    /// Absolute tolerance of each F_ij (outer quadrature)
+    #[arg(long, default_value_t = 1e-10)]
+    pub(crate) tolerance: f64,
+    /// Most times an element is split into four where the outer rule's levels disagree (shadow
+    /// lines crossing it); each split costs up to 4x the time of the element
+    #[arg(long, default_value_t = 1)]
+    pub(crate) max_depth: u32,
+    /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv
+    #[arg(long, value_name = "FILE")]
+    pub(crate) output: Option<String>,
+    /// Write the summary as JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+}
+
+#[derive(Args)]
+pub(crate) struct AssembleArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    #[command(flatten)]
+    pub(crate) device: DeviceArgs,
+    /// Output file (NumPy .npy, float64, row-major dof x dof)
+    #[arg(long, value_name = "FILE.npy")]
+    pub(crate) output: String,
+}
+
+pub(crate) fn parse_params(text: &str) -> Result<SurfaceParameters> {
+    let bad = || Error::InvalidParameter {
+        name: "params",
+        value: text.into(),
+        reason: "expected three numbers A,B,C".into(),
+    };
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad())?;
+    let [a, b, c] = values[..] else { return Err(bad()) };
+    let p = SurfaceParameters { a, b, c };
+    p.validate()?;
+    Ok(p)
+}
+
+pub(crate) fn backend(b: BackendArg, p: PrecisionArg) -> Backend {
+    match b {
+        BackendArg::Cpu => Backend::Cpu,
+        BackendArg::Gpu => Backend::Gpu(match p {
+            PrecisionArg::F64 => Precision::F64,
+            PrecisionArg::F32 => Precision::F32,
+        }),
+    }
+}
+
+impl GeometryArgs {
+    pub(crate) fn quadrature(&self) -> Result<Quadrature> {
+        let (max_level, ibase, near_ratio) = (self.max_level, self.ibase, self.near_ratio);
+        let q = match self.quadrature {
+            QuadratureArg::Exact => Quadrature::Exact,
+            QuadratureArg::SevenPoint => Quadrature::SevenPoint { max_level, near_ratio },
+            QuadratureArg::Gauss => Quadrature::Gauss { ibase, max_level, near_ratio },
+        };
+        q.validate()?;
+        Ok(q)
+    }
+
+    /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere.
+    pub(crate) fn config(&self) -> Result<RunConfig> {
+        let scene = SceneSource::parse(&self.scene)?;
+        let method = match self.method {
+            MethodArg::Centroid if self.alpha.is_some() => {
+                return Err(Error::InvalidParameter {
+                    name: "alpha",
+                    value: format!("{}", self.alpha.unwrap_or_default()),
+                    reason: "alpha belongs to --method linear".into(),
+                });
+            }
+            MethodArg::Centroid => Method::Centroid,
+            MethodArg::Linear => Method::linear(self.alpha.unwrap_or(Method::PAPER_ALPHA))?,
+        };
+        if self.imt_nodes < 2 {
+            return Err(Error::InvalidParameter {
+                name: "imt-nodes",
+                value: self.imt_nodes.to_string(),
+                reason: "the IMT rule needs at least 2 subintervals".into(),
+            });
+        }
+        let solution = scene.is_paper_surface().then_some(TrueSolution::X2Y2);
+        Ok(RunConfig {
+            scene,
+            params: parse_params(&self.params)?,
+            mesh: match self.mesh {
+                MeshArg::Uniform => MeshChoice::Uniform,
+                MeshArg::Discontinuity => MeshChoice::Discontinuity(S5Diagonals::Paper),
+                MeshArg::DiscontinuityUniformDiagonals => {
+                    MeshChoice::Discontinuity(S5Diagonals::AsUniform)
+                }
+                MeshArg::AutoDiscontinuity => {
+                    MeshChoice::AutoDiscontinuity(match self.shadow_lines {
+                        ShadowLinesArg::Chords => LineExtent::Chords,
+                        ShadowLinesArg::Segments => LineExtent::Segments,
+                    })
+                }
+            },
+            refine: self.refine,
+            grade: self.grade.clone(),
+            grading_exponent: self.grading,
+            method,
+            solution,
+            assembly: AssemblyOptions {
+                quadrature: self.quadrature()?,
+                imt_nodes: self.imt_nodes,
+                far_field: !self.no_far_field,
+            },
+            emission: EmissionOptions::default(),
+            backend: Backend::Cpu,
+            solver: SolverOptions::default(),
+            progress: true,
+            setup_repeats: 1,
+            surface_lattice: None,
+        })
+    }
+}
+
+impl SolveArgs {
+    pub(crate) fn config(&self) -> Result<RunConfig> {
+        let mut config = self.geometry.config()?;
+        if let Some(name) = &self.solution {
+            config.solution = if name == "none" {
+                None
+            } else {
+                Some(TrueSolution::parse(name, self.beta, self.gamma)?)
+            };
+        } else if let Some(TrueSolution::X2Y2) = config.solution {
+            if self.beta.is_some() || self.gamma.is_some() {
+                return Err(Error::InvalidParameter {
+                    name: "beta/gamma",
+                    value: "given".into(),
+                    reason: "beta and gamma belong to --solution shadow or edge".into(),
+                });
+            }
+        }
+        config.backend = backend(self.device.backend, self.device.precision);
+        if let Some(m) = self.surface_lattice {
+            if m < 3 {
+                return Err(Error::InvalidParameter {
+                    name: "surface-lattice",
+                    value: m.to_string(),
+                    reason: "a lattice with interior points needs M >= 3".into(),
+                });
+            }
+        }
+        config.surface_lattice = self.surface_lattice;
+        config.solver = SolverOptions {
+            choice: match self.solver {
+                SolverArg::Auto => SolverChoice::Auto,
+                SolverArg::Lu => SolverChoice::Lu,
+                SolverArg::Iterative => SolverChoice::Iterative,
+            },
+            tolerance: self.tolerance,
+        };
+        Ok(config)
+    }
+}

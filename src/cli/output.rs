@@ -1,0 +1,21 @@
+//! Printing a result: JSON, a table, or both.
+
+use serde::Serialize;
+
+use radiosity::error::Result;
+use radiosity::report;
+
+/// A study's result: JSON to `json` when given, and the table unless the JSON goes to stdout.
+pub(crate) fn emit<T: Serialize>(
+    result: &T,
+    json: Option<&str>,
+    table: impl FnOnce() -> String,
+) -> Result<()> {
+    if let Some(target) = json {
+        report::write_json(result, target)?;
+    }
+    if json != Some("-") {
+        print!("{}", table());
+    }
+    Ok(())
+}

@@ -1,0 +1,117 @@
+//! `radiosity solve`: one run, its outputs (VTU, CSV, PNG) and its summary.
+
+use radiosity::error::{Error, Result};
+use radiosity::pipeline::{self, RunReport};
+use radiosity::report;
+
+use super::*;
+
+/// Three comma-separated numbers.
+pub(crate) fn parse_point(name: &'static str, text: &str) -> Result<glam::DVec3> {
+    // Every component must parse: "1,x,2,3" is refused, not read as (1, 2, 3).
+    let values: Option<Vec<f64>> = text.split(',').map(|s| s.trim().parse().ok()).collect();
+    match values.as_deref().unwrap_or_default() {
+        &[x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+            Ok(glam::DVec3::new(x, y, z))
+        }
+        _ => Err(Error::InvalidParameter {
+            name,
+            value: text.into(),
+            reason: "expected three finite numbers X,Y,Z".into(),
+        }),
+    }
+}
+
+pub(crate) fn write_outputs(run: &pipeline::Run, out: &OutputArgs) -> Result<()> {
+    let field = run.field();
+    if let Some(path) = &out.vtu {
+        report::write_vtu(&field, std::path::Path::new(path))?;
+    }
+    if let Some(path) = &out.csv {
+        report::write_node_csv(&field, std::path::Path::new(path))?;
+    }
+    if let Some(path) = &out.png {
+        let size = out
+            .png_size
+            .split_once('x')
+            .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "png-size",
+                value: out.png_size.clone(),
+                reason: "expected WIDTHxHEIGHT in pixels".into(),
+            })?;
+        let mut camera = report::Camera::overview(&field, report::DEFAULT_VIEW);
+        // The user gives points in their coordinates; the scene is drawn in its local frame.
+        let origin = run.scene.origin;
+        if let Some(t) = &out.target {
+            camera.target = parse_point("target", t)? - origin;
+        }
+        if let Some(e) = &out.eye {
+            camera.eye = parse_point("eye", e)? - origin;
+        }
+        let r = &run.report;
+        let title = format!("{}: u, {} method, n = {}", r.surface, r.method, r.n);
+        report::render_png(&field, &camera, size, &title, std::path::Path::new(path))?;
+    }
+    Ok(())
+}
+
+pub(crate) fn print_run(r: &RunReport) {
+    let alpha = r.alpha.map(|a| format!(", alpha = {a}")).unwrap_or_default();
+    println!(
+        "{} ({} mesh, {} method{alpha}): n = {}, dof = {}",
+        r.surface, r.mesh, r.method, r.n, r.dof
+    );
+    if let Some(device) = &r.device {
+        println!("assembled on {device} in {}", r.precision);
+    }
+    if let Some(e) = r.error {
+        println!("max error at the nodes E_n = {e:.6e}");
+    }
+    if let Some(s) = &r.over_surface {
+        println!(
+            "max error over S ({} points): u_n {:.6e}, iterated solution E + K u_n {:.6e}",
+            s.points, s.interpolant, s.iterated
+        );
+    }
+    println!(
+        "solution at the nodes: min {:.6}, mean {:.6}, max {:.6}",
+        r.solution_range[0], r.solution_range[1], r.solution_range[2]
+    );
+    let mut iterations = match r.condition_estimate {
+        Some(k) => format!(", condition ~{k:.1e}, {} refinement steps", r.refinement_steps),
+        None => format!(", {} iterations", r.iterations),
+    };
+    if r.rows_eliminated > 0 {
+        iterations += &format!(", {} unknowns known as u = E (rho = 0)", r.rows_eliminated);
+    }
+    println!(
+        "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",
+        r.setup_seconds, r.emission_seconds, r.solve_seconds, r.solver, r.residual
+    );
+    let p = &r.pairs;
+    println!(
+        "pairs: {} total, {} skipped, {} full, {} partial",
+        p.total,
+        p.skipped(),
+        p.full,
+        p.partial
+    );
+}
+
+/// Solves, writes the outputs asked for, and prints the summary (or JSON).
+pub(crate) fn run(args: &SolveArgs) -> Result<()> {
+    let run = pipeline::run_keeping_mesh(&args.config()?)?;
+    write_outputs(&run, &args.outputs)?;
+    let r = &run.report;
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    match &args.json {
+        Some(target) => report::write_json(&r, target),
+        None => {
+            print_run(r);
+            Ok(())
+        }
+    }
+}

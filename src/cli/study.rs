@@ -1,0 +1,44 @@
+//! `radiosity study`: the paper's tables and figures, and the stability studies.
+
+use radiosity::error::Result;
+use radiosity::report;
+use radiosity::report::TableFormat;
+use radiosity::study::{StudyDevice, StudyOptions};
+
+use super::output::emit;
+use super::*;
+
+/// Runs study `id` and prints it (JSON to `json` when given, and the table unless the JSON goes
+/// to standard output); plots go to `figures`.
+pub(crate) fn run(
+    id: &str,
+    max_n: Option<usize>,
+    device: Option<BackendArg>,
+    precision: PrecisionArg,
+    figures: &str,
+    json: Option<&str>,
+    markdown: bool,
+) -> Result<()> {
+    let device = match (device, backend(BackendArg::Gpu, precision)) {
+        (None, _) => StudyDevice::Auto,
+        (Some(BackendArg::Cpu), _) => StudyDevice::Cpu,
+        (Some(BackendArg::Gpu), b) => StudyDevice::Gpu(b.precision()),
+    };
+    let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
+    match id {
+        "stability" => {
+            let result = radiosity::stability::run_stability(device)?;
+            emit(&result, json, || report::stability_table(&result, format))
+        }
+        "stiff" => {
+            let result = radiosity::stability::run_stiff(device)?;
+            emit(&result, json, || report::stiff_table(&result, format))
+        }
+        _ => {
+            let options = StudyOptions { max_n, device, progress: true };
+            let mut result = radiosity::study::run_study(id, &options)?;
+            result.figures = report::write_study_figures(&result, std::path::Path::new(figures))?;
+            emit(&result, json, || report::study_table(&result, format))
+        }
+    }
+}

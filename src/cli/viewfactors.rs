@@ -1,0 +1,86 @@
+//! `radiosity viewfactors`: element view factors, reciprocity and closure.
+
+use radiosity::error::{Error, Result};
+use radiosity::pipeline::{self};
+use radiosity::report;
+use radiosity::visibility::PairPlanner;
+
+use super::*;
+
+pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
+    use radiosity::viewfactors::{ViewFactorOptions, ViewFactorSummary, view_factors};
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: args.tolerance.to_string(),
+            reason: "must be positive".into(),
+        });
+    }
+    let config = args.geometry.config()?;
+    let (scene, mesh, _) = pipeline::build(&config)?;
+    let started = std::time::Instant::now();
+    let planner = PairPlanner::new(&scene);
+    if args.max_depth > 6 {
+        return Err(Error::InvalidParameter {
+            name: "max-depth",
+            value: args.max_depth.to_string(),
+            reason: "at most 6 (4^6 parts of an element)".into(),
+        });
+    }
+    let options = ViewFactorOptions {
+        tolerance: args.tolerance,
+        max_depth: args.max_depth,
+        ..Default::default()
+    };
+    let bar = pipeline::progress_bar(true, "viewfactors", mesh.len());
+    let f = view_factors(&scene, &mesh, &planner, &options, &|k| bar.inc(k as u64))?;
+    bar.finish_and_clear();
+    let (row_sum_min, row_sum_max) = f.row_sum_range();
+    let summary = ViewFactorSummary {
+        surface: scene.name.clone(),
+        n: f.len(),
+        row_sum_min,
+        row_sum_max,
+        reciprocity_error: f.reciprocity_error(),
+        error_estimate: f.error_estimate,
+        evaluations: f.evaluations,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if let Some(path) = &args.output {
+        if path.ends_with(".npy") {
+            report::write_npy(path, f.len(), &f.matrix)?;
+        } else if path.ends_with(".csv") {
+            let text: String = f
+                .matrix
+                .chunks(f.len())
+                .map(|row| {
+                    row.iter().map(|v| format!("{v:e}")).collect::<Vec<_>>().join(",") + "\n"
+                })
+                .collect();
+            std::fs::write(path, text)?;
+        } else {
+            return Err(Error::InvalidParameter {
+                name: "output",
+                value: path.clone(),
+                reason: "expected a .npy or .csv file".into(),
+            });
+        }
+    }
+    if let Some(target) = &args.json {
+        return report::write_json(&summary, target);
+    }
+    println!("{}: n = {} elements, {:.2} s", summary.surface, summary.n, summary.seconds);
+    println!("row sums of F: min {:.15}, max {:.15}", summary.row_sum_min, summary.row_sum_max);
+    println!(
+        "reciprocity: max |A_i F_ij - A_j F_ji| / max A_i F_ij = {:.2e}; quadrature error estimate {:.2e}",
+        summary.reciprocity_error, summary.error_estimate
+    );
+    if scene.faces.len() <= 12 {
+        println!("face-to-face view factors (row: from):");
+        for (a, row) in f.by_face(&mesh).iter().enumerate() {
+            let cells: Vec<String> = row.iter().map(|v| format!("{v:.10}")).collect();
+            println!("  {:>12} {}", scene.faces[a].name, cells.join(" "));
+        }
+    }
+    Ok(())
+}
