@@ -1,0 +1,52 @@
+//! The collocation integrals on the CPU, one (node, element) pair at a time: the production closed
+//! form (constant and affine weights), Lambert's contour formula, the paper's right-triangle
+//! formula, and the far-field rule. `cargo bench --bench kernels`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::{DVec2, DVec3};
+use radiosity::kernels::far_field::FarFieldRule;
+use radiosity::kernels::{Affine2, Observer, exact, lambert, paper_closed_form};
+use radiosity::quadrature::ImtRule;
+use std::hint::black_box;
+
+fn kernels(c: &mut Criterion) {
+    let tri = [DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(0.3, 0.8)];
+    // A node above and beside the element, its face tilted: every term of the closed forms works.
+    let near = Observer {
+        position: DVec3::new(0.4, -0.3, 0.5),
+        normal: DVec3::new(0.3, 0.4, -0.866_025_403_784_438_6),
+    };
+    let far = Observer { position: DVec3::new(6.0, 4.0, 3.0), normal: DVec3::new(-0.6, 0.0, -0.8) };
+    let weights = [
+        Affine2 { c0: 1.0, cx: -1.0, cy: -0.5 },
+        Affine2 { c0: 0.0, cx: 1.0, cy: -0.375 },
+        Affine2 { c0: 0.0, cx: 0.0, cy: 1.25 },
+    ];
+    let imt = ImtRule::new(128);
+    let loops = [&tri[..]];
+    let mut group = c.benchmark_group("kernels");
+    group.bench_function("closed form, constant weight", |b| {
+        b.iter(|| exact::constant_weight(black_box(&near), loops))
+    });
+    group.bench_function("closed form, three affine weights", |b| {
+        b.iter(|| exact::affine_weights(black_box(&near), loops, &weights, &imt))
+    });
+    group.bench_function("Lambert contour, constant weight", |b| {
+        b.iter(|| lambert::constant_weight(black_box(&near), loops))
+    });
+    group.bench_function("paper right triangles (4.10), constant weight", |b| {
+        b.iter(|| paper_closed_form::constant_weight(black_box(&near), &tri))
+    });
+    let rule = FarFieldRule::standard();
+    group.bench_function("far-field rule, three affine weights", |b| {
+        b.iter(|| {
+            rule.integrate_subdivided(black_box(&far), &tri, &weights, |t| {
+                exact::affine_weights(&far, [&t[..]], &weights, &imt)
+            })
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kernels);
+criterion_main!(benches);
