@@ -351,6 +351,38 @@ impl Run {
     }
 }
 
+/// Assembles K for `config` up to `config.setup_repeats` times (fewer once one assembly takes over
+/// [`REPEAT_BELOW_SECONDS`]), each with a pair plan of its own; returns the last assembly, the
+/// GPU's name, and the fastest time (pair plan included).
+fn assemble_timed(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+) -> Result<(Assembly, Option<String>, f64)> {
+    let progress = progress_bar(config.progress, "assembly", disc.dof());
+    let mut timed = None;
+    let mut setup_seconds = f64::INFINITY;
+    for _ in 0..config.setup_repeats.max(1) {
+        let started = Instant::now();
+        let planner = PairPlanner::new(scene);
+        let assembled =
+            assemble_on(config.backend, scene, mesh, disc, &planner, &config.assembly, &|k| {
+                progress.inc(k as u64)
+            })?;
+        let seconds = started.elapsed().as_secs_f64();
+        setup_seconds = setup_seconds.min(seconds);
+        timed = Some(assembled);
+        progress.reset();
+        if seconds > REPEAT_BELOW_SECONDS {
+            break;
+        }
+    }
+    progress.finish_and_clear();
+    let (assembled, device) = timed.expect("at least one assembly");
+    Ok((assembled, device, setup_seconds))
+}
+
 /// What the user should be told about a scene before trusting its solution.
 fn run_warnings(scene: &Scene, emission: &[f64]) -> Vec<String> {
     let mut warnings = Vec::new();
@@ -385,26 +417,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         None => None,
     };
     let planner = PairPlanner::new(&scene);
-    let progress = progress_bar(config.progress, "assembly", disc.dof());
-    let mut timed = None;
-    let mut setup_seconds = f64::INFINITY;
-    for _ in 0..config.setup_repeats.max(1) {
-        let started = Instant::now();
-        let planner = PairPlanner::new(&scene);
-        let assembled =
-            assemble_on(config.backend, &scene, &mesh, &disc, &planner, &config.assembly, &|k| {
-                progress.inc(k as u64)
-            })?;
-        let seconds = started.elapsed().as_secs_f64();
-        setup_seconds = setup_seconds.min(seconds);
-        timed = Some(assembled);
-        progress.reset();
-        if seconds > REPEAT_BELOW_SECONDS {
-            break;
-        }
-    }
-    progress.finish_and_clear();
-    let (assembled, device) = timed.expect("at least one assembly");
+    let (assembled, device, setup_seconds) = assemble_timed(config, &scene, &mesh, &disc)?;
 
     let started = Instant::now();
     let rhs: Vec<f64> = match &u_faces {

@@ -119,55 +119,67 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
             let zero = vec![0.0; dof];
             let rhs: Vec<f64> =
                 compensated_residual(&k, &exact, &zero).iter().map(|v| -v).collect();
-            let error_of = |u: &[f64]| relative_difference(u, &exact);
-            let error_lu = LuSolution::new(&k, &rhs, 0).ok().map(|s| error_of(&s.u));
-            let mut row = StiffRow {
-                case: case.clone(),
-                method: method.name(),
-                rho,
-                dof,
-                condition_estimate: None,
-                error_lu,
-                error_refined: None,
-                refinement_steps: None,
-                error_gmres: None,
-                gmres_vs_lu: None,
-                gmres_iterations: None,
-                rows_eliminated: 0,
-                bound: None,
-                status: "solved".into(),
-            };
-            match solve(&k, &rhs, SolverOptions::with(SolverChoice::Lu)) {
-                Ok(s) => {
-                    let kappa = s.condition_estimate.unwrap_or(f64::INFINITY);
-                    row.condition_estimate = Some(kappa);
-                    row.error_refined = Some(error_of(&s.u));
-                    row.refinement_steps = Some(s.refinement_steps);
-                    row.rows_eliminated = s.rows_eliminated;
-                    let ratio = max_abs(&rhs) / max_abs(&exact);
-                    row.bound = Some(4.0 * f64::EPSILON + 3.0 * kappa * f64::EPSILON * ratio);
-                    match solve(&k, &rhs, SolverOptions::with(SolverChoice::Iterative)) {
-                        Ok(g) => {
-                            row.error_gmres = Some(error_of(&g.u));
-                            row.gmres_vs_lu = Some(relative_difference(&g.u, &s.u));
-                            row.gmres_iterations = Some(g.iterations);
-                        }
-                        Err(e @ Error::NotConverged { .. }) => {
-                            row.status = format!("LU solved; {e}")
-                        }
-                        Err(e) => return Err(e),
-                    }
-                }
-                Err(Error::SingularSystem { condition, reason }) => {
-                    row.condition_estimate = condition.is_finite().then_some(condition);
-                    row.status = format!("refused as singular: {reason}");
-                }
-                Err(e) => return Err(e),
-            }
-            rows.push(row);
+            rows.push(stiff_row(&case, method, rho, &k, &rhs, &exact)?);
         }
     }
     Ok(rows)
+}
+
+/// Solves one stiff system three ways (plain LU, the solver's LU, GMRES) against its known
+/// solution `exact`.
+fn stiff_row(
+    case: &str,
+    method: Method,
+    rho: f64,
+    k: &CollocationMatrix,
+    rhs: &[f64],
+    exact: &[f64],
+) -> Result<StiffRow> {
+    let dof = k.dof();
+    let error_of = |u: &[f64]| relative_difference(u, exact);
+    let error_lu = LuSolution::new(k, rhs, 0).ok().map(|s| error_of(&s.u));
+    let mut row = StiffRow {
+        case: case.to_string(),
+        method: method.name(),
+        rho,
+        dof,
+        condition_estimate: None,
+        error_lu,
+        error_refined: None,
+        refinement_steps: None,
+        error_gmres: None,
+        gmres_vs_lu: None,
+        gmres_iterations: None,
+        rows_eliminated: 0,
+        bound: None,
+        status: "solved".into(),
+    };
+    match solve(k, rhs, SolverOptions::with(SolverChoice::Lu)) {
+        Ok(s) => {
+            let kappa = s.condition_estimate.unwrap_or(f64::INFINITY);
+            row.condition_estimate = Some(kappa);
+            row.error_refined = Some(error_of(&s.u));
+            row.refinement_steps = Some(s.refinement_steps);
+            row.rows_eliminated = s.rows_eliminated;
+            let ratio = max_abs(rhs) / max_abs(exact);
+            row.bound = Some(4.0 * f64::EPSILON + 3.0 * kappa * f64::EPSILON * ratio);
+            match solve(k, rhs, SolverOptions::with(SolverChoice::Iterative)) {
+                Ok(g) => {
+                    row.error_gmres = Some(error_of(&g.u));
+                    row.gmres_vs_lu = Some(relative_difference(&g.u, &s.u));
+                    row.gmres_iterations = Some(g.iterations);
+                }
+                Err(e @ Error::NotConverged { .. }) => row.status = format!("LU solved; {e}"),
+                Err(e) => return Err(e),
+            }
+        }
+        Err(Error::SingularSystem { condition, reason }) => {
+            row.condition_estimate = condition.is_finite().then_some(condition);
+            row.status = format!("refused as singular: {reason}");
+        }
+        Err(e) => return Err(e),
+    }
+    Ok(row)
 }
 
 fn max_abs(v: &[f64]) -> f64 {

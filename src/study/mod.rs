@@ -164,16 +164,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
         let first = rows.len();
         let mut previous: Option<(f64, Option<f64>)> = None;
         for refine in 0.. {
-            let mut config = RunConfig::paper(series.scene, refine);
-            config.mesh = series.mesh;
-            config.method = series.method;
-            config.solution = Some(series.solution);
-            config.assembly.quadrature = series.quadrature;
-            config.assembly.imt_nodes = series.imt_nodes;
-            config.backend = backend;
-            config.progress = options.progress;
-            config.setup_repeats = if timing { 3 } else { 1 };
-            config.surface_lattice = spec.surface_lattice;
+            let config = series_config(&spec, series, refine, backend, options.progress);
             let (_, mesh, _) = pipeline::build(&config)?;
             if mesh.len() > max_n {
                 break;
@@ -227,33 +218,10 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             });
             previous = Some((error, paper_error));
         }
-        let done = &rows[first..];
-        let rate_of = |f: &dyn Fn(&StudyRow) -> Option<f64>| {
-            let points: Option<Vec<(usize, f64)>> =
-                done.iter().map(|r| f(r).map(|e| (r.n, e))).collect();
-            points.and_then(|p| fit_rate(&p))
-        };
-        summaries.push(SeriesSummary {
-            series: label,
-            rate: rate_of(&|r| Some(r.error)),
-            last_rate: done.last().and_then(|r| r.ratio).map(f64::log2),
-            surface_rate: rate_of(&|r| r.surface_error),
-            iterated_rate: rate_of(&|r| r.iterated_error),
-            skipped: None,
-        });
+        summaries.push(summary(label, &rows[first..]));
     }
     if spec.kind == (Kind::Timing { plot: true }) {
-        for method in ["centroid", "linear"] {
-            let points: Vec<(f64, f64)> = rows
-                .iter()
-                .filter(|r| r.method == method)
-                .map(|r| (r.setup_seconds, r.error))
-                .collect();
-            let front = pareto_front(&points);
-            for (row, on_front) in rows.iter_mut().filter(|r| r.method == method).zip(front) {
-                row.pareto = Some(on_front);
-            }
-        }
+        mark_pareto_fronts(&mut rows);
     }
     Ok(StudyResult {
         study: spec.id.into(),
@@ -263,6 +231,60 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
         notes: spec.notes.iter().map(|s| s.to_string()).collect(),
         figures: Vec::new(),
     })
+}
+
+/// The run of `series` at `refine` on `backend`.
+fn series_config(
+    spec: &StudySpec,
+    series: &Series,
+    refine: u32,
+    backend: Backend,
+    progress: bool,
+) -> RunConfig {
+    let mut config = RunConfig::paper(series.scene, refine);
+    config.mesh = series.mesh;
+    config.method = series.method;
+    config.solution = Some(series.solution);
+    config.assembly.quadrature = series.quadrature;
+    config.assembly.imt_nodes = series.imt_nodes;
+    config.backend = backend;
+    config.progress = progress;
+    // Timings of small runs are noisy: the timing studies take the best of three.
+    config.setup_repeats = if matches!(spec.kind, Kind::Timing { .. }) { 3 } else { 1 };
+    config.surface_lattice = spec.surface_lattice;
+    config
+}
+
+/// A series' fitted rates from its rows.
+fn summary(label: String, done: &[StudyRow]) -> SeriesSummary {
+    let rate_of = |f: &dyn Fn(&StudyRow) -> Option<f64>| {
+        let points: Option<Vec<(usize, f64)>> =
+            done.iter().map(|r| f(r).map(|e| (r.n, e))).collect();
+        points.and_then(|p| fit_rate(&p))
+    };
+    SeriesSummary {
+        series: label,
+        rate: rate_of(&|r| Some(r.error)),
+        last_rate: done.last().and_then(|r| r.ratio).map(f64::log2),
+        surface_rate: rate_of(&|r| r.surface_error),
+        iterated_rate: rate_of(&|r| r.iterated_error),
+        skipped: None,
+    }
+}
+
+/// Marks the rows on the Pareto front of error against setup time, per method.
+fn mark_pareto_fronts(rows: &mut [StudyRow]) {
+    for method in ["centroid", "linear"] {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.method == method)
+            .map(|r| (r.setup_seconds, r.error))
+            .collect();
+        let front = pareto_front(&points);
+        for (row, on_front) in rows.iter_mut().filter(|r| r.method == method).zip(front) {
+            row.pareto = Some(on_front);
+        }
+    }
 }
 
 fn lookup(table: &[(usize, f64)], n: usize) -> Option<f64> {
