@@ -1,5 +1,6 @@
 //! `radiosity bench`: the same matrix assembled on each backend, timed in one run, and compared
-//! entry by entry. Timings exclude one-time costs (device creation, shader compilation), which are
+//! entry by entry. It is the matrix `solve` uses: the same [`Assembler`] (on the GPU, thin
+//! elements' columns recomputed on the CPU). Timings exclude one-time costs (device creation, shader compilation), which are
 //! reported apart, and are the best of several repetitions.
 
 use std::time::Instant;
@@ -8,8 +9,8 @@ use serde::Serialize;
 
 use crate::assembly::{AssemblyOptions, CollocationMatrix};
 use crate::error::Result;
-use crate::gpu::{self, GpuAssembler, GpuTimings};
-use crate::pipeline::{self, Backend, RunConfig};
+use crate::gpu::GpuTimings;
+use crate::pipeline::{self, Assembler, Backend, RunConfig};
 use crate::visibility::PairPlanner;
 
 /// One backend's figures.
@@ -101,31 +102,22 @@ pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<B
     let mut matrices: Vec<CollocationMatrix> = Vec::new();
     for &backend in backends {
         let started = Instant::now();
-        let gpu_assembler = match backend {
-            Backend::Cpu => None,
-            Backend::Gpu(precision) => {
-                let ctx = gpu::context_for(precision)?;
-                report.device = Some(format!(
-                    "{} ({}, {})",
-                    ctx.adapter.name, ctx.adapter.backend, ctx.adapter.device_type
-                ));
-                Some(GpuAssembler::new(ctx, precision, disc.method)?)
-            }
-        };
+        let assembler = Assembler::new(backend, disc.method, options.quadrature)?;
         let preparation_seconds = started.elapsed().as_secs_f64();
+        if let Assembler::Gpu(g) = &assembler {
+            let a = &g.context().adapter;
+            report.device = Some(format!("{} ({}, {})", a.name, a.backend, a.device_type));
+        }
         let mut best = f64::INFINITY;
         let mut breakdown = None;
         let mut last = None;
         for _ in 0..repeats {
             let started = Instant::now();
-            let a = match &gpu_assembler {
-                None => crate::assembly::assemble(&mesh, &disc, &planner, options, &|_| {})?,
-                Some(g) => g.assemble(&scene, &mesh, &disc, &planner, options, &|_| {})?,
-            };
+            let a = assembler.assemble(&scene, &mesh, &disc, &planner, options, &|_| {})?;
             let elapsed = started.elapsed().as_secs_f64();
             if elapsed < best {
                 best = elapsed;
-                breakdown = gpu_assembler.as_ref().map(GpuAssembler::last_timings);
+                breakdown = assembler.last_timings();
             }
             last = Some(a);
         }

@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::assembly::{self, Assembly, AssemblyOptions, Quadrature};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
-use crate::gpu::{self, GpuAssembler, Precision};
+use crate::gpu::{self, GpuAssembler, GpuTimings, Precision};
 use crate::mesh::{
     Grading, LineExtent, Mesh, MeshKind, S5Diagonals, Sources, paper_discontinuity_cuts,
     shadow_lines,
@@ -75,7 +75,75 @@ impl Backend {
     }
 }
 
-/// Assembles K on `backend`; returns the device's name for the GPU.
+/// A backend ready to assemble K: on the GPU, the kernels compiled once (the one-time cost that
+/// timings of the assembly leave out). Every command that assembles goes through it, so `bench`
+/// times the very matrix `solve` uses.
+pub enum Assembler {
+    /// Plain Rust on all cores.
+    Cpu,
+    /// The GPU's compiled kernels.
+    Gpu(GpuAssembler<'static>),
+}
+
+impl Assembler {
+    /// Prepares `backend` for `method` and `quadrature` (the GPU evaluates the exact method only).
+    pub fn new(backend: Backend, method: Method, quadrature: Quadrature) -> Result<Self> {
+        match backend {
+            Backend::Cpu => Ok(Self::Cpu),
+            Backend::Gpu(_) if quadrature != Quadrature::Exact => Err(Error::InvalidParameter {
+                name: "quadrature",
+                value: quadrature.name().into(),
+                reason: "the GPU backend evaluates the exact method only; use --backend cpu".into(),
+            }),
+            Backend::Gpu(precision) => {
+                let ctx = gpu::context_for(precision)?;
+                Ok(Self::Gpu(GpuAssembler::new(ctx, precision, method)?))
+            }
+        }
+    }
+
+    /// The GPU adapter's name and backend, for reports.
+    pub fn device(&self) -> Option<String> {
+        match self {
+            Self::Cpu => None,
+            Self::Gpu(g) => {
+                let a = &g.context().adapter;
+                Some(format!("{} ({})", a.name, a.backend))
+            }
+        }
+    }
+
+    /// Where the GPU's last assembly spent its time.
+    pub fn last_timings(&self) -> Option<GpuTimings> {
+        match self {
+            Self::Cpu => None,
+            Self::Gpu(g) => Some(g.last_timings()),
+        }
+    }
+
+    /// Assembles K. On the GPU the columns of thin elements, where the closed forms cancel, are
+    /// recomputed on the CPU ([`assembly::recompute_thin_columns`]).
+    pub fn assemble(
+        &self,
+        scene: &Scene,
+        mesh: &Mesh,
+        disc: &Discretization,
+        planner: &PairPlanner,
+        options: &AssemblyOptions,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Assembly> {
+        match self {
+            Self::Cpu => assembly::assemble(mesh, disc, planner, options, progress),
+            Self::Gpu(g) => {
+                let mut a = g.assemble(scene, mesh, disc, planner, options, progress)?;
+                assembly::recompute_thin_columns(&mut a, disc, planner, options);
+                Ok(a)
+            }
+        }
+    }
+}
+
+/// Assembles K on `backend` once (kernels compiled for it); returns the device's name for the GPU.
 pub fn assemble_on(
     backend: Backend,
     scene: &Scene,
@@ -85,23 +153,9 @@ pub fn assemble_on(
     options: &AssemblyOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(Assembly, Option<String>)> {
-    match backend {
-        Backend::Cpu => Ok((assembly::assemble(mesh, disc, planner, options, progress)?, None)),
-        Backend::Gpu(_) if options.quadrature != Quadrature::Exact => {
-            Err(Error::InvalidParameter {
-                name: "quadrature",
-                value: options.quadrature.name().into(),
-                reason: "the GPU backend evaluates the exact method only; use --backend cpu".into(),
-            })
-        }
-        Backend::Gpu(precision) => {
-            let ctx = gpu::context_for(precision)?;
-            let assembler = GpuAssembler::new(ctx, precision, disc.method)?;
-            let mut a = assembler.assemble(scene, mesh, disc, planner, options, progress)?;
-            assembly::recompute_thin_columns(&mut a, disc, planner, options);
-            Ok((a, Some(format!("{} ({})", ctx.adapter.name, ctx.adapter.backend))))
-        }
-    }
+    let assembler = Assembler::new(backend, disc.method, options.quadrature)?;
+    let a = assembler.assemble(scene, mesh, disc, planner, options, progress)?;
+    Ok((a, assembler.device()))
 }
 
 /// Where a study's series run.
@@ -254,6 +308,8 @@ pub struct RunReport {
     pub condition_estimate: Option<f64>,
     /// Steps of iterative refinement after LU.
     pub refinement_steps: usize,
+    /// One-time preparation of the backend (GPU: compiling its kernels), not in `setup_seconds`.
+    pub preparation_seconds: f64,
     /// Unknowns known without solving (zero rows of K: rho = 0 or nothing in view; u = E).
     pub rows_eliminated: usize,
     /// What the user should know about the scene or the run (no emitter, faces lying on one
@@ -352,14 +408,16 @@ impl Run {
 }
 
 /// Assembles K for `config` up to `config.setup_repeats` times (fewer once one assembly takes over
-/// [`REPEAT_BELOW_SECONDS`]), each with a pair plan of its own; returns the last assembly, the
-/// GPU's name, and the fastest time (pair plan included).
+/// [`REPEAT_BELOW_SECONDS`]), each with a pair plan of its own, with one prepared backend.
 fn assemble_timed(
     config: &RunConfig,
     scene: &Scene,
     mesh: &Mesh,
     disc: &Discretization,
-) -> Result<(Assembly, Option<String>, f64)> {
+) -> Result<TimedAssembly> {
+    let started = Instant::now();
+    let assembler = Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
+    let preparation_seconds = started.elapsed().as_secs_f64();
     let progress = progress_bar(config.progress, "assembly", disc.dof());
     let mut timed = None;
     let mut setup_seconds = f64::INFINITY;
@@ -367,7 +425,7 @@ fn assemble_timed(
         let started = Instant::now();
         let planner = PairPlanner::new(scene);
         let assembled =
-            assemble_on(config.backend, scene, mesh, disc, &planner, &config.assembly, &|k| {
+            assembler.assemble(scene, mesh, disc, &planner, &config.assembly, &|k| {
                 progress.inc(k as u64)
             })?;
         let seconds = started.elapsed().as_secs_f64();
@@ -379,8 +437,18 @@ fn assemble_timed(
         }
     }
     progress.finish_and_clear();
-    let (assembled, device) = timed.expect("at least one assembly");
-    Ok((assembled, device, setup_seconds))
+    let assembled = timed.expect("at least one assembly");
+    Ok(TimedAssembly { assembled, device: assembler.device(), setup_seconds, preparation_seconds })
+}
+
+/// An assembly with its timings.
+struct TimedAssembly {
+    assembled: Assembly,
+    device: Option<String>,
+    /// The fastest assembly (pair plan included).
+    setup_seconds: f64,
+    /// One-time preparation (GPU: compiling the kernels), not part of `setup_seconds`.
+    preparation_seconds: f64,
 }
 
 /// What the user should be told about a scene before trusting its solution.
@@ -417,7 +485,8 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         None => None,
     };
     let planner = PairPlanner::new(&scene);
-    let (assembled, device, setup_seconds) = assemble_timed(config, &scene, &mesh, &disc)?;
+    let TimedAssembly { assembled, device, setup_seconds, preparation_seconds } =
+        assemble_timed(config, &scene, &mesh, &disc)?;
 
     let started = Instant::now();
     let rhs: Vec<f64> = match &u_faces {
@@ -484,6 +553,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         dof: disc.dof(),
         error,
         setup_seconds,
+        preparation_seconds,
         emission_seconds,
         solve_seconds,
         residual: outcome.residual,

@@ -63,7 +63,10 @@ pub(crate) fn print_run(r: &RunReport) {
         r.surface, r.mesh, r.method, r.n, r.dof
     );
     if let Some(device) = &r.device {
-        println!("assembled on {device} in {}", r.precision);
+        println!(
+            "assembled on {device} in {} (kernels compiled in {:.3} s, not in the setup time)",
+            r.precision, r.preparation_seconds
+        );
     }
     if let Some(e) = r.error {
         println!("max error at the nodes E_n = {e:.6e}");

@@ -292,6 +292,11 @@ impl<'a> GpuAssembler<'a> {
         self.precision
     }
 
+    /// The device the kernels run on.
+    pub fn context(&self) -> &'a GpuContext {
+        self.ctx
+    }
+
     /// Where the time of the last [`Self::assemble`] went.
     pub fn last_timings(&self) -> GpuTimings {
         *self.timings.lock().expect("timings lock")
