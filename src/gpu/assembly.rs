@@ -33,12 +33,15 @@ pub struct TileLimits {
     pub rows: usize,
     /// Pairs the near list may hold; pairs beyond it are evaluated in the first pass.
     pub near_pairs: u64,
+    /// Bytes one storage binding may hold (the device's `max_storage_buffer_binding_size` when
+    /// smaller): lets tests drive the tiling of a small scene as a device would a large one.
+    pub binding_bytes: u64,
 }
 
 impl Default for TileLimits {
     /// No bounds beyond the device's.
     fn default() -> Self {
-        Self { rows: usize::MAX, near_pairs: u64::MAX }
+        Self { rows: usize::MAX, near_pairs: u64::MAX, binding_bytes: u64::MAX }
     }
 }
 
@@ -355,12 +358,19 @@ impl<'a> GpuAssembler<'a> {
         let (tables, counts) = tables(options, self.method, self.precision)?;
         let tables = compute::uniform(ctx, &layout::real_bytes(&tables, p));
 
-        let max_binding =
-            ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
+        let max_binding = ctx
+            .limits
+            .max_storage_buffer_binding_size
+            .min(ctx.limits.max_buffer_size)
+            .min(limits.binding_bytes);
+        // Per row of a tile: its output and its views of every face (a scene of 10 000 faces has
+        // 5 MB of views per row in f64, more than its output row).
         let row_bytes = (dof * p.bytes()) as u64;
-        // The output binding and the host's staging copy stay below 64 MiB per tile, and the rows of a
-        // tile fit in one dimension of the dispatch grid.
-        let rows_per_tile = ((max_binding.min(64 << 20) / row_bytes.max(1)) as usize)
+        let view_bytes = (mesh.face_count() * VIEW_STRIDE * p.bytes()) as u64;
+        // Every per-row buffer and the host's staging copy stay below 64 MiB per tile, and the
+        // rows of a tile fit in one dimension of the dispatch grid.
+        let rows_per_tile = ((max_binding.min(64 << 20) / row_bytes.max(view_bytes).max(1))
+            as usize)
             .min(ctx.limits.max_compute_workgroups_per_dimension as usize)
             .min(limits.rows)
             .clamp(1, dof.max(1));
@@ -435,95 +445,105 @@ impl<'a> GpuAssembler<'a> {
                 )));
             }
         }
-        let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
-        // The near list holds every pair of the tile, up to what one indirect dispatch and one
-        // binding allow; pairs beyond it are evaluated in the first pass.
-        let near_capacity = if self.method.nodes_per_element() == 3 {
-            let grid_limit =
-                ctx.limits.max_compute_workgroups_per_dimension as u64 * layout::WORKGROUP as u64;
-            let binding_limit = (max_binding - layout::NEAR_HEADER_BYTES) / 8;
-            ((rows * disc.element_count()) as u64)
-                .min(grid_limit)
-                .min(binding_limit)
-                .min(max_near_pairs)
-        } else {
-            0
-        };
-        let params = Params {
-            rows: rows as u32,
-            elements: disc.element_count() as u32,
-            faces: mesh.face_count() as u32,
-            dof: dof as u32,
-            imt_count: counts.imt as u32,
-            rule_offset: counts.rule_offset as u32,
-            band_count: counts.bands as u32,
-            exception_count: plan.exception_count,
-            piece_offset: plan.piece_offset,
-            stride,
-            near_capacity: near_capacity as u32,
-            _pad: 0,
-        };
-        let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
-        let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("near"),
-            size: layout::NEAR_HEADER_BYTES + 8 * near_capacity.max(1),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        // The indirect arguments, copied out of the near list: a buffer bound read-write cannot
-        // also drive the dispatch that binds it.
-        let near_args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("near dispatch"),
-            size: 16,
-            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let views = compute::storage(ctx, &view_bytes);
-        let exceptions = compute::storage(ctx, exception_bytes);
-        let vertices = compute::storage(ctx, &vertex_bytes);
-        let size = (rows * dof * p.bytes()) as u64;
-        let (out, staging) = compute::output(ctx, size);
-        let group = compute::bind_group(
-            ctx,
-            &self.layout,
-            &[&params, &views, elements, tables, &exceptions, &vertices, &out, &near],
-        );
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.full);
-            pass.set_bind_group(0, &group, &[]);
-            let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
-            pass.dispatch_workgroups(groups_x, rows as u32, 1);
-        }
-        if near_capacity > 0 {
-            // The pairs the first pass deferred, with every lane busy.
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.prepare_near);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-            drop(pass);
-            encoder.copy_buffer_to_buffer(&near, layout::NEAR_DISPATCH_OFFSET, &near_args, 0, 12);
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.near);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups_indirect(&near_args, 0);
-        }
-        if plan.exception_count > 0 {
-            // A second pass: ordered after the first, which it partly overwrites.
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pieces);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(exc_x, exc_y, 1);
-        }
-        encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, size.max(16));
-        ctx.queue.submit([encoder.finish()]);
-        Ok(InFlight {
-            rows: plan.rows.clone(),
-            staging,
-            size,
-            _buffers: vec![params, views, exceptions, vertices, out, near, near_args],
-        })
+        // Buffers, bindings and the submission inside error scopes: a device limit met here is
+        // an error of this run, not a panic in wgpu's default handler.
+        compute::checked(ctx, "GPU assembly", || {
+            let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
+            // The near list holds every pair of the tile, up to what one indirect dispatch and one
+            // binding allow; pairs beyond it are evaluated in the first pass.
+            let near_capacity = if self.method.nodes_per_element() == 3 {
+                let grid_limit = ctx.limits.max_compute_workgroups_per_dimension as u64
+                    * layout::WORKGROUP as u64;
+                let binding_limit = (max_binding - layout::NEAR_HEADER_BYTES) / 8;
+                ((rows * disc.element_count()) as u64)
+                    .min(grid_limit)
+                    .min(binding_limit)
+                    .min(max_near_pairs)
+            } else {
+                0
+            };
+            let params = Params {
+                rows: rows as u32,
+                elements: disc.element_count() as u32,
+                faces: mesh.face_count() as u32,
+                dof: dof as u32,
+                imt_count: counts.imt as u32,
+                rule_offset: counts.rule_offset as u32,
+                band_count: counts.bands as u32,
+                exception_count: plan.exception_count,
+                piece_offset: plan.piece_offset,
+                stride,
+                near_capacity: near_capacity as u32,
+                _pad: 0,
+            };
+            let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+            let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("near"),
+                size: layout::NEAR_HEADER_BYTES + 8 * near_capacity.max(1),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            // The indirect arguments, copied out of the near list: a buffer bound read-write cannot
+            // also drive the dispatch that binds it.
+            let near_args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("near dispatch"),
+                size: 16,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let views = compute::storage(ctx, &view_bytes);
+            let exceptions = compute::storage(ctx, exception_bytes);
+            let vertices = compute::storage(ctx, &vertex_bytes);
+            let size = (rows * dof * p.bytes()) as u64;
+            let (out, staging) = compute::output(ctx, size);
+            let group = compute::bind_group(
+                ctx,
+                &self.layout,
+                &[&params, &views, elements, tables, &exceptions, &vertices, &out, &near],
+            );
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.full);
+                pass.set_bind_group(0, &group, &[]);
+                let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
+                pass.dispatch_workgroups(groups_x, rows as u32, 1);
+            }
+            if near_capacity > 0 {
+                // The pairs the first pass deferred, with every lane busy.
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.prepare_near);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+                drop(pass);
+                encoder.copy_buffer_to_buffer(
+                    &near,
+                    layout::NEAR_DISPATCH_OFFSET,
+                    &near_args,
+                    0,
+                    12,
+                );
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.near);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups_indirect(&near_args, 0);
+            }
+            if plan.exception_count > 0 {
+                // A second pass: ordered after the first, which it partly overwrites.
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.pieces);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(exc_x, exc_y, 1);
+            }
+            encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, size.max(16));
+            ctx.queue.submit([encoder.finish()]);
+            Ok::<_, Error>(InFlight {
+                rows: plan.rows.clone(),
+                staging,
+                size,
+                _buffers: vec![params, views, exceptions, vertices, out, near, near_args],
+            })
+        })?
     }
 
     fn finish(

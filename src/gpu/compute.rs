@@ -66,6 +66,20 @@ pub fn pipeline(
     Ok((bind_layout, pipelines))
 }
 
+/// Runs `work` (buffer creation, binding, submission) inside error scopes, so that a validation
+/// or out-of-memory error comes back as [`Error::Gpu`] naming `what`, instead of reaching wgpu's
+/// default handler, which panics.
+pub fn checked<T>(ctx: &GpuContext, what: &str, work: impl FnOnce() -> T) -> Result<T> {
+    let out_of_memory = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let value = work();
+    let errors = [pollster::block_on(validation.pop()), pollster::block_on(out_of_memory.pop())];
+    match errors.into_iter().flatten().next() {
+        Some(e) => Err(Error::Gpu(format!("{what} failed on the device: {e}"))),
+        None => Ok(value),
+    }
+}
+
 /// A read-only storage buffer holding `bytes` (at least 16 bytes, as empty bindings are invalid).
 pub fn storage(ctx: &GpuContext, bytes: &[u8]) -> wgpu::Buffer {
     let padded;

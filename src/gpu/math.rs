@@ -144,7 +144,8 @@ pub struct UlpReport {
     pub worst_at: (f64, f64),
 }
 
-/// Evaluates `function` on the device at each sample.
+/// Evaluates `function` on the device at each sample, in as many dispatches as the device's grid
+/// and binding limits need.
 pub fn evaluate(
     ctx: &GpuContext,
     precision: Precision,
@@ -154,25 +155,37 @@ pub fn evaluate(
     let code = MathFunction::ALL.iter().position(|f| *f == function).expect("listed") as u32;
     let source = shaders::math_test(precision);
     let (layout_, pipelines) = compute::pipeline(ctx, &source, &["math_eval"], 3, &[0], &[2])?;
-    let flat: Vec<f64> = samples.iter().flat_map(|&(x, y)| [x, y]).collect();
-    let params: [u32; 4] = [code, samples.len() as u32, 0, 0];
-    let uniform = compute::uniform(ctx, bytemuck::cast_slice(&params));
-    let input = compute::storage(ctx, &layout::real_bytes(&flat, precision));
-    let size = (samples.len() * precision.bytes()) as u64;
-    let (out, staging) = compute::output(ctx, size);
-    let group = compute::bind_group(ctx, &layout_, &[&uniform, &input, &out]);
-    let (x, y, _) = compute::grid(ctx, samples.len() as u64);
-    assert_eq!(y, 1, "math tests use a 1-D grid");
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipelines[0]);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x, 1, 1);
+    // One dispatch: a 1-D grid, and two arguments per sample within one binding.
+    let grid_limit =
+        u64::from(ctx.limits.max_compute_workgroups_per_dimension) * u64::from(layout::WORKGROUP);
+    let binding_limit =
+        ctx.limits.max_storage_buffer_binding_size.min(1 << 26) / (2 * precision.bytes() as u64);
+    let chunk = grid_limit.min(binding_limit).max(1) as usize;
+    let mut values = Vec::with_capacity(samples.len());
+    for part in samples.chunks(chunk) {
+        let flat: Vec<f64> = part.iter().flat_map(|&(x, y)| [x, y]).collect();
+        let params: [u32; 4] = [code, part.len() as u32, 0, 0];
+        let size = (part.len() * precision.bytes()) as u64;
+        let staging = compute::checked(ctx, "gpu-check", || {
+            let uniform = compute::uniform(ctx, bytemuck::cast_slice(&params));
+            let input = compute::storage(ctx, &layout::real_bytes(&flat, precision));
+            let (out, staging) = compute::output(ctx, size);
+            let group = compute::bind_group(ctx, &layout_, &[&uniform, &input, &out]);
+            let (x, _, _) = compute::grid(ctx, part.len() as u64);
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipelines[0]);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(x, 1, 1);
+            }
+            encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, size.max(16));
+            ctx.queue.submit([encoder.finish()]);
+            staging
+        })?;
+        values.extend(compute::read_back(ctx, &staging, size, precision)?);
     }
-    encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, size.max(16));
-    ctx.queue.submit([encoder.finish()]);
-    compute::read_back(ctx, &staging, size, precision)
+    Ok(values)
 }
 
 /// Worst ulp error of each function over `count` samples.
