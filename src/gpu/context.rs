@@ -24,6 +24,8 @@ pub struct AdapterSummary {
     pub device_type: String,
     /// Whether the device has `SHADER_F64`.
     pub f64: bool,
+    /// Driver and its version, as the adapter reports them (e.g. "llvmpipe, Mesa 22.3.6").
+    pub driver: String,
 }
 
 /// A device and queue with the facts the work functions need.
@@ -114,6 +116,7 @@ impl GpuContext {
                 backend: format!("{:?}", info.backend),
                 device_type: format!("{:?}", info.device_type),
                 f64: has_f64,
+                driver: format!("{}, {}", info.driver, info.driver_info),
             },
             limits,
         })
