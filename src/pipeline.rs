@@ -252,6 +252,10 @@ pub struct RunConfig {
     pub surface_lattice: Option<usize>,
 }
 
+/// Relative error estimate of E above which `solve` warns: 1e3 times the quadrature's relative
+/// tolerance (1e-12): the sum of per-triangle estimates is pessimistic by about that much.
+const EMISSION_WARNING: f64 = 1e-9;
+
 /// Assemblies slower than this are not repeated for timing.
 pub const REPEAT_BELOW_SECONDS: f64 = 2.0;
 
@@ -308,6 +312,9 @@ pub struct RunReport {
     pub condition_estimate: Option<f64>,
     /// Steps of iterative refinement after LU.
     pub refinement_steps: usize,
+    /// Estimated relative error of E computed from a true solution by adaptive quadrature (0 in
+    /// closed form; `None` when E comes from the scene's emitters).
+    pub emission_error_estimate: Option<f64>,
     /// One-time preparation of the backend (GPU: compiling its kernels), not in `setup_seconds`.
     pub preparation_seconds: f64,
     /// Unknowns known without solving (zero rows of K: rho = 0 or nothing in view; u = E).
@@ -489,19 +496,26 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         assemble_timed(config, &scene, &mesh, &disc)?;
 
     let started = Instant::now();
-    let rhs: Vec<f64> = match &u_faces {
+    let (rhs, emission_error_estimate) = match &u_faces {
         Some(u) => {
             let progress = progress_bar(config.progress, "emission", disc.dof());
             let e = emission_at(&scene, &disc.nodes, &planner, u, &config.emission, &|k| {
                 progress.inc(k as u64)
             });
             progress.finish_and_clear();
-            e
+            (e.values, Some(e.error_estimate))
         }
-        None => disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(),
+        None => (disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(), None),
     };
     let emission_seconds = started.elapsed().as_secs_f64();
-    let warnings = run_warnings(&scene, &rhs);
+    let mut warnings = run_warnings(&scene, &rhs);
+    if let Some(estimate) = emission_error_estimate.filter(|&e| e > EMISSION_WARNING) {
+        warnings.push(format!(
+            "the emissivity of the true solution is uncertain to {estimate:.1e} (relative), above \
+             {EMISSION_WARNING:.0e}: the adaptive quadrature ran out of subdivisions; E_n below \
+             that level is not meaningful"
+        ));
+    }
 
     let started = Instant::now();
     let outcome = solve::solve(&assembled.matrix, &rhs, config.solver)?;
@@ -554,6 +568,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         error,
         setup_seconds,
         preparation_seconds,
+        emission_error_estimate,
         emission_seconds,
         solve_seconds,
         residual: outcome.residual,

@@ -16,7 +16,9 @@ pub fn integral(obs: &Observer, poly: &[DVec2], w: impl Fn(DVec2) -> f64, tol: T
 
 /// `∫_poly f(Q) dS_Q` over a convex polygon, fanned into triangles.
 pub fn integral_of(poly: &[DVec2], f: impl Fn(DVec2) -> f64, tol: Tolerance) -> f64 {
-    (1..poly.len() - 1).map(|k| integrate_triangle(&f, [poly[0], poly[k], poly[k + 1]], tol)).sum()
+    (1..poly.len() - 1)
+        .map(|k| integrate_triangle(&f, [poly[0], poly[k], poly[k + 1]], tol).0)
+        .sum()
 }
 
 /// `∫_poly G(P, Q) w(Q) dS_Q` for an affine weight `w`, over any simple polygon (counter-clockwise),

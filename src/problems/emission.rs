@@ -33,6 +33,16 @@ impl Default for EmissionOptions {
     }
 }
 
+/// E at points of S, with how far the adaptive quadrature may be off.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Emission {
+    /// E at each point.
+    pub values: Vec<f64>,
+    /// The largest error estimate of an E value, relative to the largest |E| (0 when every
+    /// integral is in closed form, as for quadratic u).
+    pub error_estimate: f64,
+}
+
 /// `E` at `points` of S (the collocation nodes, or any other points with their face's normal and
 /// rho) for the true solution given face by face in `u`.
 pub fn emission_at(
@@ -42,12 +52,12 @@ pub fn emission_at(
     u: &[FaceFunction],
     options: &EmissionOptions,
     progress: &(dyn Fn(usize) + Sync),
-) -> Vec<f64> {
+) -> Emission {
     let imt = ImtRule::new(options.imt_nodes.max(2));
-    points
+    let per_point: Vec<(f64, f64)> = points
         .par_iter()
         .map(|node| {
-            let mut integral = 0.0;
+            let (mut integral, mut error) = (0.0, 0.0);
             for (k, face) in scene.faces.iter().enumerate() {
                 let view = planner.face_view(node.position, node.normal, node.face, k);
                 if matches!(view, FaceView::Skip(_)) {
@@ -61,15 +71,25 @@ pub fn emission_at(
                     position: face.frame.to_local(node.position),
                     normal: face.frame.dir_to_local(node.normal),
                 };
-                integral += face_integral(&obs, &face.frame, &pieces, &u[k], &imt, options);
+                let (value, estimate) =
+                    face_integral(&obs, &face.frame, &pieces, &u[k], &imt, options);
+                integral += value;
+                error += estimate;
             }
             progress(1);
-            u[node.face].eval(node.position) - node.rho / PI * integral
+            (u[node.face].eval(node.position) - node.rho / PI * integral, node.rho / PI * error)
         })
-        .collect()
+        .collect();
+    let largest = per_point.iter().fold(0.0f64, |m, (e, _)| m.max(e.abs()));
+    let worst = per_point.iter().fold(0.0f64, |m, (_, err)| m.max(*err));
+    Emission {
+        values: per_point.iter().map(|(e, _)| *e).collect(),
+        error_estimate: if worst == 0.0 { 0.0 } else { worst / largest.max(f64::MIN_POSITIVE) },
+    }
 }
 
-/// `∫ u G` over the convex `pieces` (face coordinates) of one face.
+/// `∫ u G` over the convex `pieces` (face coordinates) of one face, and its error estimate (0 in
+/// closed form).
 fn face_integral(
     obs: &Observer,
     frame: &PlaneFrame,
@@ -77,11 +97,11 @@ fn face_integral(
     u: &FaceFunction,
     imt: &ImtRule,
     options: &EmissionOptions,
-) -> f64 {
+) -> (f64, f64) {
     match u {
         FaceFunction::Quadratic { a, b, c } => {
             let q = restrict(frame, a, *b, *c);
-            exact::quadratic_weight(obs, pieces.iter().map(Vec::as_slice), &q, imt)
+            (exact::quadratic_weight(obs, pieces.iter().map(Vec::as_slice), &q, imt), 0.0)
         }
         FaceFunction::General { f, kinks, magnitude } => {
             let mut parts: Vec<Vec<DVec2>> = pieces.to_vec();
@@ -108,7 +128,7 @@ fn face_integral(
                 .iter()
                 .flat_map(|p| (1..p.len() - 1).map(move |k| [p[0], p[k], p[k + 1]]))
                 .map(|tri| integrate_triangle(|x| f(frame.to_global(x)) * obs.kernel(x), tri, tol))
-                .sum()
+                .fold((0.0, 0.0), |(v, e), (dv, de)| (v + dv, e + de))
         }
     }
 }
@@ -169,7 +189,7 @@ mod tests {
             let opts = EmissionOptions::default();
             let e1 = emission_at(&scene, &disc.nodes, &planner, &exact_u, &opts, &|_| {});
             let e2 = emission_at(&scene, &disc.nodes, &planner, &general_u, &opts, &|_| {});
-            for (i, (a, b)) in e1.iter().zip(&e2).enumerate() {
+            for (i, (a, b)) in e1.values.iter().zip(&e2.values).enumerate() {
                 let scale = disc.nodes[i].position.truncate().length_squared().max(1.0);
                 assert!((a - b).abs() < 1e-10 * scale, "{} node {i}: {a} vs {b}", scene.name);
             }
@@ -189,9 +209,19 @@ mod tests {
             let tight = EmissionOptions { relative_tolerance: 1e-13, ..Default::default() };
             let a = emission_at(&scene, &disc.nodes, &planner, &u, &loose, &|_| {});
             let b = emission_at(&scene, &disc.nodes, &planner, &u, &tight, &|_| {});
-            for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+            for (i, (x, y)) in a.values.iter().zip(&b.values).enumerate() {
                 assert!((x - y).abs() < 1e-10 * y.abs().max(1.0), "{sol}: node {i}: {x} vs {y}");
             }
+            // The loose run's own estimate covers its difference from the tight one.
+            let scale = b.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff =
+                a.values.iter().zip(&b.values).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            assert!(
+                diff <= a.error_estimate * scale + 1e-15,
+                "{sol}: {diff:e} vs {:e}",
+                a.error_estimate
+            );
+            assert!(b.error_estimate < 1e-9, "{sol}: tight estimate {:e}", b.error_estimate);
         }
     }
 

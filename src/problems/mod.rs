@@ -4,5 +4,5 @@
 mod emission;
 mod solutions;
 
-pub use emission::{EmissionOptions, emission_at};
+pub use emission::{Emission, EmissionOptions, emission_at};
 pub use solutions::{FaceFunction, TrueSolution};

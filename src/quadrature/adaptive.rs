@@ -132,8 +132,9 @@ pub fn integrate_adaptive(
 
 /// Integral of `f` over the triangle `(v0, v1, v2)` by iterated adaptive Gauss–Kronrod, with
 /// `Q = v0 + s (v1 - v0) + t (v2 - v0)`, `0 <= t <= 1 - s`. Features along the triangle's edges
-/// and at its vertices (end points of the iterated integrals) are resolved by bisection.
-pub fn integrate_triangle(f: impl Fn(DVec2) -> f64, tri: [DVec2; 3], tol: Tolerance) -> f64 {
+/// and at its vertices (end points of the iterated integrals) are resolved by bisection. Returns
+/// the value and an estimate of its absolute error.
+pub fn integrate_triangle(f: impl Fn(DVec2) -> f64, tri: [DVec2; 3], tol: Tolerance) -> (f64, f64) {
     let (v0, d1, d2) = (tri[0], tri[1] - tri[0], tri[2] - tri[0]);
     let jacobian = d1.perp_dot(d2).abs();
     let inner_tol = Tolerance {
@@ -141,9 +142,18 @@ pub fn integrate_triangle(f: impl Fn(DVec2) -> f64, tri: [DVec2; 3], tol: Tolera
         relative: tol.relative * 0.25,
         ..tol
     };
-    let outer = |s: f64| integrate_adaptive(|t| f(v0 + d1 * s + d2 * t), 0.0, 1.0 - s, inner_tol).0;
+    // The error of the iterated integral: the outer rule's, plus at most the worst inner
+    // estimate over the unit length of the outer interval.
+    let worst_inner = std::cell::Cell::new(0.0f64);
+    let outer = |s: f64| {
+        let (value, error) =
+            integrate_adaptive(|t| f(v0 + d1 * s + d2 * t), 0.0, 1.0 - s, inner_tol);
+        worst_inner.set(worst_inner.get().max(error));
+        value
+    };
     let outer_tol = Tolerance { absolute: tol.absolute / jacobian.max(f64::MIN_POSITIVE), ..tol };
-    jacobian * integrate_adaptive(outer, 0.0, 1.0, outer_tol).0
+    let (value, error) = integrate_adaptive(outer, 0.0, 1.0, outer_tol);
+    (jacobian * value, jacobian * (error + worst_inner.get()))
 }
 
 #[cfg(test)]
@@ -178,7 +188,25 @@ mod tests {
     fn triangle_integral_of_a_quadratic() {
         // ∫ over the unit right triangle of x² y = 1/60.
         let tri = [DVec2::ZERO, DVec2::X, DVec2::Y];
-        let v = integrate_triangle(|q| q.x * q.x * q.y, tri, Tolerance::default());
+        let (v, e) = integrate_triangle(|q| q.x * q.x * q.y, tri, Tolerance::default());
         assert!((v - 1.0 / 60.0).abs() < 1e-16, "{v}");
+        assert!(e < 1e-15, "estimate {e}");
+    }
+
+    #[test]
+    fn the_triangle_error_estimate_covers_the_error_when_subdivision_runs_out() {
+        // ∫ over the unit right triangle of (x + y)^(-1/2) = 2/3 ... computed: ∫0^1 r^(-1/2) r dr
+        // over the lines x + y = r: ∫0^1 r^{1/2} dr = 2/3. The singular corner needs subdivision.
+        let tri = [DVec2::ZERO, DVec2::X, DVec2::Y];
+        let f = |q: DVec2| (q.x + q.y).powf(-0.5);
+        for max_intervals in [2, 4, 8, 2000] {
+            let tol = Tolerance { max_intervals, ..Tolerance::default() };
+            let (v, e) = integrate_triangle(f, tri, tol);
+            let error = (v - 2.0 / 3.0).abs();
+            assert!(error <= e.max(1e-15), "{max_intervals} intervals: error {error:e} > {e:e}");
+            if max_intervals == 2 {
+                assert!(e > 1e-6, "a starved rule must say so: {e:e}");
+            }
+        }
     }
 }
