@@ -134,7 +134,6 @@ pub fn solve(k: &CollocationMatrix, rhs: &[f64], options: SolverOptions) -> Resu
             rows_eliminated: sys.eliminated(),
         }
     };
-    clear_upper_vector_state();
     Ok(outcome)
 }
 
@@ -158,25 +157,6 @@ fn reject_constant_null_vector(k: &CollocationMatrix) -> Result<()> {
 
 /// Most refinement steps [`solve`] takes.
 pub const REFINEMENT_STEPS: usize = 3;
-
-/// faer's AVX-512 kernels can leave the upper halves of the vector registers dirty on the threads
-/// that ran them, and plain (SSE-encoded) code on those threads then pays a transition penalty on
-/// every vector instruction: on the AMD EPYC machines we measured, the linear n = 640 assembly
-/// after a small solve took 0.55 s instead of 0.18 s. `vzeroupper` on every worker thread and on
-/// this one restores the speed.
-fn clear_upper_vector_state() {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        #[target_feature(enable = "avx")]
-        fn zero_upper() {
-            std::arch::x86_64::_mm256_zeroupper();
-        }
-        // SAFETY: AVX was detected at run time just above.
-        let clear = || unsafe { zero_upper() };
-        rayon::broadcast(|_| clear());
-        clear();
-    }
-}
 
 /// Solves `(I - K) u = rhs` by LU with partial pivoting (no refinement); see [`LuSolution`].
 pub fn solve_lu(k: &CollocationMatrix, rhs: &[f64]) -> Result<Vec<f64>> {
