@@ -186,7 +186,11 @@ fn log_integrand(w: real, s: real, h2: real, z: real, log_s_over_z: real) -> rea
     return ratio * r;
 }
 
-// z L_e by the IMT rule in w with t = S sinh w (moments::log_integral).
+// Widest interval in w one application of the IMT rule covers (moments::LOG_PANEL_WIDTH).
+const LOG_PANEL_WIDTH: real = 8.0;
+
+// z L_e by the IMT rule in w with t = S sinh w, on equal panels of at most LOG_PANEL_WIDTH
+// (moments::log_integral).
 fn log_integral(edge: EdgeTerms, z: real) -> real {
     if (edge.h == 0.0) {
         return 0.0;
@@ -196,14 +200,18 @@ fn log_integral(edge: EdgeTerms, z: real) -> real {
     let h2 = edge.h * edge.h;
     let wa = m_asinh(edge.ta / s);
     let wb = m_asinh(edge.tb / s);
-    let span = wb - wa;
     let log_s_over_z = m_log(s / z);
+    let panels = u32((wb - wa) / LOG_PANEL_WIDTH) + 1u;
+    let width = (wb - wa) / real(panels);
     var acc: real = 0.0;
-    for (var k = 0u; k < params.imt_count; k = k + 1u) {
-        let node = tables.entries[k];
-        acc = acc + node.y * log_integrand(wa + span * node.x, s, h2, z, log_s_over_z);
+    for (var p = 0u; p < panels; p = p + 1u) {
+        let a = wa + width * real(p);
+        for (var k = 0u; k < params.imt_count; k = k + 1u) {
+            let node = tables.entries[k];
+            acc = acc + node.y * log_integrand(a + width * node.x, s, h2, z, log_s_over_z);
+        }
     }
-    return 0.5 * edge.h * span * acc / z;
+    return 0.5 * edge.h * width * acc / z;
 }
 
 // Scaled moments of a region (kernels::Moments).

@@ -115,6 +115,18 @@ mod tests {
         assert_eq!(wgsl_u32_constant(&module, "WORKGROUP"), layout::WORKGROUP);
         assert_eq!(wgsl_u32_constant(&module, "TABLE_SIZE") as usize, layout::TABLE_SIZE);
         assert_eq!(wgsl_u32_constant(&module, "PER_ELEMENT"), 3);
+        // The IMT panels of the log moment, as on the CPU.
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some("LOG_PANEL_WIDTH"))
+            .expect("LOG_PANEL_WIDTH");
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::F64(v)) => {
+                assert_eq!(v, crate::kernels::LOG_PANEL_WIDTH)
+            }
+            ref other => panic!("LOG_PANEL_WIDTH is not an f64 literal: {other:?}"),
+        }
         let (_, params) = module
             .types
             .iter()

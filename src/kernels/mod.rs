@@ -31,7 +31,7 @@ mod moments;
 pub mod paper_closed_form;
 pub mod reference;
 
-pub use moments::{Moments, ThirdOrderMoments};
+pub use moments::{LOG_PANEL_WIDTH, Moments, ThirdOrderMoments};
 
 use glam::{DVec2, DVec3};
 
