@@ -11,6 +11,7 @@ pub mod kernels;
 pub mod mesh;
 pub mod pipeline;
 pub mod problems;
+pub mod progress;
 pub mod quadrature;
 pub mod report;
 pub mod scene;

@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use crate::assembly::{self, Assembly, AssemblyOptions, Quadrature};
@@ -16,6 +15,7 @@ use crate::mesh::{
     shadow_lines,
 };
 use crate::problems::{EmissionOptions, TrueSolution, emission_at};
+use crate::progress::ProgressSink;
 use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
 use crate::solve::{self, SolverOptions};
 use crate::surface_error::{SurfaceErrors, surface_errors};
@@ -242,8 +242,8 @@ pub struct RunConfig {
     pub backend: Backend,
     /// Linear solver and its tolerance.
     pub solver: SolverOptions,
-    /// Show progress bars on stderr.
-    pub progress: bool,
+    /// Where progress goes (nowhere by default).
+    pub progress: ProgressSink,
     /// Assemble up to this many times and report the fastest (timings of small runs are noisy);
     /// repetition stops once one assembly has taken over [`REPEAT_BELOW_SECONDS`].
     pub setup_repeats: usize,
@@ -275,7 +275,7 @@ impl RunConfig {
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
             solver: SolverOptions::default(),
-            progress: false,
+            progress: ProgressSink::default(),
             setup_repeats: 1,
             surface_lattice: None,
         }
@@ -349,21 +349,6 @@ pub struct RunReport {
     pub u: Vec<f64>,
 }
 
-/// A progress bar on stderr for a stage of `len` steps (hidden unless `enabled`).
-pub fn progress_bar(enabled: bool, stage: &str, len: usize) -> ProgressBar {
-    if !enabled {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(len as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({elapsed}, eta {eta})")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(stage.to_string());
-    bar
-}
-
 /// The scene, mesh and discretization of a configuration.
 pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
     let scene = config.scene.build(config.params)?;
@@ -425,25 +410,25 @@ fn assemble_timed(
     let started = Instant::now();
     let assembler = Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
     let preparation_seconds = started.elapsed().as_secs_f64();
-    let progress = progress_bar(config.progress, "assembly", disc.dof());
+    let progress = &config.progress;
     let mut timed = None;
     let mut setup_seconds = f64::INFINITY;
     for _ in 0..config.setup_repeats.max(1) {
+        progress.start("assembly", disc.dof());
         let started = Instant::now();
         let planner = PairPlanner::new(scene);
         let assembled =
             assembler.assemble(scene, mesh, disc, &planner, &config.assembly, &|k| {
-                progress.inc(k as u64)
+                progress.advance(k)
             })?;
         let seconds = started.elapsed().as_secs_f64();
         setup_seconds = setup_seconds.min(seconds);
         timed = Some(assembled);
-        progress.reset();
+        progress.finish();
         if seconds > REPEAT_BELOW_SECONDS {
             break;
         }
     }
-    progress.finish_and_clear();
     let assembled = timed.expect("at least one assembly");
     Ok(TimedAssembly { assembled, device: assembler.device(), setup_seconds, preparation_seconds })
 }
@@ -498,11 +483,12 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     let started = Instant::now();
     let (rhs, emission_error_estimate) = match &u_faces {
         Some(u) => {
-            let progress = progress_bar(config.progress, "emission", disc.dof());
+            let progress = &config.progress;
+            progress.start("emission", disc.dof());
             let e = emission_at(&scene, &disc.nodes, &planner, u, &config.emission, &|k| {
-                progress.inc(k as u64)
+                progress.advance(k)
             });
-            progress.finish_and_clear();
+            progress.finish();
             (e.values, Some(e.error_estimate))
         }
         None => (disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(), None),

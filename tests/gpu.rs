@@ -134,7 +134,7 @@ fn the_gpu_column_of_table_4_1_agrees_with_the_exact_cpu_column() {
     let options = StudyOptions {
         max_n: Some(160),
         device: StudyDevice::Gpu(Precision::F64),
-        progress: false,
+        progress: Default::default(),
     };
     let result = run_study("table-4.1", &options).unwrap();
     let gpu_rows: Vec<_> = result.rows.iter().filter(|r| r.backend == "gpu").collect();
@@ -150,7 +150,7 @@ fn the_gpu_column_of_table_4_1_agrees_with_the_exact_cpu_column() {
 fn studies_on_the_gpu_print_the_cpu_errors() {
     let Some(_) = gpu() else { return };
     use radiosity::study::{StudyDevice, StudyOptions, run_study};
-    let options = |device| StudyOptions { max_n: Some(160), device, progress: false };
+    let options = |device| StudyOptions { max_n: Some(160), device, progress: Default::default() };
     for id in ["table-3.1", "table-3.4"] {
         let cpu = run_study(id, &options(StudyDevice::Cpu)).unwrap();
         let gpu = run_study(id, &options(StudyDevice::Gpu(Precision::F64))).unwrap();

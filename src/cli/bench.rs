@@ -8,7 +8,7 @@ use super::*;
 
 pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     let mut config = args.geometry.config()?;
-    config.progress = false;
+    config.progress = radiosity::progress::ProgressSink::default();
     let named = match &args.backends {
         Some(named) => named.clone(),
         None => {

@@ -6,6 +6,7 @@ pub(crate) mod bench_plan;
 pub(crate) mod gpu_check;
 pub(crate) mod inspect;
 pub(crate) mod output;
+pub(crate) mod progress;
 pub(crate) mod solve;
 pub(crate) mod study;
 pub(crate) mod viewfactors;
@@ -411,7 +412,7 @@ impl GeometryArgs {
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
             solver: SolverOptions::default(),
-            progress: true,
+            progress: progress::on_stderr(),
             setup_repeats: 1,
             surface_lattice: None,
         })

@@ -35,7 +35,7 @@ pub(crate) fn run(
             emit(&result, json, || report::stiff_table(&result, format))
         }
         _ => {
-            let options = StudyOptions { max_n, device, progress: true };
+            let options = StudyOptions { max_n, device, progress: super::progress::on_stderr() };
             let mut result = radiosity::study::run_study(id, &options)?;
             result.figures = report::write_study_figures(&result, std::path::Path::new(figures))?;
             emit(&result, json, || report::study_table(&result, format))

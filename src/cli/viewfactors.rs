@@ -32,7 +32,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         max_depth: args.max_depth,
         ..Default::default()
     };
-    let bar = pipeline::progress_bar(true, "viewfactors", mesh.len());
+    let bar = super::progress::bar("viewfactors", mesh.len());
     let f = view_factors(&scene, &mesh, &planner, &options, &|k| bar.inc(k as u64))?;
     bar.finish_and_clear();
     let (row_sum_min, row_sum_max) = f.row_sum_range();

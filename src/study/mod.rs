@@ -15,6 +15,7 @@ use crate::assembly::Quadrature;
 use crate::error::{Error, Result};
 use crate::gpu;
 use crate::pipeline::{self, Backend, RunConfig};
+use crate::progress::ProgressSink;
 use crate::quadrature::ImtRule;
 
 pub use crate::pipeline::StudyDevice;
@@ -26,8 +27,8 @@ pub struct StudyOptions {
     pub max_n: Option<usize>,
     /// Where the series run.
     pub device: StudyDevice,
-    /// Show progress on stderr.
-    pub progress: bool,
+    /// Where progress goes (which run starts, assembly and emission stages).
+    pub progress: ProgressSink,
 }
 
 /// One row of a study.
@@ -164,14 +165,12 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
         let first = rows.len();
         let mut previous: Option<(f64, Option<f64>)> = None;
         for refine in 0.. {
-            let config = series_config(&spec, series, refine, backend, options.progress);
+            let config = series_config(&spec, series, refine, backend, &options.progress);
             let (_, mesh, _) = pipeline::build(&config)?;
             if mesh.len() > max_n {
                 break;
             }
-            if options.progress {
-                eprintln!("{}: {label}: n = {}", spec.id, mesh.len());
-            }
+            options.progress.note(&format!("{}: {label}: n = {}", spec.id, mesh.len()));
             let report = pipeline::run(&config)?;
             let error = report.error.expect("a true solution is set");
             let paper_error = lookup(series.paper, report.n);
@@ -239,7 +238,7 @@ fn series_config(
     series: &Series,
     refine: u32,
     backend: Backend,
-    progress: bool,
+    progress: &ProgressSink,
 ) -> RunConfig {
     let mut config = RunConfig::paper(series.scene, refine);
     config.mesh = series.mesh;
@@ -248,7 +247,7 @@ fn series_config(
     config.assembly.quadrature = series.quadrature;
     config.assembly.imt_nodes = series.imt_nodes;
     config.backend = backend;
-    config.progress = progress;
+    config.progress = progress.clone();
     // Timings of small runs are noisy: the timing studies take the best of three.
     config.setup_repeats = if matches!(spec.kind, Kind::Timing { .. }) { 3 } else { 1 };
     config.surface_lattice = spec.surface_lattice;
