@@ -218,6 +218,32 @@ fn tiles_are_sized_by_the_views_of_a_scene_of_many_faces() {
     assert!(d <= 1e-12, "{d:e}");
 }
 
+#[test]
+fn tiles_whose_visible_pieces_outgrow_a_binding_are_split() {
+    // The occluded box has many partly visible pairs: the visible pieces of a tile are known only
+    // once it is planned, and with a 24 KiB binding several tiles sized by their output rows hold
+    // more pieces than that. They are split and planned again instead of refused.
+    let Some(ctx) = gpu() else { return };
+    let scene = radiosity::scene::load(std::path::Path::new("examples/occluded-box.toml")).unwrap();
+    let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
+    let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
+    let planner = PairPlanner::new(&scene);
+    let opts = AssemblyOptions::default();
+    let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
+    let binding: u64 = 24 << 10;
+    let limits = gpu::TileLimits { binding_bytes: binding, ..Default::default() };
+    let gpu = assembler
+        .assemble_with_limits(&scene, &mesh, &disc, &planner, &opts, limits, &|_| {})
+        .unwrap();
+    // Tiles sized by their output alone: 5 rows of 576 entries each.
+    let by_output = disc.dof().div_ceil((binding / (8 * disc.dof() as u64)) as usize);
+    let tiles = assembler.last_timings().tiles;
+    assert!(tiles > by_output, "{tiles} tiles, as many as the output alone needs ({by_output})");
+    let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+    let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
+    assert!(d <= 1e-12, "{d:e}");
+}
+
 /// `radiosity bench` of `scene` at refine 1, one repetition, as JSON.
 fn bench_once(scene: &str, method: &str) -> serde_json::Value {
     common::json(&[

@@ -187,6 +187,14 @@ fn plan_tile(
     TilePlan { rows, views, exceptions: records, exception_count, piece_offset, vertices, stats }
 }
 
+impl TilePlan {
+    /// Whether each of its per-tile buffers fits in one binding of `max_binding` bytes.
+    fn fits(&self, max_binding: u64, precision: Precision) -> bool {
+        let reals = self.views.len().max(self.vertices.len()) * precision.bytes();
+        reals.max(self.exceptions.len() * 4) as u64 <= max_binding
+    }
+}
+
 /// Where the rules array's parts start and how long they are.
 #[derive(Clone, Copy)]
 struct RuleCounts {
@@ -378,8 +386,7 @@ impl<'a> GpuAssembler<'a> {
             (0..dof).step_by(rows_per_tile).map(|s| s..(s + rows_per_tile).min(dof)).collect();
 
         let mut stats = PairStats::default();
-        *self.timings.lock().expect("timings lock") =
-            GpuTimings { tiles: tiles.len(), ..Default::default() };
+        *self.timings.lock().expect("timings lock") = GpuTimings::default();
         let timed_plan = |t: &Range<usize>| {
             let started = std::time::Instant::now();
             let plan = plan_tile(unit, t.clone(), scene, mesh, disc, planner);
@@ -387,10 +394,25 @@ impl<'a> GpuAssembler<'a> {
                 started.elapsed().as_secs_f64();
             plan
         };
+        // The visible pieces of a tile are known only once it is planned: a tile whose pieces or
+        // exception records outgrow a binding is split in two and planned again.
+        let mut queue: std::collections::VecDeque<Range<usize>> = tiles.into();
+        let mut plan_next = || {
+            while let Some(t) = queue.pop_front() {
+                let plan = timed_plan(&t);
+                if t.len() == 1 || plan.fits(max_binding, p) {
+                    return Some(plan);
+                }
+                let middle = t.start + t.len() / 2;
+                queue.push_front(middle..t.end);
+                queue.push_front(t.start..middle);
+            }
+            None
+        };
         let mut in_flight: Option<InFlight> = None;
-        let mut next_plan = tiles.first().map(timed_plan);
-        for k in 0..tiles.len() {
-            let plan = next_plan.take().expect("planned before use");
+        let mut next_plan = plan_next();
+        while let Some(plan) = next_plan.take() {
+            self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
             let submitted = self.submit(
                 &plan,
@@ -407,7 +429,7 @@ impl<'a> GpuAssembler<'a> {
             }
             in_flight = Some(submitted);
             // Plan the next tile while the device works on this one.
-            next_plan = tiles.get(k + 1).map(timed_plan);
+            next_plan = plan_next();
         }
         if let Some(done) = in_flight.take() {
             self.finish(done, &mut matrix, progress)?;
