@@ -213,7 +213,7 @@ pub enum Error {
     /// A dense matrix that cannot fit in memory.
     #[error(
         "a dense {dof} x {dof} matrix needs {needed_gib:.1} GiB but only {available_gib:.1} GiB may be used \
-         (the iterative solver also keeps the matrix); use a coarser mesh (smaller --refine: each \
+         (the iterative solver also keeps the matrix); use a coarser mesh (fewer refinement levels: each \
          level multiplies the memory by 16) or a machine with more memory"
     )]
     TooLarge {
@@ -239,8 +239,8 @@ pub enum Error {
     /// The iterative solver stopped without reaching the residual asked for.
     #[error(
         "the iterative solver (GMRES) stopped: {reason}; relative residual {residual:.2e} after \
-         {iterations} iterations. Ask for a larger --tolerance if that residual is enough, or use \
-         --solver lu where the matrix fits in memory twice"
+         {iterations} iterations. Ask for a larger tolerance if that residual is enough, or use \
+         the LU solver where the matrix fits in memory twice"
     )]
     NotConverged {
         /// Why it stopped.

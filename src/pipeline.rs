@@ -93,7 +93,8 @@ impl Assembler {
             Backend::Gpu(_) if quadrature != Quadrature::Exact => Err(Error::InvalidParameter {
                 name: "quadrature",
                 value: quadrature.name().into(),
-                reason: "the GPU backend evaluates the exact method only; use --backend cpu".into(),
+                reason: "the GPU backend evaluates the exact method only; use the CPU backend"
+                    .into(),
             }),
             Backend::Gpu(precision) => {
                 let ctx = gpu::context_for(precision)?;

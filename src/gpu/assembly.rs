@@ -271,7 +271,7 @@ impl<'a> GpuAssembler<'a> {
     pub fn new(ctx: &'a GpuContext, precision: Precision, method: Method) -> Result<Self> {
         if precision == Precision::F64 && !ctx.adapter.f64 {
             return Err(Error::Gpu(format!(
-                "adapter '{}' has no SHADER_F64; use --precision f32, or {}",
+                "adapter '{}' has no SHADER_F64; use single precision, or {}",
                 ctx.adapter.name,
                 super::INSTALL_HINT
             )));

@@ -37,7 +37,7 @@ pub fn context_for(precision: Precision) -> Result<&'static GpuContext> {
     let ctx = shared_context()?;
     if precision == Precision::F64 && !ctx.adapter.f64 {
         return Err(Error::Gpu(format!(
-            "adapter '{}' has no SHADER_F64 (double precision in shaders); use --precision f32, \
+            "adapter '{}' has no SHADER_F64 (double precision in shaders); use single precision, \
              or {INSTALL_HINT}",
             ctx.adapter.name
         )));
@@ -75,7 +75,7 @@ fn verify_f64_math(ctx: &GpuContext) -> std::result::Result<(), String> {
         return Err(format!(
             "adapter '{}' (driver {}) computes the f64 math library's {:?} {} ulp off at {:?}, above \
              the {F64_ULP_BOUND} ulp it is verified to: its f64 arithmetic is not IEEE-exact \
-             enough for the GPU backend; use --backend cpu (or --precision f32)",
+             enough for the GPU backend; use the CPU backend (or single precision)",
             a.name, a.driver, r.function, r.worst_ulp, r.worst_at
         ));
     }

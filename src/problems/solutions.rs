@@ -106,7 +106,7 @@ impl TrueSolution {
                         name: "gamma",
                         value: g.to_string(),
                         reason:
-                            "the edge solution (3.4) has no gamma; it belongs to --solution shadow"
+                            "the edge solution (3.4) has no gamma; it belongs to the shadow solution (3.3)"
                                 .into(),
                     });
                 }

@@ -66,7 +66,7 @@ pub fn run_stability(device: StudyDevice) -> Result<StabilityResult> {
         "relative_error: max over the row's entries |K - reference| / max |reference| (absolute \
          where the reference is 0); reference: adaptive quadrature to 1e-15, in polar \
          coordinates about the node's foot near the element, of the plain integrand elsewhere; \
-         closed forms: the CPU with the paper's closed forms for every pair (--no-far-field); \
+         closed forms: the CPU with the paper's closed forms for every pair (far-field rules off); \
          bound: 512 ulps times h / (the node's distance to the nearest edge or tangent-plane \
          trace)"
             .to_string(),

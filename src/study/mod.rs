@@ -124,7 +124,7 @@ fn backend_for(series: &Series, device: StudyDevice) -> std::result::Result<Back
             Ok(Backend::Gpu(p))
         }
         (Placement::Selected | Placement::Cpu, _) => Ok(Backend::Cpu),
-        (Placement::Gpu(_), StudyDevice::Cpu) => Err("left out: --backend cpu".into()),
+        (Placement::Gpu(_), StudyDevice::Cpu) => Err("left out: the CPU was asked for".into()),
         (Placement::Gpu(p), StudyDevice::Gpu(_)) => Ok(Backend::Gpu(p)),
         (Placement::Gpu(p), StudyDevice::Auto) => match gpu::context_for(p) {
             Ok(_) => Ok(Backend::Gpu(p)),

@@ -310,7 +310,7 @@ const TIMING_NOTES: &[&str] = &[
      200 MHz HP C200 (1999).",
     "int. err: max |u_n - u_n(exact, cpu)| / max |u_n(exact, cpu)| at the nodes, the change the \
      integration method (or the GPU) makes in the solution.",
-    "The GPU column runs where an adapter is found (or with --backend gpu); --backend cpu leaves it out.",
+    "The GPU column runs where an adapter is found (or when the GPU is asked for); asking for the CPU leaves it out.",
 ];
 
 fn error_vs_time() -> StudySpec {
