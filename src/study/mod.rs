@@ -140,37 +140,69 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
         name: id.into(),
         expected: study_ids().join(", "),
     })?;
-    let max_n = options.max_n.unwrap_or(spec.default_max_n);
-    let timing = matches!(spec.kind, Kind::Timing { .. });
-    // Exact CPU solutions by (method, n): the reference of the integration errors.
-    let mut reference: HashMap<(&'static str, usize), Vec<f64>> = HashMap::new();
+    let mut reference = References::new();
     let mut rows = Vec::new();
     let mut summaries = Vec::new();
     for series in &spec.series {
         let label = series.label();
-        let backend = match backend_for(series, options.device) {
-            Ok(b) => b,
-            Err(why) => {
-                summaries.push(SeriesSummary {
-                    series: label,
-                    rate: None,
-                    last_rate: None,
-                    surface_rate: None,
-                    iterated_rate: None,
-                    skipped: Some(why),
-                });
-                continue;
+        match backend_for(series, options.device) {
+            Ok(backend) => {
+                let first = rows.len();
+                let run = SeriesRun { spec: &spec, series, backend, options };
+                run.rows(&mut reference, &mut rows)?;
+                summaries.push(summary(label, &rows[first..]));
             }
-        };
-        let first = rows.len();
+            Err(why) => summaries.push(SeriesSummary {
+                series: label,
+                rate: None,
+                last_rate: None,
+                surface_rate: None,
+                iterated_rate: None,
+                skipped: Some(why),
+            }),
+        }
+    }
+    if spec.kind == (Kind::Timing { plot: true }) {
+        mark_pareto_fronts(&mut rows);
+    }
+    Ok(StudyResult {
+        study: spec.id.into(),
+        title: spec.title.into(),
+        rows,
+        series: summaries,
+        notes: spec.notes.iter().map(|s| s.to_string()).collect(),
+        figures: Vec::new(),
+    })
+}
+
+/// Exact CPU solutions at the nodes by (method, n), the reference of the integration errors.
+type References = HashMap<(&'static str, usize), Vec<f64>>;
+
+/// One series of a study on its backend.
+struct SeriesRun<'a> {
+    spec: &'a StudySpec,
+    series: &'a Series,
+    backend: Backend,
+    options: &'a StudyOptions,
+}
+
+impl SeriesRun<'_> {
+    /// Runs the series at refine 0, 1, ... while n stays within the study's largest n, and
+    /// appends its rows to `rows`. In a timing study, the exact CPU runs with the paper's IMT
+    /// rule become the references of the others' integration errors.
+    fn rows(&self, reference: &mut References, rows: &mut Vec<StudyRow>) -> Result<()> {
+        let (spec, series) = (self.spec, self.series);
+        let max_n = self.options.max_n.unwrap_or(spec.default_max_n);
+        let timing = matches!(spec.kind, Kind::Timing { .. });
+        let label = series.label();
         let mut previous: Option<(f64, Option<f64>)> = None;
         for refine in 0.. {
-            let config = series_config(&spec, series, refine, backend, &options.progress);
+            let config = series_config(spec, series, refine, self.backend, &self.options.progress);
             let (_, mesh, _) = pipeline::build(&config)?;
             if mesh.len() > max_n {
                 break;
             }
-            options.progress.note(&format!("{}: {label}: n = {}", spec.id, mesh.len()));
+            self.options.progress.note(&format!("{}: {label}: n = {}", spec.id, mesh.len()));
             let report = pipeline::run(&config)?;
             let error = report.error.expect("a true solution is set");
             let paper_error = lookup(series.paper, report.n);
@@ -182,7 +214,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             let integration_error = if !timing {
                 None
             } else if series.quadrature == Quadrature::Exact
-                && backend == Backend::Cpu
+                && self.backend == Backend::Cpu
                 && series.imt_nodes == ImtRule::PAPER_NODES
             {
                 reference.insert(key, report.u.clone());
@@ -217,19 +249,8 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
             });
             previous = Some((error, paper_error));
         }
-        summaries.push(summary(label, &rows[first..]));
+        Ok(())
     }
-    if spec.kind == (Kind::Timing { plot: true }) {
-        mark_pareto_fronts(&mut rows);
-    }
-    Ok(StudyResult {
-        study: spec.id.into(),
-        title: spec.title.into(),
-        rows,
-        series: summaries,
-        notes: spec.notes.iter().map(|s| s.to_string()).collect(),
-        figures: Vec::new(),
-    })
 }
 
 /// The run of `series` at `refine` on `backend`.
