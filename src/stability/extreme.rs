@@ -127,8 +127,17 @@ const ALPHA: f64 = 1.0 / 6.0;
 const ELEMENT: [DVec3; 3] =
     [DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.3, 0.9, 0.0)];
 
-/// All cases.
+/// All cases: the geometric ones, then the generic and one near-edge case scaled and shifted.
 pub fn cases() -> Vec<ExtremeCase> {
+    let mut out = geometric_cases();
+    let moved = moved_copies(&out);
+    out.extend(moved);
+    out
+}
+
+/// One (node, element) pair per extreme position, in the unit frame, for each method it applies
+/// to.
+fn geometric_cases() -> Vec<ExtremeCase> {
     let linear = Method::Linear { alpha: ALPHA };
     let both = [Method::Centroid, linear];
     let mut out = Vec::new();
@@ -213,20 +222,27 @@ pub fn cases() -> Vec<ExtremeCase> {
         let far = DVec3::new(0.3, 0.4, 0.9).normalize() * d;
         add(format!("far away ({d:.0e})"), &both, ELEMENT, far, -far);
     }
-    let generic = out.iter().filter(|c| c.name == "generic").cloned().collect::<Vec<_>>();
-    let near_edge: Vec<ExtremeCase> =
-        out.iter().filter(|c| c.name == "neighbour face, 1e-5 from edge").cloned().collect();
+    out
+}
+
+/// Copies of the generic case and of the neighbour-face case 1e-5 from the edge, scaled by 2^-20
+/// and 2^20 and moved 1e6 from the origin.
+fn moved_copies(base: &[ExtremeCase]) -> Vec<ExtremeCase> {
+    let generic = base.iter().filter(|c| c.name == "generic");
+    let near_edge = base.iter().filter(|c| c.name == "neighbour face, 1e-5 from edge");
+    let chosen: Vec<&ExtremeCase> = generic.chain(near_edge).collect();
+    let mut out = Vec::new();
     for (label, scale, offset) in [
         ("scale 2^-20", 2f64.powi(-20), DVec3::ZERO),
         ("scale 2^20", 2f64.powi(20), DVec3::ZERO),
         ("offset 1e6", 1.0, DVec3::new(1e6, -2e6, 3e6)),
     ] {
-        for base in generic.iter().chain(&near_edge) {
+        for c in &chosen {
             out.push(ExtremeCase {
-                name: format!("{}, {label}", base.name),
+                name: format!("{}, {label}", c.name),
                 scale,
                 offset,
-                ..base.clone()
+                ..(*c).clone()
             });
         }
     }
