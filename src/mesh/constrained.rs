@@ -98,7 +98,42 @@ fn constrained_delaunay(face: &Face, segments: &[Segment]) -> Result<Vec<[DVec3;
         reason: what,
     };
     let polygon = face.local_polygon();
-    let tol = SNAP * face.size();
+    let (points, constraints) = snapped_constraints(&polygon, segments, SNAP * face.size());
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> = Default::default();
+    let handles = points
+        .iter()
+        .map(|p| cdt.insert(Point2::new(p.x, p.y)))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|e| failed(format!("{e:?}")))?;
+    for (a, b) in constraints {
+        if handles[a] != handles[b] {
+            cdt.add_constraint_and_split(handles[a], handles[b], |p| p);
+        }
+    }
+    let mut triangles = Vec::new();
+    for f in cdt.inner_faces() {
+        let [a, b, c] = f.vertices().map(|v| {
+            let p = v.position();
+            DVec2::new(p.x, p.y)
+        });
+        // Triangles of the convex hull outside a non-convex face are dropped.
+        if !polygon_contains(&polygon, (a + b + c) / 3.0) {
+            continue;
+        }
+        let t = if (b - a).perp_dot(c - a) >= 0.0 { [a, b, c] } else { [a, c, b] };
+        triangles.push(t.map(|p| face.frame.to_global(p)));
+    }
+    Ok(triangles)
+}
+
+/// The points and constraint edges (pairs of point indices) of the outline of `polygon` and the
+/// `segments`: each cut at its ends and its crossings with the others, points closer than `tol`
+/// merged into the first of them (the outline's vertices come first).
+fn snapped_constraints(
+    polygon: &[DVec2],
+    segments: &[Segment],
+    tol: f64,
+) -> (Vec<DVec2>, Vec<(usize, usize)>) {
     let n = polygon.len();
     // Every constraint: the outline's edges, then the segments.
     let lines: Vec<Segment> = (0..n)
@@ -125,7 +160,7 @@ fn constrained_delaunay(face: &Face, segments: &[Segment]) -> Result<Vec<[DVec3;
         }
     }
     // Merge nearby points: each gets the index of the first point within the tolerance.
-    let mut points: Vec<DVec2> = polygon.clone();
+    let mut points: Vec<DVec2> = polygon.to_vec();
     let mut vertex_of = |p: DVec2| -> usize {
         match points.iter().position(|q| (*q - p).length() <= tol) {
             Some(k) => k,
@@ -146,29 +181,5 @@ fn constrained_delaunay(face: &Face, segments: &[Segment]) -> Result<Vec<[DVec3;
             }
         }
     }
-    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> = Default::default();
-    let handles = points
-        .iter()
-        .map(|p| cdt.insert(Point2::new(p.x, p.y)))
-        .collect::<std::result::Result<Vec<_>, _>>()
-        .map_err(|e| failed(format!("{e:?}")))?;
-    for (a, b) in constraints {
-        if handles[a] != handles[b] {
-            cdt.add_constraint_and_split(handles[a], handles[b], |p| p);
-        }
-    }
-    let mut triangles = Vec::new();
-    for f in cdt.inner_faces() {
-        let [a, b, c] = f.vertices().map(|v| {
-            let p = v.position();
-            DVec2::new(p.x, p.y)
-        });
-        // Triangles of the convex hull outside a non-convex face are dropped.
-        if !polygon_contains(&polygon, (a + b + c) / 3.0) {
-            continue;
-        }
-        let t = if (b - a).perp_dot(c - a) >= 0.0 { [a, b, c] } else { [a, c, b] };
-        triangles.push(t.map(|p| face.frame.to_global(p)));
-    }
-    Ok(triangles)
+    (points, constraints)
 }
