@@ -1,14 +1,16 @@
 //! `radiosity viewfactors`: element view factors, reciprocity and closure.
 
 use radiosity::error::{Error, Result};
+use radiosity::mesh::Mesh;
 use radiosity::pipeline::{self};
 use radiosity::report;
+use radiosity::scene::Scene;
+use radiosity::viewfactors::{ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors};
 use radiosity::visibility::PairPlanner;
 
 use super::*;
 
 pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
-    use radiosity::viewfactors::{ViewFactorOptions, ViewFactorSummary, view_factors};
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(Error::InvalidParameter {
             name: "tolerance",
@@ -47,28 +49,38 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         seconds: started.elapsed().as_secs_f64(),
     };
     if let Some(path) = &args.output {
-        if path.ends_with(".npy") {
-            report::write_npy(path, f.len(), &f.matrix)?;
-        } else if path.ends_with(".csv") {
-            let text: String = f
-                .matrix
-                .chunks(f.len())
-                .map(|row| {
-                    row.iter().map(|v| format!("{v:e}")).collect::<Vec<_>>().join(",") + "\n"
-                })
-                .collect();
-            std::fs::write(path, text)?;
-        } else {
-            return Err(Error::InvalidParameter {
-                name: "output",
-                value: path.clone(),
-                reason: "expected a .npy or .csv file".into(),
-            });
-        }
+        write_matrix(path, &f)?;
     }
     if let Some(target) = &args.json {
         return report::write_json(&summary, target);
     }
+    print_summary(&summary, &f, &scene, &mesh);
+    Ok(())
+}
+
+/// F as a NumPy file (`.npy`) or as CSV (`.csv`), one row per element.
+fn write_matrix(path: &str, f: &ViewFactors) -> Result<()> {
+    if path.ends_with(".npy") {
+        report::write_npy(path, f.len(), &f.matrix)?;
+    } else if path.ends_with(".csv") {
+        let text: String = f
+            .matrix
+            .chunks(f.len())
+            .map(|row| row.iter().map(|v| format!("{v:e}")).collect::<Vec<_>>().join(",") + "\n")
+            .collect();
+        std::fs::write(path, text)?;
+    } else {
+        return Err(Error::InvalidParameter {
+            name: "output",
+            value: path.to_string(),
+            reason: "expected a .npy or .csv file".into(),
+        });
+    }
+    Ok(())
+}
+
+/// The summary as text, and the face-to-face view factors of scenes of at most 12 faces.
+fn print_summary(summary: &ViewFactorSummary, f: &ViewFactors, scene: &Scene, mesh: &Mesh) {
     println!("{}: n = {} elements, {:.2} s", summary.surface, summary.n, summary.seconds);
     println!("row sums of F: min {:.15}, max {:.15}", summary.row_sum_min, summary.row_sum_max);
     println!(
@@ -77,10 +89,9 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     );
     if scene.faces.len() <= 12 {
         println!("face-to-face view factors (row: from):");
-        for (a, row) in f.by_face(&mesh).iter().enumerate() {
+        for (a, row) in f.by_face(mesh).iter().enumerate() {
             let cells: Vec<String> = row.iter().map(|v| format!("{v:.10}")).collect();
             println!("  {:>12} {}", scene.faces[a].name, cells.join(" "));
         }
     }
-    Ok(())
 }
