@@ -37,18 +37,26 @@ fn named_after(text: &str, prefix: &str) -> Vec<Vec<String>> {
 /// The module graph of the crate under `src`: top-level modules, and the children of each
 /// directory module among themselves.
 fn module_graph(src: &Path) -> Graph {
-    let mut graph = Graph::new();
     let mut files = Vec::new();
     collect_rust_files(src, &mut files);
-    for file in files {
-        let rel = file.strip_prefix(src).unwrap().with_extension("");
+    graph_of(files.iter().map(|file| {
+        let rel = file.strip_prefix(src).unwrap().to_string_lossy().into_owned();
+        (rel, std::fs::read_to_string(file).unwrap())
+    }))
+}
+
+/// The module graph of source files given by path relative to src/ (`mesh/constrained.rs`) and
+/// text.
+fn graph_of(files: impl IntoIterator<Item = (String, String)>) -> Graph {
+    let mut graph = Graph::new();
+    for (rel, text) in files {
+        let rel = Path::new(&rel).with_extension("");
         let parts: Vec<String> =
             rel.iter().map(|p| p.to_string_lossy().into_owned()).filter(|p| p != "mod").collect();
         let Some(top) = parts.first().cloned() else { continue };
         if top == "main" || top == "lib" || parts.last().is_some_and(|p| p == "tests") {
             continue;
         }
-        let text = std::fs::read_to_string(&file).unwrap();
         let code = without_tests(&text);
         for path in named_after(code, "crate::") {
             let Some(target) = path.first().filter(|t| !t.is_empty()) else { continue };
@@ -151,4 +159,39 @@ fn the_cycle_check_finds_cycles() {
     // The scan reads braced groups and sibling imports.
     let named = named_after("use crate::{mesh::Mesh, scene};", "crate::");
     assert_eq!(named, vec![vec!["mesh".to_string(), "Mesh".into()], vec!["scene".to_string()]]);
+}
+
+#[test]
+fn the_scan_finds_the_cycles_of_a_cyclic_crate() {
+    let crate_of = |files: &[(&str, &str)]| {
+        graph_of(files.iter().map(|(path, text)| (path.to_string(), text.to_string())))
+    };
+    // The cycle this crate once had, through a braced group and a path in an expression.
+    let cyclic = crate_of(&[
+        ("report/mod.rs", "use crate::{error::Result, study::StudyResult};"),
+        ("study/mod.rs", "fn run() { crate::pipeline::run(); }"),
+        ("pipeline.rs", "use crate::report::SolutionField;"),
+        ("error.rs", ""),
+    ]);
+    let cycle = find_cycle(&cyclic).expect("the scan must find the cycle");
+    assert_eq!(cycle.len(), 4, "{cycle:?}");
+    for module in ["report", "study", "pipeline"] {
+        assert!(cycle.contains(&module.to_string()), "{cycle:?}");
+    }
+    // Two files of one directory that import each other.
+    let siblings = crate_of(&[
+        ("mesh/constrained.rs", "use super::shadow_lines::Segment;"),
+        ("mesh/shadow_lines.rs", "use super::constrained::triangulate;"),
+    ]);
+    assert!(find_cycle(&siblings).is_some(), "{siblings:?}");
+    // Imports in test modules, and the crate root, are left out; one-way imports are no cycle.
+    let acyclic = crate_of(&[
+        ("report/mod.rs", "use crate::study::StudyResult;"),
+        ("study/mod.rs", "use crate::pipeline::run;\n#[cfg(test)]\nuse crate::report::x;"),
+        ("pipeline.rs", "use crate::solution::SolutionField;"),
+        ("solution.rs", ""),
+        ("lib.rs", "pub mod report; use crate::pipeline::run;"),
+        ("main.rs", "use crate::report::x;"),
+    ]);
+    assert_eq!(find_cycle(&acyclic), None, "{acyclic:?}");
 }
