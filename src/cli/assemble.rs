@@ -1,10 +1,13 @@
 //! `radiosity assemble`: the matrix K as a NumPy file.
 
+use radiosity::assembly::Assembly;
+use radiosity::discretization::Discretization;
 use radiosity::error::Result;
-use radiosity::pipeline::{self};
+use radiosity::mesh::Mesh;
+use radiosity::pipeline::{self, RunConfig};
+use radiosity::scene::Scene;
 use radiosity::visibility::PairPlanner;
 
-use super::inspect::assemble_without_progress;
 use super::*;
 
 pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
@@ -20,4 +23,24 @@ pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
         args.output
     );
     Ok(())
+}
+
+/// K for `config` on its backend.
+pub(crate) fn assemble_without_progress(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+    planner: &PairPlanner,
+) -> Result<Assembly> {
+    let (assembled, _) = pipeline::assemble_on(
+        config.backend,
+        scene,
+        mesh,
+        disc,
+        planner,
+        &config.assembly,
+        &|_| {},
+    )?;
+    Ok(assembled)
 }

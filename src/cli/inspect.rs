@@ -2,15 +2,12 @@
 
 use serde::Serialize;
 
-use radiosity::assembly::Assembly;
-use radiosity::discretization::Discretization;
 use radiosity::error::{Error, Result};
-use radiosity::mesh::Mesh;
-use radiosity::pipeline::{self, RunConfig};
+use radiosity::pipeline::{self};
 use radiosity::report;
-use radiosity::scene::Scene;
 use radiosity::visibility::PairPlanner;
 
+use super::assemble::assemble_without_progress;
 use super::*;
 
 /// What `inspect` prints.
@@ -34,26 +31,6 @@ pub(crate) struct Inspection {
     pairs_hidden: u64,
     occluders_possible: bool,
     setup_seconds: f64,
-}
-
-/// K for `config` on its backend.
-pub(crate) fn assemble_without_progress(
-    config: &RunConfig,
-    scene: &Scene,
-    mesh: &Mesh,
-    disc: &Discretization,
-    planner: &PairPlanner,
-) -> Result<Assembly> {
-    let (assembled, _) = pipeline::assemble_on(
-        config.backend,
-        scene,
-        mesh,
-        disc,
-        planner,
-        &config.assembly,
-        &|_| {},
-    )?;
-    Ok(assembled)
 }
 
 pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
