@@ -359,6 +359,13 @@ fn imperfect_scenes_are_named_where_they_go_wrong() {
     assert!(ok && err.contains("warning: faces 'floor' and 'lid' lie on one another"), "{err}");
     let (ok, _, err) = radiosity(&["solve", "--scene", "baffled-box", "--refine", "0"]);
     assert!(ok && !err.contains("warning"), "{err}");
+    // Missing files and unknown names say so, and what else would do.
+    for missing in ["no-such-scene.toml", "no-such-mesh.obj"] {
+        let (ok, _, err) = radiosity(&["solve", "--scene", missing]);
+        assert!(!ok && err.contains(missing) && err.contains("no such file"), "{err}");
+    }
+    let (ok, _, err) = radiosity(&["solve", "--scene", "nope"]);
+    assert!(!ok && err.contains("city:NXxNY") && err.contains("FILE.toml"), "{err}");
     // Nothing emits: said, with how to set emission.
     let (ok, _, err) = radiosity(&["solve", "--scene", "city:1x1", "--refine", "0"]);
     assert!(

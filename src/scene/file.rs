@@ -125,7 +125,6 @@ pub fn is_scene_file(name: &str) -> bool {
 /// `GROUP/k`, rho from the OBJ material or [`IMPORT_RHO`], no emission).
 pub fn load(path: &Path) -> Result<Scene> {
     let display = path.display().to_string();
-    check_readable(path)?;
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => load_toml(path),
@@ -168,6 +167,7 @@ fn stem(path: &Path) -> String {
 }
 
 fn load_toml(path: &Path) -> Result<Scene> {
+    check_readable(path)?;
     let display = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::SceneFile { path: display.clone(), reason: e.to_string() })?;

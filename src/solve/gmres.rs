@@ -9,7 +9,7 @@
 //! the recurrence. A cycle that does not halve the residual is stagnation: the solver stops there
 //! and says how far it got, instead of running to an iteration limit.
 
-use super::system::ReducedSystem;
+use super::system::{ReducedSystem, dot};
 use crate::error::{Error, IterationFailure, Result};
 
 /// Krylov vectors kept per cycle (memory: `(RESTART + 1) n` values).
@@ -132,10 +132,6 @@ fn cycle(
         x.iter_mut().zip(v).for_each(|(xk, vk)| *xk += yi * vk);
     }
     k
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn norm(a: &[f64]) -> f64 {
