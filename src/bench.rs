@@ -57,24 +57,40 @@ pub struct BenchReport {
     pub max_abs_diff: Option<f64>,
     /// Largest |K_cpu - K_gpu| relative to the largest |K_cpu| entry of its row, when both ran.
     pub max_rel_diff: Option<f64>,
+    /// Largest `||K_cpu - K_gpu||_∞` of a row relative to `||K_cpu||_1` of that row (the bound on
+    /// the relative change of `(K u)_i` for u of one sign), when both ran. Unlike
+    /// `max_rel_diff` it does not grow with n: entries of size h² carry the closed forms'
+    /// absolute rounding of O(1) terms on both backends (docs/gpu.md).
+    pub max_row_norm_rel_diff: Option<f64>,
     /// Repetitions per backend.
     pub repeats: usize,
 }
 
+/// Differences between two matrices of one size.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MatrixDifferences {
+    /// Largest `|a_ij - b_ij|`.
+    pub abs: f64,
+    /// Largest `|a_ij - b_ij| / max_j |a_ij|`.
+    pub row_max_relative: f64,
+    /// Largest `|a_ij - b_ij| / sum_j |a_ij|`.
+    pub row_norm_relative: f64,
+}
+
 /// Largest absolute and row-relative differences between two matrices of one size.
-pub fn matrix_differences(a: &CollocationMatrix, b: &CollocationMatrix) -> (f64, f64) {
-    let (mut abs, mut rel) = (0.0f64, 0.0f64);
+pub fn matrix_differences(a: &CollocationMatrix, b: &CollocationMatrix) -> MatrixDifferences {
+    let mut diff = MatrixDifferences::default();
     for i in 0..a.dof() {
-        let scale = a.row(i).iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (x, y) in a.row(i).iter().zip(b.row(i)) {
-            let d = (x - y).abs();
-            abs = abs.max(d);
-            if scale > 0.0 {
-                rel = rel.max(d / scale);
-            }
+        let (max, sum) =
+            a.row(i).iter().fold((0.0f64, 0.0), |(m, s), v| (m.max(v.abs()), s + v.abs()));
+        let d = a.row(i).iter().zip(b.row(i)).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        diff.abs = diff.abs.max(d);
+        if max > 0.0 {
+            diff.row_max_relative = diff.row_max_relative.max(d / max);
+            diff.row_norm_relative = diff.row_norm_relative.max(d / sum);
         }
     }
-    (abs, rel)
+    diff
 }
 
 /// Assembles the matrix of `config` on each of `backends`, `repeats` times each.
@@ -97,6 +113,7 @@ pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<B
         speedup: None,
         max_abs_diff: None,
         max_rel_diff: None,
+        max_row_norm_rel_diff: None,
         repeats,
     };
     let mut matrices: Vec<CollocationMatrix> = Vec::new();
@@ -140,9 +157,10 @@ pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<B
         report.speedup = Some(c.setup_seconds / g.setup_seconds);
         let cpu_index = backends.iter().position(|b| *b == Backend::Cpu).expect("cpu ran");
         let gpu_index = 1 - cpu_index;
-        let (abs, rel) = matrix_differences(&matrices[cpu_index], &matrices[gpu_index]);
-        report.max_abs_diff = Some(abs);
-        report.max_rel_diff = Some(rel);
+        let diff = matrix_differences(&matrices[cpu_index], &matrices[gpu_index]);
+        report.max_abs_diff = Some(diff.abs);
+        report.max_rel_diff = Some(diff.row_max_relative);
+        report.max_row_norm_rel_diff = Some(diff.row_norm_relative);
     }
     Ok(report)
 }

@@ -59,9 +59,12 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     if let Some(d) = &r.device {
         println!("device: {d}");
     }
-    if let (Some(s), Some(a), Some(rel)) = (r.speedup, r.max_abs_diff, r.max_rel_diff) {
+    if let (Some(s), Some(a), Some(rel), Some(norm)) =
+        (r.speedup, r.max_abs_diff, r.max_rel_diff, r.max_row_norm_rel_diff)
+    {
         println!(
-            "speedup (cpu time / gpu time): {s:.2}; max |difference| {a:.2e}, row-relative {rel:.2e}"
+            "speedup (cpu time / gpu time): {s:.2}; max |difference| {a:.2e}, relative to the \
+             row's largest entry {rel:.2e}, to the row's 1-norm {norm:.2e}"
         );
     }
     Ok(())

@@ -34,6 +34,17 @@ pub fn shared_context() -> Result<&'static GpuContext> {
 /// does not count as available for f64 work (Mesa's GL llvmpipe, for one, has none), and the
 /// error says how to get one that has it.
 pub fn context_for(precision: Precision) -> Result<&'static GpuContext> {
+    let ctx = capable_context(precision)?;
+    if precision == Precision::F64 {
+        F64_VERIFIED.get_or_init(|| verify_f64_math(ctx)).clone().map_err(Error::Gpu)?;
+    }
+    Ok(ctx)
+}
+
+/// The shared context when its adapter has what kernels of `precision` need, before the f64 math
+/// library has been checked on it: for `gpu-check`, which measures the math library itself (and
+/// so must be able to show the table on an adapter that [`context_for`] refuses).
+pub fn capable_context(precision: Precision) -> Result<&'static GpuContext> {
     let ctx = shared_context()?;
     if precision == Precision::F64 && !ctx.adapter.f64 {
         return Err(Error::Gpu(format!(
@@ -41,9 +52,6 @@ pub fn context_for(precision: Precision) -> Result<&'static GpuContext> {
              or {INSTALL_HINT}",
             ctx.adapter.name
         )));
-    }
-    if precision == Precision::F64 {
-        F64_VERIFIED.get_or_init(|| verify_f64_math(ctx)).clone().map_err(Error::Gpu)?;
     }
     Ok(ctx)
 }
