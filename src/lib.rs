@@ -9,6 +9,7 @@ pub mod geometry;
 pub mod gpu;
 pub mod kernels;
 pub mod mesh;
+pub mod operator;
 pub mod pipeline;
 pub mod problems;
 pub mod progress;

@@ -182,6 +182,32 @@ impl PairPlanner {
         found
     }
 
+    /// Whether no occluder can meet a segment between a point of the box `nodes` on face `a` and a
+    /// point of the box `elements` on face `b`, both in front of the other's plane (a block of the
+    /// compressed operator): no occluder piece other than `a`'s and `b`'s reaches into the shaft
+    /// (Haines and Wallace 1994), the convex hull of the two boxes in front of both planes. The
+    /// shaft is bounded by supporting planes of the two boxes (their faces, and planes along each
+    /// axis through corresponding corners), so the test only errs towards "not clear".
+    pub fn shaft_is_clear(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+    ) -> bool {
+        let (fa, fb) = (&self.faces[a], &self.faces[b]);
+        let tol = 1e-12 * fa.size.max(fb.size);
+        let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
+        let corners = box_corners(nodes).into_iter().chain(box_corners(elements));
+        let corners: Vec<DVec3> = corners.collect();
+        for n in shaft_normals(nodes, elements) {
+            let reach = corners.iter().map(|c| n.dot(*c)).fold(f64::NEG_INFINITY, f64::max);
+            // Inside: n·x <= reach, grown by the tolerance (a piece touching it counts).
+            volume.push(-n, reach, -tol);
+        }
+        self.occluders.inside(a, b, &volume).next().is_none()
+    }
+
     /// The convex occluder pieces of the scene.
     pub fn occluders(&self) -> &[Occluder] {
         &self.occluders.pieces
@@ -338,6 +364,36 @@ impl PairPlanner {
             })
             .collect()
     }
+}
+
+/// The eight corners of a box.
+fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
+    std::array::from_fn(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
+/// Outward normals of supporting planes of the convex hull of two boxes: the six axes, and for
+/// each axis and each pair of corresponding corners the two normals perpendicular to the axis and
+/// to the segment joining those corners (the planes of Haines and Wallace's shaft).
+fn shaft_normals(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> Vec<DVec3> {
+    let mut normals = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
+    let (ca, cb) = (box_corners(a), box_corners(b));
+    for (axis, bit) in [(DVec3::X, 1), (DVec3::Y, 2), (DVec3::Z, 4)] {
+        // Corners with the axis's bit clear: one per sign pattern of the other two axes.
+        for k in (0..8).filter(|k| k & bit == 0) {
+            let n = axis.cross(cb[k] - ca[k]);
+            if n.length_squared() > 0.0 {
+                let n = n.normalize();
+                normals.extend([n, -n]);
+            }
+        }
+    }
+    normals
 }
 
 fn polygon_scale(poly: &[DVec2]) -> f64 {

@@ -1,0 +1,187 @@
+//! Cluster trees: items (collocation nodes, or elements) ordered so that every cluster is a
+//! contiguous range, split by geometric bisection of bounding boxes.
+
+use glam::DVec3;
+
+/// One cluster: items `start..end` of the tree's order.
+#[derive(Clone, Debug)]
+pub struct Cluster {
+    /// First item (position in the tree's order).
+    pub start: usize,
+    /// One past the last item.
+    pub end: usize,
+    /// Bounding box of the items' extents.
+    pub lo: DVec3,
+    /// Upper corner of the box.
+    pub hi: DVec3,
+    /// The two halves, or `None` for a leaf.
+    pub children: Option<(usize, usize)>,
+    /// Faces the items lie on, sorted.
+    pub faces: Vec<usize>,
+}
+
+impl Cluster {
+    /// Number of items.
+    pub fn len(&self) -> usize {
+        self.end - self.start
+    }
+
+    /// Whether it holds no item (only an empty scene gives one).
+    pub fn is_empty(&self) -> bool {
+        self.end == self.start
+    }
+
+    /// Diameter of its box.
+    pub fn diameter(&self) -> f64 {
+        (self.hi - self.lo).length()
+    }
+
+    /// Distance between its box and another's (0 when they overlap).
+    pub fn distance(&self, other: &Cluster) -> f64 {
+        let gap = (other.lo - self.hi).max(self.lo - other.hi).max(DVec3::ZERO);
+        gap.length()
+    }
+
+    /// The box as a pair of corners.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        (self.lo, self.hi)
+    }
+}
+
+/// A binary cluster tree; cluster 0 is the root.
+#[derive(Clone, Debug)]
+pub struct ClusterTree {
+    /// `order[k]`: the original index of the item at position k.
+    pub order: Vec<usize>,
+    /// Clusters, parents before children.
+    pub clusters: Vec<Cluster>,
+}
+
+/// One item to cluster: where it is (for splitting), how far it reaches (for the boxes), its face.
+#[derive(Clone, Copy, Debug)]
+pub struct Item {
+    /// Reference point (node position, element centroid).
+    pub point: DVec3,
+    /// Lower corner of its extent.
+    pub lo: DVec3,
+    /// Upper corner of its extent.
+    pub hi: DVec3,
+    /// Face.
+    pub face: usize,
+}
+
+impl ClusterTree {
+    /// Splits `items` until clusters hold at most `leaf_size`: each cluster is cut at the middle
+    /// of the longest side of its points' box (at the median instead when that leaves one side
+    /// empty, as for items at one point).
+    pub fn new(items: &[Item], leaf_size: usize) -> Self {
+        let mut tree = Self { order: (0..items.len()).collect(), clusters: Vec::new() };
+        tree.split(items, 0, items.len(), leaf_size.max(1));
+        tree
+    }
+
+    /// Builds the cluster of `start..end` and, below it, its descendants; returns its index.
+    fn split(&mut self, items: &[Item], start: usize, end: usize, leaf_size: usize) -> usize {
+        let index = self.clusters.len();
+        let members = &self.order[start..end];
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let (mut plo, mut phi) = (lo, hi);
+        let mut faces: Vec<usize> = Vec::new();
+        for &k in members {
+            let it = &items[k];
+            lo = lo.min(it.lo);
+            hi = hi.max(it.hi);
+            plo = plo.min(it.point);
+            phi = phi.max(it.point);
+            faces.push(it.face);
+        }
+        faces.sort_unstable();
+        faces.dedup();
+        self.clusters.push(Cluster { start, end, lo, hi, children: None, faces });
+        if end - start <= leaf_size {
+            return index;
+        }
+        let extent = phi - plo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        let middle = 0.5 * (plo[axis] + phi[axis]);
+        let slice = &mut self.order[start..end];
+        let mut cut = partition(slice, |&k| items[k].point[axis] < middle);
+        if cut == 0 || cut == slice.len() {
+            cut = slice.len() / 2;
+            slice.select_nth_unstable_by(cut, |&a, &b| {
+                items[a].point[axis].total_cmp(&items[b].point[axis])
+            });
+        }
+        let left = self.split(items, start, start + cut, leaf_size);
+        let right = self.split(items, start + cut, end, leaf_size);
+        self.clusters[index].children = Some((left, right));
+        index
+    }
+
+    /// The root cluster.
+    pub fn root(&self) -> &Cluster {
+        &self.clusters[0]
+    }
+}
+
+/// Moves the items for which `left` holds to the front; returns how many there are.
+fn partition(slice: &mut [usize], left: impl Fn(&usize) -> bool) -> usize {
+    let mut cut = 0;
+    for k in 0..slice.len() {
+        if left(&slice[k]) {
+            slice.swap(cut, k);
+            cut += 1;
+        }
+    }
+    cut
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(x: f64, y: f64, face: usize) -> Item {
+        let p = DVec3::new(x, y, 0.0);
+        Item { point: p, lo: p, hi: p, face }
+    }
+
+    #[test]
+    fn clusters_are_contiguous_ranges_with_boxes_holding_their_items() {
+        let items: Vec<Item> =
+            (0..100).map(|k| point((k % 10) as f64, (k / 10) as f64, k / 50)).collect();
+        let tree = ClusterTree::new(&items, 8);
+        let mut sorted = tree.order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..100).collect::<Vec<_>>());
+        for c in &tree.clusters {
+            for &k in &tree.order[c.start..c.end] {
+                assert!(items[k].point.cmpge(c.lo).all() && items[k].point.cmple(c.hi).all());
+                assert!(c.faces.contains(&items[k].face));
+            }
+            match c.children {
+                Some((l, r)) => {
+                    assert_eq!(
+                        (tree.clusters[l].start, tree.clusters[l].end),
+                        (c.start, tree.clusters[r].start)
+                    );
+                    assert_eq!(tree.clusters[r].end, c.end);
+                    assert!(c.len() > 8);
+                }
+                None => assert!(c.len() <= 8 && !c.is_empty()),
+            }
+        }
+    }
+
+    #[test]
+    fn items_at_one_point_are_split_at_the_median() {
+        let items: Vec<Item> = (0..20).map(|_| point(1.0, 1.0, 0)).collect();
+        let tree = ClusterTree::new(&items, 4);
+        assert!(tree.clusters.iter().all(|c| c.children.is_some() || c.len() <= 4));
+    }
+}

@@ -1,0 +1,450 @@
+//! The compressed collocation operator for large n (DESIGN.md sec. 2b): K applied to vectors
+//! without the dense n × n matrix, in about n log n memory and time.
+//!
+//! Rows (collocation nodes) and columns (elements, with their basis functions) are ordered by
+//! cluster trees ([`cluster`]); the block tree pairs node clusters with element clusters
+//! ([`blocks`]). Each block is one of:
+//!
+//! - *nothing*: every element lies in a plane with, or behind the tangent plane of, every node
+//!   of the block, or the other way round, so G = 0 there;
+//! - *smooth and admissible*: every element is in front of every node's plane and faces it, no
+//!   occluder reaches into the shaft between the two boxes (so V = 1), and the clusters are far
+//!   apart for their size; the kernel is analytic there and the block is stored as a low-rank
+//!   product built by adaptive cross approximation ([`aca`]) from true collocation entries;
+//! - a leaf that is neither: every entry computed exactly by the pair plan and kernels of the
+//!   dense path, partly visible elements included (paper sec. 2.7), and stored as it is.
+//!
+//! So the only error added to the dense path is the tolerance of the low-rank blocks, which the
+//! user sets, and which tests measure against the dense matrix.
+
+pub mod aca;
+mod blocks;
+pub mod cluster;
+
+use std::f64::consts::PI;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::assembly::{AssemblyOptions, PairIntegrator, available_memory};
+use crate::discretization::Discretization;
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
+
+use aca::LowRank;
+use blocks::{BlockPlan, FacePairs};
+use cluster::{ClusterTree, Item};
+
+/// Which operator a run stores.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OperatorChoice {
+    /// Dense up to [`AUTO_COMPRESSED_ABOVE`] unknowns, compressed beyond.
+    #[default]
+    Auto,
+    /// The dense matrix: every entry stored (the reference).
+    Dense,
+    /// Low-rank blocks far away, exact blocks near.
+    Compressed,
+}
+
+impl OperatorChoice {
+    /// Whether a system of `dof` unknowns is compressed.
+    pub fn compresses(self, dof: usize) -> bool {
+        match self {
+            Self::Dense => false,
+            Self::Compressed => true,
+            Self::Auto => dof > AUTO_COMPRESSED_ABOVE,
+        }
+    }
+}
+
+/// Above this many unknowns [`OperatorChoice::Auto`] compresses (docs/performance.md: the
+/// compressed setup is faster than the dense one from about here on).
+pub const AUTO_COMPRESSED_ABOVE: usize = 12_000;
+
+/// Default relative tolerance of the low-rank blocks.
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+
+/// How the operator is compressed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CompressionOptions {
+    /// Relative Frobenius-norm error of each low-rank block.
+    pub tolerance: f64,
+    /// Admissibility: a block is far when `min(diam) <= eta * distance`.
+    pub eta: f64,
+    /// Most items in a leaf cluster.
+    pub leaf_size: usize,
+}
+
+impl Default for CompressionOptions {
+    fn default() -> Self {
+        Self { tolerance: DEFAULT_TOLERANCE, eta: 1.0, leaf_size: 32 }
+    }
+}
+
+impl CompressionOptions {
+    /// Refuses a tolerance outside (0, 1), a non-positive eta or an empty leaf.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return Err(Error::InvalidParameter {
+                name: "compression tolerance",
+                value: self.tolerance.to_string(),
+                reason: "the relative error of the low-rank blocks must lie in (0, 1)".into(),
+            });
+        }
+        if !(self.eta > 0.0 && self.eta.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "eta",
+                value: self.eta.to_string(),
+                reason: "the admissibility parameter must be positive and finite".into(),
+            });
+        }
+        if self.leaf_size == 0 {
+            return Err(Error::InvalidParameter {
+                name: "leaf size",
+                value: "0".into(),
+                reason: "a leaf cluster holds at least one item".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Block statistics of a compressed operator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct OperatorStats {
+    /// Bytes of the stored blocks (values and their index data).
+    pub operator_bytes: u64,
+    /// Entries stored as they are (exact near blocks).
+    pub near_entries: u64,
+    /// Blocks stored exactly.
+    pub near_blocks: u64,
+    /// Low-rank blocks.
+    pub far_blocks: u64,
+    /// Entries the low-rank blocks stand for.
+    pub far_entries: u64,
+    /// Largest rank of a low-rank block.
+    pub max_rank: usize,
+    /// Blocks found to hold nothing (G = 0 throughout) and not stored.
+    pub empty_blocks: u64,
+    /// Admissible blocks kept exact because their rank would not have saved memory.
+    pub incompressible_blocks: u64,
+}
+
+/// A block of K: rows `rows` of the node order, columns of the elements `cols` of the element
+/// order (each with its basis functions).
+#[derive(Clone, Debug)]
+struct Block {
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+    data: BlockData,
+}
+
+#[derive(Clone, Debug)]
+enum BlockData {
+    /// Row-major, rows × (elements · per).
+    Dense(Vec<f64>),
+    LowRank(LowRank),
+}
+
+/// K as exact near blocks and low-rank far blocks.
+#[derive(Clone, Debug)]
+pub struct CompressedOperator {
+    dof: usize,
+    per: usize,
+    nodes: ClusterTree,
+    elements: ClusterTree,
+    blocks: Vec<Block>,
+    /// Statistics of the blocks.
+    pub stats: OperatorStats,
+    /// Pair classes of the exact blocks.
+    pub pairs: PairStats,
+    /// Rows of nodes that reflect nothing (rho = 0): zero, u = E there.
+    pub zero_rows: usize,
+}
+
+/// Fraction of the available memory the near blocks may take.
+const MEMORY_SHARE: f64 = 0.8;
+
+impl CompressedOperator {
+    /// Builds K for `disc` on `mesh` of `scene`; `progress` is called with the number of blocks
+    /// finished.
+    pub fn build(
+        scene: &Scene,
+        mesh: &Mesh,
+        disc: &Discretization,
+        planner: &PairPlanner,
+        assembly: &AssemblyOptions,
+        options: &CompressionOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<Self> {
+        options.validate()?;
+        assembly.quadrature.validate()?;
+        let per = disc.method.nodes_per_element();
+        let node_items: Vec<Item> = disc
+            .nodes
+            .iter()
+            .map(|n| Item { point: n.position, lo: n.position, hi: n.position, face: n.face })
+            .collect();
+        let element_items: Vec<Item> = mesh
+            .elements()
+            .iter()
+            .map(|e| {
+                let [a, b, c] = e.vertices;
+                Item { point: e.centroid(), lo: a.min(b).min(c), hi: a.max(b).max(c), face: e.face }
+            })
+            .collect();
+        let nodes = ClusterTree::new(&node_items, options.leaf_size);
+        let elements = ClusterTree::new(&element_items, options.leaf_size);
+        let faces = FacePairs::new(scene, planner);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, options.eta);
+        check_memory(plan.near_entries(&nodes, &elements, per), disc.dof())?;
+
+        let integrator = PairIntegrator::new(disc.method, assembly);
+        let entries = Entries {
+            mesh,
+            disc,
+            planner,
+            integrator: &integrator,
+            nodes: &nodes,
+            elements: &elements,
+            per,
+        };
+        let total = plan.near.len() + plan.far.len();
+        let near = plan.near.par_iter().map(|&(t, s)| {
+            let (block, stats) = entries.exact_block(t, s);
+            progress(1, total);
+            (block, stats, false)
+        });
+        let far = plan.far.par_iter().map(|&(t, s)| {
+            let r = match entries.compressed_block(t, s, &faces, options.tolerance) {
+                Some(block) => (block, PairStats::default(), false),
+                None => {
+                    let (block, stats) = entries.exact_block(t, s);
+                    (block, stats, true)
+                }
+            };
+            progress(1, total);
+            r
+        });
+        let built: Vec<(Block, PairStats, bool)> = near.chain(far).collect();
+
+        let mut stats = OperatorStats { empty_blocks: plan.empty as u64, ..Default::default() };
+        let mut pairs = PairStats::default();
+        let mut blocks = Vec::with_capacity(built.len());
+        for (block, s, incompressible) in built {
+            pairs += s;
+            stats.incompressible_blocks += u64::from(incompressible);
+            let index_bytes = std::mem::size_of::<Block>() as u64;
+            match &block.data {
+                BlockData::Dense(d) => {
+                    if d.iter().all(|&v| v == 0.0) {
+                        stats.empty_blocks += 1;
+                        continue;
+                    }
+                    stats.near_blocks += 1;
+                    stats.near_entries += d.len() as u64;
+                    stats.operator_bytes += 8 * d.len() as u64 + index_bytes;
+                }
+                BlockData::LowRank(lr) => {
+                    stats.far_blocks += 1;
+                    stats.far_entries += (lr.m * lr.c) as u64;
+                    stats.max_rank = stats.max_rank.max(lr.k);
+                    stats.operator_bytes += 8 * lr.len() as u64 + index_bytes;
+                }
+            }
+            blocks.push(block);
+        }
+        stats.operator_bytes += 8 * (nodes.order.len() + elements.order.len()) as u64;
+        let zero_rows = disc.nodes.iter().filter(|n| n.rho == 0.0).count();
+        Ok(Self { dof: disc.dof(), per, nodes, elements, blocks, stats, pairs, zero_rows })
+    }
+
+    /// Number of unknowns.
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+
+    /// `K x`: the blocks in parallel, each adding into its rows.
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let per = self.per;
+        // x in the element order.
+        let mut xp = vec![0.0; self.dof];
+        for (k, &e) in self.elements.order.iter().enumerate() {
+            xp[k * per..(k + 1) * per].copy_from_slice(&x[e * per..(e + 1) * per]);
+        }
+        let yp = self
+            .blocks
+            .par_iter()
+            .with_min_len(16)
+            .fold(
+                || vec![0.0; self.dof],
+                |mut y, b| {
+                    let xs = &xp[b.cols.start * per..b.cols.end * per];
+                    let ys = &mut y[b.rows.clone()];
+                    match &b.data {
+                        BlockData::Dense(d) => {
+                            let c = xs.len();
+                            for (yi, row) in ys.iter_mut().zip(d.chunks_exact(c)) {
+                                *yi += row.iter().zip(xs).map(|(a, b)| a * b).sum::<f64>();
+                            }
+                        }
+                        BlockData::LowRank(lr) => lr.apply_add(xs, ys),
+                    }
+                    y
+                },
+            )
+            .reduce(
+                || vec![0.0; self.dof],
+                |mut a, b| {
+                    a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
+                    a
+                },
+            );
+        let mut y = vec![0.0; self.dof];
+        for (k, &i) in self.nodes.order.iter().enumerate() {
+            y[i] = yp[k];
+        }
+        y
+    }
+}
+
+/// Refuses a plan whose exact blocks alone would not fit in memory.
+fn check_memory(near_entries: u64, dof: usize) -> Result<()> {
+    let bytes = near_entries as f64 * 8.0;
+    if let Some(avail) = available_memory() {
+        let allowed = MEMORY_SHARE * avail as f64;
+        if bytes > allowed {
+            return Err(Error::TooLarge {
+                dof,
+                needed_gib: bytes / (1u64 << 30) as f64,
+                available_gib: allowed / (1u64 << 30) as f64,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Computes entries of K for blocks.
+struct Entries<'a> {
+    mesh: &'a Mesh,
+    disc: &'a Discretization,
+    planner: &'a PairPlanner,
+    integrator: &'a PairIntegrator,
+    nodes: &'a ClusterTree,
+    elements: &'a ClusterTree,
+    per: usize,
+}
+
+impl Entries<'_> {
+    /// Every entry of the block, by the dense path's pair plan (views per node and face, exact
+    /// visible parts) and kernels.
+    fn exact_block(&self, t: usize, s: usize) -> (Block, PairStats) {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let per = self.per;
+        let width = sc.len() * per;
+        let mut data = vec![0.0; tc.len() * width];
+        let mut stats = PairStats::default();
+        let element_ids = &self.elements.order[sc.start..sc.end];
+        for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
+            let node = &self.disc.nodes[i];
+            if node.rho == 0.0 {
+                stats += PairStats::not_reflecting_row(sc.len());
+                continue;
+            }
+            let scale = node.rho / PI;
+            let mut views: Vec<(usize, FaceView)> = Vec::new();
+            for (k, &j) in element_ids.iter().enumerate() {
+                let el = &self.disc.elements[j];
+                let view = match views.iter().position(|(f, _)| *f == el.face) {
+                    Some(p) => &views[p].1,
+                    None => {
+                        let v =
+                            self.planner.face_view(node.position, node.normal, node.face, el.face);
+                        views.push((el.face, v));
+                        &views[views.len() - 1].1
+                    }
+                };
+                let vis = match view {
+                    FaceView::Skip(reason) => Visibility::Skip(*reason),
+                    v if v.is_unobstructed() => Visibility::Full,
+                    v => self.planner.visible(v, &el.in_face()),
+                };
+                stats.record(&vis, 1);
+                if matches!(vis, Visibility::Skip(_)) {
+                    continue;
+                }
+                let values = self.integrator.integrate(
+                    el,
+                    &self.disc.bases[j],
+                    node.position,
+                    node.normal,
+                    &vis,
+                );
+                let at = r * width + k * per;
+                for (c, v) in values.iter().take(per).enumerate() {
+                    data[at + c] = scale * v;
+                }
+            }
+        }
+        let block =
+            Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data: BlockData::Dense(data) };
+        (block, stats)
+    }
+
+    /// The values of node `i` (original index) against element `j`, where the block's plan says
+    /// the element is wholly visible from the node unless their faces give nothing.
+    fn smooth_pair(&self, i: usize, j: usize, faces: &FacePairs) -> [f64; 3] {
+        let node = &self.disc.nodes[i];
+        let el = &self.disc.elements[j];
+        let vertices = &self.mesh.elements()[j].vertices;
+        if node.rho == 0.0 || faces.nothing_between(node.face, node.position, el, vertices) {
+            return [0.0; 3];
+        }
+        let values = self.integrator.integrate(
+            el,
+            &self.disc.bases[j],
+            node.position,
+            node.normal,
+            &Visibility::Full,
+        );
+        values.map(|v| v * node.rho / PI)
+    }
+
+    /// The block as a low-rank product, or `None` when its rank would not save memory.
+    fn compressed_block(
+        &self,
+        t: usize,
+        s: usize,
+        faces: &FacePairs,
+        tolerance: f64,
+    ) -> Option<Block> {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let per = self.per;
+        let (m, c) = (tc.len(), sc.len() * per);
+        let node_ids = &self.nodes.order[tc.start..tc.end];
+        let element_ids = &self.elements.order[sc.start..sc.end];
+        let row = |r: usize| {
+            let i = node_ids[r];
+            let mut out = Vec::with_capacity(c);
+            for &j in element_ids {
+                out.extend_from_slice(&self.smooth_pair(i, j, faces)[..per]);
+            }
+            out
+        };
+        let col = |q: usize| {
+            let (j, basis) = (element_ids[q / per], q % per);
+            node_ids.iter().map(|&i| self.smooth_pair(i, j, faces)[basis]).collect()
+        };
+        // Beyond this rank U and V take more memory than the block itself.
+        let max_rank = (m * c) / (m + c);
+        let lr = aca::aca(m, c, row, col, tolerance, max_rank.max(1))?;
+        Some(Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data: BlockData::LowRank(lr) })
+    }
+}
+
+#[cfg(test)]
+mod tests;

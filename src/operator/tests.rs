@@ -1,0 +1,169 @@
+//! The compressed operator against the dense matrix (the reference): same products to the
+//! tolerance, exact where visibility is partial, nothing stored where nothing is seen.
+
+use glam::DVec3;
+
+use super::*;
+use crate::assembly::{AssemblyOptions, CollocationMatrix, assemble};
+use crate::discretization::Method;
+use crate::mesh::MeshKind;
+use crate::scene::{Face, SurfaceParameters, baffled_box, cube, five_piece};
+
+struct Case {
+    scene: Scene,
+    mesh: Mesh,
+    disc: Discretization,
+    planner: PairPlanner,
+}
+
+fn case(scene: Scene, method: Method, refine: u32) -> Case {
+    let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
+    let disc = Discretization::new(&scene, &mesh, method).unwrap();
+    let planner = PairPlanner::new(&scene);
+    Case { scene, mesh, disc, planner }
+}
+
+fn compressed(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator {
+    let options = CompressionOptions { tolerance, leaf_size, ..Default::default() };
+    let assembly = AssemblyOptions::default();
+    CompressedOperator::build(
+        &c.scene,
+        &c.mesh,
+        &c.disc,
+        &c.planner,
+        &assembly,
+        &options,
+        &|_, _| {},
+    )
+    .unwrap()
+}
+
+fn dense(c: &Case) -> CollocationMatrix {
+    assemble(&c.mesh, &c.disc, &c.planner, &AssemblyOptions::default(), &|_| {}).unwrap().matrix
+}
+
+/// Largest `|K_c x - K x| / |K x|` (max norms) over a few vectors of one sign and of both signs.
+fn worst_product_difference(op: &CompressedOperator, k: &CollocationMatrix) -> f64 {
+    let n = k.dof();
+    let vectors: Vec<Vec<f64>> = vec![
+        vec![1.0; n],
+        (0..n).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
+        (0..n).map(|i| (i as f64 * 1.3).cos()).collect(),
+    ];
+    vectors
+        .iter()
+        .map(|x| {
+            let (a, b) = (op.apply(x), k.apply(x));
+            let diff = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+            diff / b.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn five_piece_products_match_the_dense_matrix_to_the_tolerance() {
+    let scene = || five_piece(SurfaceParameters::default()).unwrap();
+    for (method, refine) in [(Method::Centroid, 3), (Method::linear(1.0 / 6.0).unwrap(), 2)] {
+        let c = case(scene(), method, refine);
+        let k = dense(&c);
+        for tol in [1e-4, 1e-8] {
+            let op = compressed(&c, tol, 8);
+            let d = worst_product_difference(&op, &k);
+            assert!(d <= 10.0 * tol, "{method}, tol {tol}: {d:.2e} ({:?})", op.stats);
+            assert!(op.stats.far_blocks > 0 && op.stats.near_blocks > 0, "{:?}", op.stats);
+            assert!(op.stats.max_rank > 0);
+        }
+    }
+}
+
+#[test]
+fn partly_visible_leaves_are_exact() {
+    // The baffled box: the plate casts shadows on every wall. Leaves hold partly visible pairs
+    // (counted), and with the tolerance near rounding the products equal the dense ones.
+    let c = case(baffled_box().unwrap(), Method::Centroid, 3);
+    let k = dense(&c);
+    let op = compressed(&c, 1e-13, 8);
+    assert!(op.pairs.partial > 0 && op.pairs.hidden > 0, "{:?}", op.pairs);
+    let d = worst_product_difference(&op, &k);
+    assert!(d <= 1e-12, "{d:.2e}");
+}
+
+#[test]
+fn closed_boxes_keep_rows_summing_to_one() {
+    // Lemma 2.1 through the compressed operator: K/rho applied to ones is 1 in every row.
+    for (scene, name) in [(cube().unwrap(), "cube"), (baffled_box().unwrap(), "baffled box")] {
+        let c = case(scene, Method::Centroid, 4);
+        let tol = 1e-6;
+        let op = compressed(&c, tol, 16);
+        let ones = vec![1.0; op.dof()];
+        let worst = op
+            .apply(&ones)
+            .iter()
+            .zip(&c.disc.nodes)
+            .map(|(s, node)| (s / node.rho - 1.0).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 10.0 * tol, "{name}: {worst:.2e}");
+        assert!(op.stats.far_blocks > 0, "{name}: {:?}", op.stats);
+    }
+}
+
+/// A unit square at height z, facing up (`up`) or down.
+fn square(name: &str, z: f64, half: f64, up: bool) -> Face {
+    let mut v = vec![
+        DVec3::new(-half, -half, z),
+        DVec3::new(half, -half, z),
+        DVec3::new(half, half, z),
+        DVec3::new(-half, half, z),
+    ];
+    if !up {
+        v.reverse();
+    }
+    Face::new(name, v, 0.5).unwrap().with_emission(1.0).unwrap()
+}
+
+#[test]
+fn hidden_and_facing_away_blocks_store_nothing() {
+    // Two squares back to back: every pair faces away, nothing is stored.
+    let scene = Scene::new(
+        "back to back",
+        vec![square("low", 0.0, 1.0, false), square("high", 1.0, 1.0, true)],
+    )
+    .unwrap();
+    let c = case(scene, Method::Centroid, 3);
+    let op = compressed(&c, 1e-6, 8);
+    assert_eq!((op.stats.near_blocks, op.stats.far_blocks), (0, 0), "{:?}", op.stats);
+    assert!(op.stats.empty_blocks > 0);
+
+    // A floor and a ceiling far apart with a plate between them that hides each from the other:
+    // the tree separates the floor from the rest, and no stored block pairs floor nodes with
+    // ceiling elements only (those blocks are found empty and dropped).
+    let scene = Scene::new(
+        "hidden",
+        vec![
+            square("floor", 0.0, 1.0, true),
+            square("ceiling", 10.0, 1.0, false),
+            square("plate", 5.0, 4.0, false),
+        ],
+    )
+    .unwrap();
+    let c = case(scene, Method::Centroid, 2);
+    let k = dense(&c);
+    let op = compressed(&c, 1e-10, 8);
+    assert!(worst_product_difference(&op, &k) <= 1e-9);
+    assert!(op.stats.empty_blocks > 0 && op.pairs.hidden > 0, "{:?} {:?}", op.stats, op.pairs);
+    let face_of_row = |r: usize| c.disc.nodes[op.nodes.order[r]].face;
+    let face_of_col = |q: usize| c.disc.elements[op.elements.order[q]].face;
+    let floor_to_ceiling = op.blocks.iter().filter(|b| {
+        b.rows.clone().all(|r| face_of_row(r) == 0) && b.cols.clone().all(|q| face_of_col(q) == 1)
+    });
+    assert_eq!(floor_to_ceiling.count(), 0);
+}
+
+#[test]
+fn bad_tolerances_are_refused_with_the_limit() {
+    for tol in [0.0, 1.0, -1e-6, f64::NAN, 2.0] {
+        let options = CompressionOptions { tolerance: tol, ..Default::default() };
+        let e = options.validate().unwrap_err().to_string();
+        assert!(e.contains("compression tolerance") && e.contains("(0, 1)"), "{e}");
+    }
+}
