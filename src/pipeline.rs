@@ -14,6 +14,7 @@ use crate::mesh::{
     Grading, LineExtent, Mesh, MeshKind, S5Diagonals, Sources, paper_discontinuity_cuts,
     shadow_lines,
 };
+use crate::operator::{CompressedOperator, CompressionOptions, OperatorChoice, OperatorStats};
 use crate::problems::{EmissionOptions, TrueSolution, emission_at};
 use crate::progress::ProgressSink;
 use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
@@ -251,6 +252,10 @@ pub struct RunConfig {
     /// Also measure the errors over all of S at the sample points of this lattice
     /// ([`crate::surface_error`]), when a true solution is known.
     pub surface_lattice: Option<usize>,
+    /// Which operator to store: dense, compressed, or by size.
+    pub operator: OperatorChoice,
+    /// How the compressed operator is built.
+    pub compression: CompressionOptions,
 }
 
 /// Relative error estimate of E above which `solve` warns: 1e3 times the quadrature's relative
@@ -279,6 +284,8 @@ impl RunConfig {
             progress: ProgressSink::default(),
             setup_repeats: 1,
             surface_lattice: None,
+            operator: OperatorChoice::Dense,
+            compression: CompressionOptions::default(),
         }
     }
 }
@@ -337,8 +344,20 @@ pub struct RunReport {
     pub solve_seconds: f64,
     /// Relative residual of the solve.
     pub residual: f64,
-    /// Pair classes.
+    /// Pair classes (of the exact blocks, for the compressed operator).
     pub pairs: PairStats,
+    /// `dense` or `compressed`.
+    pub operator: &'static str,
+    /// Relative tolerance of the low-rank blocks (compressed operator).
+    pub compression_tolerance: Option<f64>,
+    /// Memory of the stored operator, in bytes.
+    pub operator_bytes: u64,
+    /// Block statistics of the compressed operator (`near_entries`, `far_blocks`, `max_rank`,
+    /// ...).
+    #[serde(flatten)]
+    pub blocks: Option<OperatorStats>,
+    /// Peak resident memory of the whole process so far, from the OS (Linux), in bytes.
+    pub peak_rss_bytes: Option<u64>,
     /// Smallest, mean and largest nodal value of the solution.
     pub solution_range: [f64; 3],
     /// Errors over all of S at sample points (`surface_error`, `iterated_error`, `surface_points`),
@@ -444,6 +463,125 @@ struct TimedAssembly {
     preparation_seconds: f64,
 }
 
+/// The operator a run solves with.
+enum BuiltOperator {
+    Dense(TimedAssembly),
+    Compressed { op: CompressedOperator, setup_seconds: f64 },
+}
+
+/// What a report says of the operator.
+struct OperatorSummary {
+    operator: &'static str,
+    device: Option<String>,
+    setup_seconds: f64,
+    preparation_seconds: f64,
+    pairs: PairStats,
+    compression_tolerance: Option<f64>,
+    operator_bytes: u64,
+    blocks: Option<OperatorStats>,
+}
+
+impl BuiltOperator {
+    fn summary(&self, config: &RunConfig, dof: usize) -> OperatorSummary {
+        match self {
+            Self::Dense(t) => OperatorSummary {
+                operator: "dense",
+                device: t.device.clone(),
+                setup_seconds: t.setup_seconds,
+                preparation_seconds: t.preparation_seconds,
+                pairs: t.assembled.stats,
+                compression_tolerance: None,
+                operator_bytes: 8 * (dof as u64) * (dof as u64),
+                blocks: None,
+            },
+            Self::Compressed { op, setup_seconds } => OperatorSummary {
+                operator: "compressed",
+                device: None,
+                setup_seconds: *setup_seconds,
+                preparation_seconds: 0.0,
+                pairs: op.pairs,
+                compression_tolerance: Some(config.compression.tolerance),
+                operator_bytes: op.stats.operator_bytes,
+                blocks: Some(op.stats),
+            },
+        }
+    }
+}
+
+/// The compressed operator of `config` for a built scene (CPU).
+pub fn build_compressed(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+) -> Result<CompressedOperator> {
+    CompressedOperator::build(
+        scene,
+        mesh,
+        disc,
+        &PairPlanner::new(scene),
+        &config.assembly,
+        &config.compression,
+        &*config.progress,
+    )
+}
+
+/// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
+/// size, the compressed operator (built once; CPU only).
+fn build_operator(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+) -> Result<BuiltOperator> {
+    if !compresses(config, disc.dof()) {
+        return Ok(BuiltOperator::Dense(assemble_timed(config, scene, mesh, disc)?));
+    }
+    if config.backend != Backend::Cpu {
+        return Err(Error::InvalidParameter {
+            name: "backend",
+            value: config.backend.name().into(),
+            reason: "the compressed operator is built on the CPU backend only; use the CPU \
+                     backend, or the dense operator on the GPU"
+                .into(),
+        });
+    }
+    if config.solver.choice == solve::SolverChoice::Lu {
+        return Err(Error::InvalidParameter {
+            name: "solver",
+            value: "lu".into(),
+            reason: "LU needs the dense matrix; the compressed operator is solved by GMRES \
+                     (the iterative solver), or choose the dense operator"
+                .into(),
+        });
+    }
+    let started = Instant::now();
+    let op = build_compressed(config, scene, mesh, disc)?;
+    Ok(BuiltOperator::Compressed { op, setup_seconds: started.elapsed().as_secs_f64() })
+}
+
+/// Whether `config` stores the compressed operator for `dof` unknowns: when asked for, or under
+/// [`OperatorChoice::Auto`] above its size unless the GPU backend or LU (which need the dense
+/// matrix) are asked for.
+pub fn compresses(config: &RunConfig, dof: usize) -> bool {
+    match config.operator {
+        OperatorChoice::Auto => {
+            config.operator.compresses(dof)
+                && config.backend == Backend::Cpu
+                && config.solver.choice != solve::SolverChoice::Lu
+        }
+        choice => choice.compresses(dof),
+    }
+}
+
+/// Peak resident set size of this process (`VmHWM` of /proc/self/status), in bytes.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
 /// What the user should be told about a scene before trusting its solution.
 fn run_warnings(scene: &Scene, emission: &[f64]) -> Vec<String> {
     let mut warnings = Vec::new();
@@ -478,8 +616,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         None => None,
     };
     let planner = PairPlanner::new(&scene);
-    let TimedAssembly { assembled, device, setup_seconds, preparation_seconds } =
-        assemble_timed(config, &scene, &mesh, &disc)?;
+    let built = build_operator(config, &scene, &mesh, &disc)?;
 
     let started = Instant::now();
     let (rhs, emission_error_estimate) = match &u_faces {
@@ -505,9 +642,17 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     }
 
     let started = Instant::now();
-    let outcome = solve::solve(&assembled.matrix, &rhs, config.solver)?;
+    let outcome = match &built {
+        BuiltOperator::Dense(timed) => solve::solve(&timed.assembled.matrix, &rhs, config.solver)?,
+        BuiltOperator::Compressed { op, .. } => {
+            let rho: Vec<f64> = disc.nodes.iter().map(|n| n.rho).collect();
+            let tolerance = config.compression.tolerance;
+            solve::solve_compressed(op, &rhs, &rho, config.solver, tolerance)?
+        }
+    };
     let solve_seconds = started.elapsed().as_secs_f64();
     let u = outcome.u;
+    let summary = built.summary(config, disc.dof());
 
     let error = u_faces.as_ref().map(|uf| {
         disc.nodes
@@ -543,7 +688,7 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         quadrature: config.assembly.quadrature,
         backend: config.backend.name(),
         precision: config.backend.precision().name(),
-        device,
+        device: summary.device,
         solver: outcome.solver,
         iterations: outcome.iterations,
         condition_estimate: outcome.condition_estimate,
@@ -553,13 +698,18 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         n: mesh.len(),
         dof: disc.dof(),
         error,
-        setup_seconds,
-        preparation_seconds,
+        setup_seconds: summary.setup_seconds,
+        preparation_seconds: summary.preparation_seconds,
         emission_error_estimate,
         emission_seconds,
         solve_seconds,
         residual: outcome.residual,
-        pairs: assembled.stats,
+        pairs: summary.pairs,
+        operator: summary.operator,
+        compression_tolerance: summary.compression_tolerance,
+        operator_bytes: summary.operator_bytes,
+        blocks: summary.blocks,
+        peak_rss_bytes: peak_rss_bytes(),
         solution_range: [lo, sum / u.len() as f64, hi],
         over_surface,
         u,

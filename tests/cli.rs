@@ -140,7 +140,20 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
             "beta = NaN",
         ),
         (&["solve", "--scene", "four-piece", "--params", "nan,2,1"], "(NaN, 2, 1)"),
-        (&["solve", "--scene", "five-piece", "--refine", "8"], "3200.0 GiB"),
+        (&["solve", "--scene", "five-piece", "--refine", "8", "--operator", "dense"], "3200.0 GiB"),
+        (
+            &["solve", "--scene", "cube", "--compression-tolerance", "0"],
+            "compression tolerance = 0",
+        ),
+        (&["solve", "--scene", "cube", "--compression-tolerance", "1.5"], "must lie in (0, 1)"),
+        (
+            &["solve", "--scene", "cube", "--operator", "compressed", "--solver", "lu"],
+            "LU needs the dense matrix",
+        ),
+        (
+            &["solve", "--scene", "cube", "--operator", "compressed", "--backend", "gpu"],
+            "CPU backend only",
+        ),
         (&["study", "stiff", "--backend", "cpu", "--max-n", "x"], "--max-n"),
     ];
     for (args, needle) in cases {
@@ -428,4 +441,43 @@ fn solve_reports_the_condition_estimate_of_a_closed_box() {
     let v = json(&["solve", "--scene", "baffled-box", "--refine", "1", "--json", "-"]);
     let kappa = v["condition_estimate"].as_f64().unwrap();
     assert!(kappa > 1.0 && kappa < 10.0, "rho = 0.5 inside a closed box: condition {kappa}");
+}
+
+#[test]
+fn the_compressed_operator_solves_like_the_dense_one() {
+    // Five-piece, both methods: the compressed run's solution equals the dense one's to well
+    // within 10 x the tolerance (measured through E_n, whose reference is the same true solution),
+    // and its JSON carries the operator's keys.
+    for (method, refine) in [("centroid", "3"), ("linear", "2")] {
+        let run = |operator: &str| {
+            json(&[
+                "solve",
+                "--scene",
+                "five-piece",
+                "--method",
+                method,
+                "--refine",
+                refine,
+                "--operator",
+                operator,
+                "--compression-tolerance",
+                "1e-8",
+                "--json",
+                "-",
+            ])
+        };
+        let (d, c) = (run("dense"), run("compressed"));
+        assert_eq!(
+            (d["operator"].as_str(), c["operator"].as_str()),
+            (Some("dense"), Some("compressed"))
+        );
+        let (ed, ec) = (d["error"].as_f64().unwrap(), c["error"].as_f64().unwrap());
+        // u is about 50 at most; E_n moves by at most max |u_c - u_d|.
+        assert!((ed - ec).abs() <= 10.0 * 1e-8 * 50.0, "{method}: {ed} vs {ec}");
+        assert_eq!(c["compression_tolerance"].as_f64(), Some(1e-8));
+        for key in ["operator_bytes", "near_entries", "far_blocks", "max_rank", "peak_rss_bytes"] {
+            assert!(c[key].as_u64().is_some_and(|v| v > 0), "{method}: {key} in {c}");
+        }
+        assert!(c["operator_bytes"].as_u64() < d["operator_bytes"].as_u64(), "{method}");
+    }
 }

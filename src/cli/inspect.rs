@@ -31,6 +31,12 @@ pub(crate) struct Inspection {
     pairs_hidden: u64,
     occluders_possible: bool,
     setup_seconds: f64,
+    operator: &'static str,
+    compression_tolerance: Option<f64>,
+    operator_bytes: u64,
+    #[serde(flatten)]
+    blocks: Option<radiosity::operator::OperatorStats>,
+    peak_rss_bytes: Option<u64>,
 }
 
 pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
@@ -46,17 +52,24 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
     let (scene, mesh, disc) = pipeline::build(&config)?;
     let started = std::time::Instant::now();
     let planner = PairPlanner::new(&scene);
-    let assembled = assemble_without_progress(&config, &scene, &mesh, &disc, &planner)?;
+    let dof = disc.dof();
+    let (row_sums, p, blocks) = if pipeline::compresses(&config, dof) {
+        let op = pipeline::build_compressed(&config, &scene, &mesh, &disc)?;
+        (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats))
+    } else {
+        let assembled = assemble_without_progress(&config, &scene, &mesh, &disc, &planner)?;
+        let sums = (0..dof).map(|i| assembled.matrix.row(i).iter().sum::<f64>()).collect();
+        (sums, assembled.stats, None)
+    };
     let setup_seconds = started.elapsed().as_secs_f64();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (i, node) in disc.nodes.iter().enumerate() {
+    for (node, sum) in disc.nodes.iter().zip(&row_sums) {
         if node.rho > 0.0 {
-            let s = assembled.matrix.row(i).iter().sum::<f64>() / node.rho;
+            let s = sum / node.rho;
             lo = lo.min(s);
             hi = hi.max(s);
         }
     }
-    let p = assembled.stats;
     let out = Inspection {
         surface: scene.name.clone(),
         mesh: config.mesh.name(),
@@ -76,6 +89,11 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         pairs_hidden: p.hidden,
         occluders_possible: planner.has_occlusion(),
         setup_seconds,
+        operator: if blocks.is_some() { "compressed" } else { "dense" },
+        compression_tolerance: blocks.is_some().then_some(config.compression.tolerance),
+        operator_bytes: blocks.map_or(8 * (dof as u64) * (dof as u64), |b| b.operator_bytes),
+        blocks,
+        peak_rss_bytes: pipeline::peak_rss_bytes(),
     };
     if let Some(target) = &args.json {
         return report::write_json(&out, target);
@@ -95,6 +113,22 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         out.pairs_full,
         out.pairs_partial
     );
+    if let Some(b) = &out.blocks {
+        println!(
+            "compressed operator (tolerance {:.0e}): {:.1} MB; {} exact blocks ({} entries), {} \
+             low-rank blocks (standing for {} entries, rank <= {}), {} empty blocks, {} admissible \
+             blocks kept exact",
+            config.compression.tolerance,
+            out.operator_bytes as f64 / 1e6,
+            b.near_blocks,
+            b.near_entries,
+            b.far_blocks,
+            b.far_entries,
+            b.max_rank,
+            b.empty_blocks,
+            b.incompressible_blocks
+        );
+    }
     println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);
     Ok(())
 }

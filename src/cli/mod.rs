@@ -18,6 +18,7 @@ use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
 use radiosity::mesh::{LineExtent, S5Diagonals};
+use radiosity::operator::{CompressionOptions, OperatorChoice};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::scene::SurfaceParameters;
@@ -217,12 +218,46 @@ pub(crate) struct DeviceArgs {
     pub(crate) precision: PrecisionArg,
 }
 
+/// Which operator to store, and how to compress it.
+#[derive(Args)]
+pub(crate) struct OperatorArgs {
+    /// Operator: dense (every entry stored; the reference), compressed (exact blocks near,
+    /// low-rank blocks far), or auto (compressed above 12 000 unknowns)
+    #[arg(long, value_enum, default_value_t = OperatorArg::Auto)]
+    pub(crate) operator: OperatorArg,
+    /// Relative error of each low-rank block of the compressed operator, in (0, 1)
+    #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
+    pub(crate) compression_tolerance: f64,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum OperatorArg {
+    Auto,
+    Dense,
+    Compressed,
+}
+
+impl OperatorArgs {
+    /// Sets the operator of `config`, refusing a tolerance outside (0, 1).
+    pub(crate) fn apply(&self, config: &mut RunConfig) -> Result<()> {
+        config.operator = match self.operator {
+            OperatorArg::Auto => OperatorChoice::Auto,
+            OperatorArg::Dense => OperatorChoice::Dense,
+            OperatorArg::Compressed => OperatorChoice::Compressed,
+        };
+        config.compression.tolerance = self.compression_tolerance;
+        config.compression.validate()
+    }
+}
+
 #[derive(Args)]
 pub(crate) struct SolveArgs {
     #[command(flatten)]
     pub(crate) geometry: GeometryArgs,
     #[command(flatten)]
     pub(crate) device: DeviceArgs,
+    #[command(flatten)]
+    pub(crate) operator: OperatorArgs,
     /// True solution (x2y2, shadow, edge, none); default x2y2 on the paper's surfaces, none elsewhere
     #[arg(long)]
     pub(crate) solution: Option<String>,
@@ -415,6 +450,8 @@ impl GeometryArgs {
             progress: progress::on_stderr(),
             setup_repeats: 1,
             surface_lattice: None,
+            operator: OperatorChoice::Dense,
+            compression: CompressionOptions::default(),
         })
     }
 }
@@ -438,6 +475,7 @@ impl SolveArgs {
             }
         }
         config.backend = backend(self.device.backend, self.device.precision);
+        self.operator.apply(&mut config)?;
         if let Some(m) = self.surface_lattice {
             if m < 3 {
                 return Err(Error::InvalidParameter {

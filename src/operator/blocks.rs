@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 
+use super::CompressionOptions;
 use super::cluster::{Cluster, ClusterTree};
 use crate::discretization::ElementFrame;
 use crate::scene::Scene;
@@ -44,8 +45,12 @@ impl<'a> FacePairs<'a> {
         if ehi <= 0.0 || nhi <= 0.0 {
             return PairClass::Nothing;
         }
-        if elo > 0.0
-            && nlo > 0.0
+        // Touching the other plane is fine (an element along the common edge of two faces):
+        // G is analytic up to cos = 0; only a part behind it would need clipping. The margin is
+        // the dense plan's (no clip within 1e-12 of the size).
+        let margin = -1e-12 * (nodes.diameter() + elements.diameter() + nodes.distance(elements));
+        if elo >= margin
+            && nlo >= margin
             && self.planner.shaft_is_clear(a, b, nodes.bounds(), elements.bounds())
         {
             PairClass::Smooth
@@ -103,51 +108,14 @@ impl BlockPlan {
         nodes: &ClusterTree,
         elements: &ClusterTree,
         faces: &FacePairs,
-        eta: f64,
+        options: &CompressionOptions,
     ) -> Self {
         let mut plan = Self::default();
         if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
-            plan.visit(nodes, elements, faces, eta, 0, 0);
+            let walk = Walk { nodes, elements, faces, options };
+            walk.visit(&mut plan, 0, 0);
         }
         plan
-    }
-
-    fn visit(
-        &mut self,
-        nodes: &ClusterTree,
-        elements: &ClusterTree,
-        faces: &FacePairs,
-        eta: f64,
-        t: usize,
-        s: usize,
-    ) {
-        let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
-        let class = classify(faces, tc, sc);
-        if class == PairClass::Nothing {
-            self.empty += 1;
-            return;
-        }
-        let admissible = tc.diameter().min(sc.diameter()) <= eta * tc.distance(sc);
-        if class == PairClass::Smooth && admissible {
-            self.far.push((t, s));
-            return;
-        }
-        match (tc.children, sc.children) {
-            (None, None) => self.near.push((t, s)),
-            (None, Some((s1, s2))) => {
-                self.visit(nodes, elements, faces, eta, t, s1);
-                self.visit(nodes, elements, faces, eta, t, s2);
-            }
-            (Some((t1, t2)), None) => {
-                self.visit(nodes, elements, faces, eta, t1, s);
-                self.visit(nodes, elements, faces, eta, t2, s);
-            }
-            (Some((t1, t2)), Some((s1, s2))) => {
-                for (a, b) in [(t1, s1), (t1, s2), (t2, s1), (t2, s2)] {
-                    self.visit(nodes, elements, faces, eta, a, b);
-                }
-            }
-        }
     }
 
     /// Entries of the near blocks (an upper bound on what they store).
@@ -164,17 +132,64 @@ impl BlockPlan {
     }
 }
 
+/// The recursion over pairs of clusters.
+struct Walk<'a> {
+    nodes: &'a ClusterTree,
+    elements: &'a ClusterTree,
+    faces: &'a FacePairs<'a>,
+    options: &'a CompressionOptions,
+}
+
+impl Walk<'_> {
+    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize) {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let class = classify(self.faces, tc, sc);
+        if class == PairClass::Nothing {
+            plan.empty += 1;
+            return;
+        }
+        let admissible = tc.diameter().min(sc.diameter()) <= self.options.eta * tc.distance(sc);
+        if class == PairClass::Smooth && admissible {
+            plan.far.push((t, s));
+            return;
+        }
+        // Smooth neighbours gain nothing from small leaves; where visibility varies they do.
+        let leaf = if class == PairClass::Smooth { self.options.leaf_size } else { 0 };
+        let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
+        match (split(tc), split(sc)) {
+            (None, None) => plan.near.push((t, s)),
+            (None, Some((s1, s2))) => {
+                self.visit(plan, t, s1);
+                self.visit(plan, t, s2);
+            }
+            (Some((t1, t2)), None) => {
+                self.visit(plan, t1, s);
+                self.visit(plan, t2, s);
+            }
+            (Some((t1, t2)), Some((s1, s2))) => {
+                for (a, b) in [(t1, s1), (t1, s2), (t2, s1), (t2, s2)] {
+                    self.visit(plan, a, b);
+                }
+            }
+        }
+    }
+}
+
 /// The class of a block: nothing if every face pair gives nothing, smooth if every one is smooth
 /// or nothing, mixed otherwise (and whenever it spans too many face pairs to test).
 fn classify(faces: &FacePairs, nodes: &Cluster, elements: &Cluster) -> PairClass {
     if nodes.faces.len() * elements.faces.len() > MAX_FACE_PAIRS {
         return PairClass::Mixed;
     }
+    // Smooth only on one pair of faces (see ClusterTree::new); below a cluster on several faces
+    // every cluster is on one.
+    let one_pair = nodes.faces.len() == 1 && elements.faces.len() == 1;
     let mut class = PairClass::Nothing;
     for &a in &nodes.faces {
         for &b in &elements.faces {
             match faces.class(a, b, nodes, elements) {
                 PairClass::Mixed => return PairClass::Mixed,
+                PairClass::Smooth if !one_pair => return PairClass::Mixed,
                 PairClass::Smooth => class = PairClass::Smooth,
                 PairClass::Nothing => {}
             }

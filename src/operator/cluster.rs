@@ -71,17 +71,35 @@ pub struct Item {
 }
 
 impl ClusterTree {
-    /// Splits `items` until clusters hold at most `leaf_size`: each cluster is cut at the middle
-    /// of the longest side of its points' box (at the median instead when that leaves one side
-    /// empty, as for items at one point).
+    /// Splits `items` until clusters hold at most `leaf_size`. A cluster on several faces is cut
+    /// between whole faces (by the faces' centres), so that below it every cluster lies on one
+    /// face: the kernel is one smooth function on a pair of such clusters, while on several faces
+    /// it is a patchwork (zero between coplanar parts) that cross approximation can miss. A
+    /// cluster on one face is cut at the middle of the longest side of its points' box (at the
+    /// median instead when that leaves one side empty, as for items at one point).
     pub fn new(items: &[Item], leaf_size: usize) -> Self {
         let mut tree = Self { order: (0..items.len()).collect(), clusters: Vec::new() };
-        tree.split(items, 0, items.len(), leaf_size.max(1));
+        let faces = items.iter().map(|it| it.face + 1).max().unwrap_or(0);
+        let (mut sum, mut count) = (vec![DVec3::ZERO; faces], vec![0.0; faces]);
+        for it in items {
+            sum[it.face] += it.point;
+            count[it.face] += 1.0;
+        }
+        let centres: Vec<DVec3> =
+            sum.iter().zip(&count).map(|(s, c)| *s / f64::max(*c, 1.0)).collect();
+        tree.split(items, &centres, 0, items.len(), leaf_size.max(1));
         tree
     }
 
     /// Builds the cluster of `start..end` and, below it, its descendants; returns its index.
-    fn split(&mut self, items: &[Item], start: usize, end: usize, leaf_size: usize) -> usize {
+    fn split(
+        &mut self,
+        items: &[Item],
+        centres: &[DVec3],
+        start: usize,
+        end: usize,
+        leaf_size: usize,
+    ) -> usize {
         let index = self.clusters.len();
         let members = &self.order[start..end];
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -97,29 +115,19 @@ impl ClusterTree {
         }
         faces.sort_unstable();
         faces.dedup();
+        let several_faces = faces.len() > 1;
         self.clusters.push(Cluster { start, end, lo, hi, children: None, faces });
-        if end - start <= leaf_size {
+        if end - start <= leaf_size && !several_faces {
             return index;
         }
-        let extent = phi - plo;
-        let axis = if extent.x >= extent.y && extent.x >= extent.z {
-            0
-        } else if extent.y >= extent.z {
-            1
-        } else {
-            2
-        };
-        let middle = 0.5 * (plo[axis] + phi[axis]);
         let slice = &mut self.order[start..end];
-        let mut cut = partition(slice, |&k| items[k].point[axis] < middle);
-        if cut == 0 || cut == slice.len() {
-            cut = slice.len() / 2;
-            slice.select_nth_unstable_by(cut, |&a, &b| {
-                items[a].point[axis].total_cmp(&items[b].point[axis])
-            });
-        }
-        let left = self.split(items, start, start + cut, leaf_size);
-        let right = self.split(items, start + cut, end, leaf_size);
+        let cut = if several_faces {
+            split_faces(slice, items, centres)
+        } else {
+            split_points(slice, items, plo, phi)
+        };
+        let left = self.split(items, centres, start, start + cut, leaf_size);
+        let right = self.split(items, centres, start + cut, end, leaf_size);
         self.clusters[index].children = Some((left, right));
         index
     }
@@ -127,6 +135,53 @@ impl ClusterTree {
     /// The root cluster.
     pub fn root(&self) -> &Cluster {
         &self.clusters[0]
+    }
+}
+
+/// Cuts items on several faces between faces: at the middle of the longest side of the box of
+/// the faces' centres, or by face number where the centres coincide (two sides of a plate).
+fn split_faces(slice: &mut [usize], items: &[Item], centres: &[DVec3]) -> usize {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for &k in slice.iter() {
+        lo = lo.min(centres[items[k].face]);
+        hi = hi.max(centres[items[k].face]);
+    }
+    let axis = longest_axis(hi - lo);
+    if hi[axis] > lo[axis] {
+        let middle = 0.5 * (lo[axis] + hi[axis]);
+        let cut = partition(slice, |&k| centres[items[k].face][axis] < middle);
+        if cut > 0 && cut < slice.len() {
+            return cut;
+        }
+    }
+    let (first, last) = slice
+        .iter()
+        .fold((usize::MAX, 0), |(a, b), &k| (a.min(items[k].face), b.max(items[k].face)));
+    partition(slice, |&k| items[k].face < first + (last - first).div_ceil(2))
+}
+
+/// Cuts items on one face at the middle of the longest side of their points' box `[lo, hi]`.
+fn split_points(slice: &mut [usize], items: &[Item], lo: DVec3, hi: DVec3) -> usize {
+    let axis = longest_axis(hi - lo);
+    let middle = 0.5 * (lo[axis] + hi[axis]);
+    let mut cut = partition(slice, |&k| items[k].point[axis] < middle);
+    if cut == 0 || cut == slice.len() {
+        cut = slice.len() / 2;
+        slice.select_nth_unstable_by(cut, |&a, &b| {
+            items[a].point[axis].total_cmp(&items[b].point[axis])
+        });
+    }
+    cut
+}
+
+/// 0, 1 or 2: the axis of the largest component.
+fn longest_axis(extent: DVec3) -> usize {
+    if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
     }
 }
 

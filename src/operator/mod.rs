@@ -30,6 +30,7 @@ use crate::assembly::{AssemblyOptions, PairIntegrator, available_memory};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
+use crate::progress::Progress;
 use crate::scene::Scene;
 use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
 
@@ -75,13 +76,17 @@ pub struct CompressionOptions {
     pub tolerance: f64,
     /// Admissibility: a block is far when `min(diam) <= eta * distance`.
     pub eta: f64,
-    /// Most items in a leaf cluster.
+    /// Near blocks of clusters this small are stored exactly rather than split further.
     pub leaf_size: usize,
+    /// Blocks where visibility varies (occluders in the shaft, elements straddling a tangent
+    /// plane) are split down to clusters this small: their partly visible pairs lie near a
+    /// surface in pair space, so smaller leaves store fewer entries around them.
+    pub mixed_leaf_size: usize,
 }
 
 impl Default for CompressionOptions {
     fn default() -> Self {
-        Self { tolerance: DEFAULT_TOLERANCE, eta: 1.0, leaf_size: 32 }
+        Self { tolerance: DEFAULT_TOLERANCE, eta: 1.0, leaf_size: 32, mixed_leaf_size: 4 }
     }
 }
 
@@ -102,10 +107,10 @@ impl CompressionOptions {
                 reason: "the admissibility parameter must be positive and finite".into(),
             });
         }
-        if self.leaf_size == 0 {
+        if self.leaf_size == 0 || self.mixed_leaf_size == 0 {
             return Err(Error::InvalidParameter {
                 name: "leaf size",
-                value: "0".into(),
+                value: format!("{} / {}", self.leaf_size, self.mixed_leaf_size),
                 reason: "a leaf cluster holds at least one item".into(),
             });
         }
@@ -116,7 +121,9 @@ impl CompressionOptions {
 /// Block statistics of a compressed operator.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct OperatorStats {
-    /// Bytes of the stored blocks (values and their index data).
+    /// Bytes of the stored blocks (values and their index data); reports carry it beside the
+    /// dense operator's as `operator_bytes`.
+    #[serde(skip)]
     pub operator_bytes: u64,
     /// Entries stored as they are (exact near blocks).
     pub near_entries: u64,
@@ -166,12 +173,15 @@ pub struct CompressedOperator {
     pub zero_rows: usize,
 }
 
+/// Admissible blocks whose break-even rank is below this are stored exactly.
+const MIN_USEFUL_RANK: usize = 4;
+
 /// Fraction of the available memory the near blocks may take.
 const MEMORY_SHARE: f64 = 0.8;
 
 impl CompressedOperator {
-    /// Builds K for `disc` on `mesh` of `scene`; `progress` is called with the number of blocks
-    /// finished.
+    /// Builds K for `disc` on `mesh` of `scene`; `progress` counts the blocks (stage
+    /// `compression`).
     pub fn build(
         scene: &Scene,
         mesh: &Mesh,
@@ -179,7 +189,7 @@ impl CompressedOperator {
         planner: &PairPlanner,
         assembly: &AssemblyOptions,
         options: &CompressionOptions,
-        progress: &(dyn Fn(usize, usize) + Sync),
+        progress: &dyn Progress,
     ) -> Result<Self> {
         options.validate()?;
         assembly.quadrature.validate()?;
@@ -197,10 +207,11 @@ impl CompressedOperator {
                 Item { point: e.centroid(), lo: a.min(b).min(c), hi: a.max(b).max(c), face: e.face }
             })
             .collect();
-        let nodes = ClusterTree::new(&node_items, options.leaf_size);
-        let elements = ClusterTree::new(&element_items, options.leaf_size);
+        let tree_leaf = options.mixed_leaf_size.min(options.leaf_size);
+        let nodes = ClusterTree::new(&node_items, tree_leaf);
+        let elements = ClusterTree::new(&element_items, tree_leaf);
         let faces = FacePairs::new(scene, planner);
-        let plan = BlockPlan::new(&nodes, &elements, &faces, options.eta);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, options);
         check_memory(plan.near_entries(&nodes, &elements, per), disc.dof())?;
 
         let integrator = PairIntegrator::new(disc.method, assembly);
@@ -213,10 +224,10 @@ impl CompressedOperator {
             elements: &elements,
             per,
         };
-        let total = plan.near.len() + plan.far.len();
+        progress.start("compression", plan.near.len() + plan.far.len());
         let near = plan.near.par_iter().map(|&(t, s)| {
             let (block, stats) = entries.exact_block(t, s);
-            progress(1, total);
+            progress.advance(1);
             (block, stats, false)
         });
         let far = plan.far.par_iter().map(|&(t, s)| {
@@ -227,10 +238,11 @@ impl CompressedOperator {
                     (block, stats, true)
                 }
             };
-            progress(1, total);
+            progress.advance(1);
             r
         });
         let built: Vec<(Block, PairStats, bool)> = near.chain(far).collect();
+        progress.finish();
 
         let mut stats = OperatorStats { empty_blocks: plan.empty as u64, ..Default::default() };
         let mut pairs = PairStats::default();
@@ -439,9 +451,13 @@ impl Entries<'_> {
             let (j, basis) = (element_ids[q / per], q % per);
             node_ids.iter().map(|&i| self.smooth_pair(i, j, faces)[basis]).collect()
         };
-        // Beyond this rank U and V take more memory than the block itself.
+        // Beyond this rank U and V take more memory than the block itself; a block that small
+        // is computed exactly without trying.
         let max_rank = (m * c) / (m + c);
-        let lr = aca::aca(m, c, row, col, tolerance, max_rank.max(1))?;
+        if max_rank < MIN_USEFUL_RANK {
+            return None;
+        }
+        let lr = aca::aca(m, c, row, col, tolerance, max_rank)?;
         Some(Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data: BlockData::LowRank(lr) })
     }
 }

@@ -33,7 +33,7 @@ fn compressed(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator 
         &c.planner,
         &assembly,
         &options,
-        &|_, _| {},
+        &crate::progress::Silent,
     )
     .unwrap()
 }

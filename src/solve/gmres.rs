@@ -9,7 +9,7 @@
 //! the recurrence. A cycle that does not halve the residual is stagnation: the solver stops there
 //! and says how far it got, instead of running to an iteration limit.
 
-use super::system::{ReducedSystem, dot};
+use super::system::dot;
 use crate::error::{Error, IterationFailure, Result};
 
 /// Krylov vectors kept per cycle (memory: `(RESTART + 1) n` values).
@@ -20,6 +20,16 @@ pub const MAX_ITERATIONS: usize = 1000;
 
 /// A cycle must reduce the residual by at least this factor, or the solve has stagnated.
 const STAGNATION_FACTOR: f64 = 0.5;
+
+/// A system `A x = b` that GMRES solves through products with `A` alone.
+pub trait KrylovSystem: Sync {
+    /// Number of unknowns.
+    fn dim(&self) -> usize;
+    /// `A x`.
+    fn apply(&self, x: &[f64]) -> Vec<f64>;
+    /// `b - A x`, as accurately as the system can give it (restarts stop on it).
+    fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64>;
+}
 
 /// A GMRES solution.
 #[derive(Clone, Debug)]
@@ -32,7 +42,7 @@ pub struct GmresSolution {
 
 /// Solves `sys x = b` to `||b - A x||_2 <= tolerance ||b||_2`, starting from `x = b` (the first
 /// term of the Neumann series of `(I - K)^-1`).
-pub fn gmres(sys: &ReducedSystem, b: &[f64], tolerance: f64) -> Result<GmresSolution> {
+pub fn gmres(sys: &impl KrylovSystem, b: &[f64], tolerance: f64) -> Result<GmresSolution> {
     let n = sys.dim();
     let b_norm = norm(b);
     if b_norm == 0.0 {
@@ -50,7 +60,7 @@ pub fn gmres(sys: &ReducedSystem, b: &[f64], tolerance: f64) -> Result<GmresSolu
         }
         let steps = cycle(sys, &mut x, &r, r_norm, target, MAX_ITERATIONS - iterations);
         iterations += steps;
-        r = sys.compensated_residual(&x, b);
+        r = sys.residual(&x, b);
         let new_norm = norm(&r);
         if !new_norm.is_finite() {
             return Err(failure(IterationFailure::NotFinite, new_norm, iterations));
@@ -71,7 +81,7 @@ fn failure(reason: IterationFailure, residual: f64, iterations: usize) -> Error 
 /// steps, stopping early once the recurrence's residual is below `target`; adds the correction to
 /// `x` and returns the number of steps.
 fn cycle(
-    sys: &ReducedSystem,
+    sys: &impl KrylovSystem,
     x: &mut [f64],
     r: &[f64],
     r_norm: f64,

@@ -9,13 +9,15 @@
 //! grows. Either way a solution is accepted only on its true residual, which is computed again at
 //! the end and reported.
 
+mod compressed;
 mod gmres;
 mod lu;
 mod system;
 
 use serde::Serialize;
 
-pub use gmres::{MAX_ITERATIONS, RESTART};
+pub use compressed::solve_compressed;
+pub use gmres::{KrylovSystem, MAX_ITERATIONS, RESTART};
 pub use lu::{LuSolution, inverse_norm_1_estimate};
 pub use system::ReducedSystem;
 
@@ -95,13 +97,7 @@ pub const CONDITION_LIMIT: f64 = 1e-2 / f64::EPSILON;
 /// [`Error::NotConverged`], with the residual it reached.
 pub fn solve(k: &CollocationMatrix, rhs: &[f64], options: SolverOptions) -> Result<SolveOutcome> {
     reject_constant_null_vector(k)?;
-    if !(options.tolerance > 0.0 && options.tolerance < 1.0) {
-        return Err(Error::InvalidParameter {
-            name: "tolerance",
-            value: options.tolerance.to_string(),
-            reason: "the relative residual must lie in (0, 1)".into(),
-        });
-    }
+    check_tolerance(options.tolerance)?;
     let sys = ReducedSystem::without_zero_rows(k);
     let reduced_rhs = sys.reduce_rhs(rhs);
     let use_lu = match options.choice {
@@ -135,6 +131,18 @@ pub fn solve(k: &CollocationMatrix, rhs: &[f64], options: SolverOptions) -> Resu
         }
     };
     Ok(outcome)
+}
+
+/// Refuses a residual tolerance outside (0, 1).
+fn check_tolerance(tolerance: f64) -> Result<()> {
+    if !(tolerance > 0.0 && tolerance < 1.0) {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance.to_string(),
+            reason: "the relative residual must lie in (0, 1)".into(),
+        });
+    }
+    Ok(())
 }
 
 /// How far a row sum of K may be from 1 for the row to count as "closed with rho = 1".
