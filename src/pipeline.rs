@@ -581,6 +581,13 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
 
 /// Runs one configuration and keeps the scene, mesh and emissivity.
 pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
+    if !config.bands.is_empty() && config.solution.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "bands",
+            value: config.bands.iter().map(|&c| CHANNELS[c]).collect::<Vec<_>>().join(","),
+            reason: "colour bands are lit by the scene's own emission: use --solution none".into(),
+        });
+    }
     let (scene, mesh, disc) = build(config)?;
     let u_faces = match &config.solution {
         Some(sol) => Some(sol.on_faces(&scene, &config.params)?),
@@ -617,14 +624,6 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     let (outcome, bands, band_reports) = if config.bands.is_empty() {
         (solve::solve(&assembled.matrix, &rhs, config.solver)?, Vec::new(), Vec::new())
     } else {
-        if config.solution.is_some() {
-            return Err(Error::InvalidParameter {
-                name: "bands",
-                value: config.bands.iter().map(|&c| CHANNELS[c]).collect::<Vec<_>>().join(","),
-                reason: "colour bands are lit by the scene's own emission: use --solution none"
-                    .into(),
-            });
-        }
         let (mut values, mut reports, mut outcomes) = (Vec::new(), Vec::new(), Vec::new());
         for (v, r, o) in
             solve_bands(&assembled.matrix, &scene, &disc, &config.bands, config.solver)?

@@ -198,7 +198,7 @@ pub fn render_png(
     }
     let rgb = rgb_bands(field);
     let span = tone.span(match &rgb {
-        Some(bands) => (0.0, colour_range(field, bands).1),
+        Some(bands) => (0.0, exposure(field, bands)),
         None => colour_range(field, &[field.u; 3]),
     });
     let mut image = vec![0u8; (width * height * 3) as usize];
@@ -246,6 +246,26 @@ fn colour_range(field: &SolutionField, bands: &[&[f64]; 3]) -> (f64, f64) {
         _ => span(true),
     };
     if hi > lo { (lo, hi) } else { (lo - 0.5, lo + 0.5) }
+}
+
+/// Share of the non-emitting elements that a colour picture shows below white (the rest, next to
+/// the lights, are clipped as in a photograph): the largest value would leave the rest of a lit
+/// room dark.
+const EXPOSURE_QUANTILE: f64 = 0.95;
+
+/// The top of a colour picture's scale: the [`EXPOSURE_QUANTILE`] of the brightest band over the
+/// non-emitting elements (all elements if every one emits).
+fn exposure(field: &SolutionField, bands: &[&[f64]; 3]) -> f64 {
+    let elements = field.mesh.elements();
+    let brightest = |j: usize| bands.iter().map(|u| field.element_mean(u, j)).fold(0.0, f64::max);
+    let lit = |j: &usize| field.scene.faces[elements[*j].face].emission == 0.0;
+    let mut values: Vec<f64> = (0..elements.len()).filter(lit).map(brightest).collect();
+    if values.is_empty() {
+        values = (0..elements.len()).map(brightest).collect();
+    }
+    values.sort_by(f64::total_cmp);
+    let top = values[((values.len() - 1) as f64 * EXPOSURE_QUANTILE).round() as usize];
+    if top > 0.0 { top } else { 1.0 }
 }
 
 /// Draws every element facing the camera into the picture area `(w, h)` of `image` (rows of
