@@ -99,7 +99,10 @@ pub(crate) fn print_run(r: &RunReport) {
         None => format!(", {} iterations", r.iterations),
     };
     if r.rows_eliminated > 0 {
-        iterations += &format!(", {} unknowns known as u = E (rho = 0)", r.rows_eliminated);
+        iterations += &format!(
+            ", {} unknowns known as u = E (rho = 0 or nothing in view)",
+            r.rows_eliminated
+        );
     }
     println!(
         "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",

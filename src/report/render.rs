@@ -461,4 +461,32 @@ mod tests {
         assert_eq!(colour(1.0), [253, 231, 37]);
         assert_eq!(colour(0.5), [33, 144, 141]);
     }
+
+    #[test]
+    fn the_default_camera_looks_through_an_open_side_or_over_a_closed_room() {
+        let field_of = |scene: &crate::scene::Scene, f: &mut dyn FnMut(&SolutionField)| {
+            let mesh = crate::mesh::Mesh::new(scene, &crate::mesh::MeshKind::Uniform, 0).unwrap();
+            let method = crate::discretization::Method::Centroid;
+            let disc = crate::discretization::Discretization::new(scene, &mesh, method).unwrap();
+            let u = vec![0.0; disc.dof()];
+            f(&SolutionField { scene, mesh: &mesh, disc: &disc, u: &u, emission: &u, bands: &[] });
+        };
+        // The Cornell box (y up, open toward +z and -z): level, from +z, toward the viewer in
+        // the y-up convention.
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/cornell-box/CornellBox-Original.obj");
+        let cornell = crate::scene::load(&path).unwrap();
+        field_of(&cornell, &mut |field| {
+            let c = Camera::default_view(field, DVec3::Y * 2.0);
+            let view = c.eye - c.target;
+            assert!(view.z > 3.0 && view.x.abs() < 1e-12 && view.y.abs() < 1e-12, "{view}");
+            assert_eq!(c.up, DVec3::Y);
+        });
+        // A closed cube, z up: the overview from the south-west, above.
+        let cube = crate::scene::cube().unwrap();
+        field_of(&cube, &mut |field| {
+            let c = Camera::default_view(field, DVec3::Z);
+            assert_eq!(c, Camera::overview(field, DEFAULT_VIEW, DVec3::Z));
+        });
+    }
 }
