@@ -399,7 +399,7 @@ pub struct BandReport {
 
 /// K for colour channel `channel` from the grey K: node i's row scaled by rho_channel / rho
 /// (K includes rho/π per row, and rho = 0 only where every channel is 0).
-pub fn band_matrix(
+fn band_matrix(
     grey: &CollocationMatrix,
     scene: &Scene,
     disc: &Discretization,
