@@ -13,7 +13,7 @@
 //! [[faces]]
 //! name = "floor"
 //! vertices = [[0, 0, 0], [4, 0, 0], [4, 3, 0], [0, 3, 0]]   # counter-clockwise about the
-//! rho = 0.3                                                  # side that radiates ("front")
+//! rho = 0.3             # side that radiates ("front"); rho and emission may be [r, g, b]
 //! radiates = "front"    # or "back" (vertex order reversed) or "both" (a double-sided plate)
 //! [[meshes]]
 //! file = "table.obj"    # relative to this file; .obj or .stl
@@ -85,42 +85,93 @@ pub struct ImportOptions {
     pub duplicates: Option<Duplicates>,
 }
 
-#[derive(Clone, Copy, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Properties {
-    rho: Option<f64>,
-    emission: Option<f64>,
-    radiates: Option<Side>,
-    /// The channels behind `rho` (an OBJ material's Kd), where it came from one.
-    #[serde(skip)]
-    rho_rgb: Option<[f64; 3]>,
-    /// The channels behind `emission` (Ke).
-    #[serde(skip)]
-    emission_rgb: Option<[f64; 3]>,
+/// A value for every colour channel (grey), or one per channel r, g, b (`[r, g, b]` in a scene
+/// file, `Kd`/`Ke` of an OBJ material), for `--bands`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Channels {
+    Grey(f64),
+    Rgb([f64; 3]),
 }
 
-impl Properties {
-    /// `self` where it says something, else `fallback` (a value and its channels go together).
-    fn or(self, fallback: Properties) -> Properties {
-        let (rho, rho_rgb) = match self.rho {
-            Some(_) => (self.rho, self.rho_rgb),
-            None => (fallback.rho, fallback.rho_rgb),
-        };
-        let (emission, emission_rgb) = match self.emission {
-            Some(_) => (self.emission, self.emission_rgb),
-            None => (fallback.emission, fallback.emission_rgb),
-        };
-        Properties {
-            rho,
-            emission,
-            radiates: self.radiates.or(fallback.radiates),
-            rho_rgb,
-            emission_rgb,
+impl<'de> Deserialize<'de> for Channels {
+    // By hand: serde's untagged enums say only "data did not match any variant".
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Channels;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, or three numbers [r, g, b]")
+            }
+            fn visit_f64<E>(self, v: f64) -> std::result::Result<Channels, E> {
+                Ok(Channels::Grey(v))
+            }
+            fn visit_i64<E>(self, v: i64) -> std::result::Result<Channels, E> {
+                Ok(Channels::Grey(v as f64))
+            }
+            fn visit_u64<E>(self, v: u64) -> std::result::Result<Channels, E> {
+                Ok(Channels::Grey(v as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<Channels, A::Error> {
+                let mut c = [0.0; 3];
+                for (k, slot) in c.iter_mut().enumerate() {
+                    *slot = seq
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
+                }
+                if seq.next_element::<f64>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(Channels::Rgb(c))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+impl Channels {
+    /// The grey value: the channels' mean.
+    fn grey(self) -> f64 {
+        match self {
+            Self::Grey(x) => x,
+            Self::Rgb(c) => (c[0] + c[1] + c[2]) / 3.0,
         }
     }
 
-    fn scalar(rho: Option<f64>, emission: Option<f64>, radiates: Option<Side>) -> Properties {
-        Properties { rho, emission, radiates, ..Default::default() }
+    fn rgb(self) -> Option<[f64; 3]> {
+        match self {
+            Self::Grey(_) => None,
+            Self::Rgb(c) => Some(c),
+        }
+    }
+
+    /// Every value given: the grey one, or each channel.
+    fn values(self) -> Vec<f64> {
+        match self {
+            Self::Grey(x) => vec![x],
+            Self::Rgb(c) => c.to_vec(),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Properties {
+    rho: Option<Channels>,
+    emission: Option<Channels>,
+    radiates: Option<Side>,
+}
+
+impl Properties {
+    /// `self` where it says something, else `fallback`.
+    fn or(self, fallback: Properties) -> Properties {
+        Properties {
+            rho: self.rho.or(fallback.rho),
+            emission: self.emission.or(fallback.emission),
+            radiates: self.radiates.or(fallback.radiates),
+        }
     }
 }
 
@@ -146,8 +197,8 @@ struct FaceEntry {
     group: Option<String>,
     /// Optional check: the normal of the radiating side (of the first face for `both`).
     normal: Option<[f64; 3]>,
-    rho: Option<f64>,
-    emission: Option<f64>,
+    rho: Option<Channels>,
+    emission: Option<Channels>,
     radiates: Option<Side>,
 }
 
@@ -160,8 +211,8 @@ struct MeshEntry {
     #[serde(default)]
     translate: [f64; 3],
     scale: Option<f64>,
-    rho: Option<f64>,
-    emission: Option<f64>,
+    rho: Option<Channels>,
+    emission: Option<Channels>,
     radiates: Option<Side>,
 }
 
@@ -194,7 +245,8 @@ pub fn load_with(path: &Path, options: ImportOptions) -> Result<Scene> {
     match ext.as_deref() {
         Some("toml") => load_toml(path, options),
         Some("obj" | "stl") => {
-            let defaults = Properties::scalar(Some(IMPORT_RHO), None, None);
+            let defaults =
+                Properties { rho: Some(Channels::Grey(IMPORT_RHO)), ..Default::default() };
             let mut builder = Builder::new(options.for_meshes());
             for poly in read_mesh(path)? {
                 let props = poly.material.or(defaults);
@@ -261,7 +313,7 @@ fn parse_toml_with(text: &str, path: &Path, options: ImportOptions) -> Result<Sc
                 });
             }
         }
-        let own = Properties::scalar(entry.rho, entry.emission, entry.radiates);
+        let own = Properties { rho: entry.rho, emission: entry.emission, radiates: entry.radiates };
         let props = own.or(group_props(entry.group.as_deref())).or(file.defaults);
         let vertices = entry.vertices.iter().map(|&v| DVec3::from_array(v)).collect();
         let normal = entry.normal.map(DVec3::from_array);
@@ -285,7 +337,7 @@ fn parse_toml_with(text: &str, path: &Path, options: ImportOptions) -> Result<Sc
         }
         let shift = DVec3::from_array(entry.translate);
         let prefix = entry.name.clone().unwrap_or_else(|| stem(&mesh_path));
-        let own = Properties::scalar(entry.rho, entry.emission, entry.radiates);
+        let own = Properties { rho: entry.rho, emission: entry.emission, radiates: entry.radiates };
         for poly in read_mesh(&mesh_path)? {
             let props = group_props(Some(&poly.group)).or(poly.material).or(own).or(file.defaults);
             let vertices = poly.vertices.iter().map(|&v| v * scale + shift).collect();
@@ -300,10 +352,13 @@ fn check_group(path: &str, group: &str, props: &Properties) -> Result<()> {
         path: path.into(),
         reason: format!("group '{group}': {what} = {value} is outside its range"),
     };
-    match (props.rho, props.emission) {
-        (Some(r), _) if !(0.0..=1.0).contains(&r) => Err(bad("rho", r)),
-        (_, Some(e)) if !(e.is_finite() && e >= 0.0) => Err(bad("emission", e)),
-        _ => Ok(()),
+    let values = |c: Option<Channels>| c.map(Channels::values).unwrap_or_default();
+    if let Some(r) = values(props.rho).into_iter().find(|r| !(0.0..=1.0).contains(r)) {
+        return Err(bad("rho", r));
+    }
+    match values(props.emission).into_iter().find(|e| !(e.is_finite() && *e >= 0.0)) {
+        Some(e) => Err(bad("emission", e)),
+        None => Ok(()),
     }
 }
 
@@ -379,8 +434,12 @@ impl Builder {
                 "face '{name}' has no rho: set it on the face, its group or [defaults]"
             ),
         })?;
-        let emission = props.emission.unwrap_or(0.0);
-        let colour = Colour { rho: props.rho_rgb, emission: props.emission_rgb };
+        let emission = props.emission.map_or(0.0, Channels::grey);
+        let colour = Colour {
+            rho: props.rho.and_then(Channels::rgb),
+            emission: props.emission.and_then(Channels::rgb),
+        };
+        let rho = rho.grey();
         let side = props.radiates.unwrap_or(Side::Front);
         if side == Side::Back {
             vertices.reverse();
@@ -640,15 +699,8 @@ fn obj_bad_index(text: &str) -> Option<String> {
 /// rho and emission from an OBJ material: the means of its diffuse colour Kd and emission Ke, with
 /// the channels kept.
 fn material_properties(m: &tobj::Material) -> Properties {
-    let mean = |c: [f32; 3]| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0;
-    let channels = |c: [f32; 3]| c.map(f64::from);
-    Properties {
-        rho: m.diffuse.map(mean),
-        emission: m.emissive.map(mean),
-        radiates: None,
-        rho_rgb: m.diffuse.map(channels),
-        emission_rgb: m.emissive.map(channels),
-    }
+    let channels = |c: [f32; 3]| Channels::Rgb(c.map(f64::from));
+    Properties { rho: m.diffuse.map(channels), emission: m.emissive.map(channels), radiates: None }
 }
 
 #[cfg(test)]
@@ -695,6 +747,8 @@ emission = 3.0
 name = "plate"
 vertices = [[0, 0, 3], [1, 0, 3], [1, 1, 3]]
 radiates = "both"
+rho = [0.25, 0.5, 0.75]
+emission = [1, 0, 0.5]
 [[meshes]]
 file = "box.obj"
 translate = [0, 0, 0.5]
@@ -711,6 +765,12 @@ rho = 0.7
         let f = |n: &str| &s.faces[s.face_index(n).unwrap()];
         assert_eq!((f("floor").rho, f("floor").emission), (0.5, 3.0));
         assert!((f("plate").frame.normal + f("plate.back").frame.normal).length() < 1e-15);
+        // Per channel in the file: the means for the grey problem, the channels kept.
+        let plate = f("plate.back");
+        assert_eq!((plate.rho, plate.emission), (0.5, 0.5));
+        assert_eq!(plate.colour.rho, Some([0.25, 0.5, 0.75]));
+        assert_eq!((plate.channel(0), plate.channel(2)), ((0.25, 1.0), (0.75, 0.5)));
+        assert_eq!(f("floor").colour, Colour::default());
         // The material's Kd and Ke, above the mesh entry's rho.
         let lid = f(lid);
         assert!(
@@ -740,6 +800,14 @@ rho = 0.7
                 "unknown group 'g'",
             ),
             ("[groups.g]\nrho = 2.0", "rho = 2"),
+            ("[groups.g]\nrho = [0.5, 2.0, 0.5]", "rho = 2"),
+            (
+                "[defaults]\nrho = [0.5, 0.5, 1.5]\n[[faces]]\nname = \"a\"\nvertices = [[0,0,0],[1,0,0],[0,1,0]]",
+                "'a (channel b)'",
+            ),
+            ("[defaults]\nrho = \"x\"", "expected a number, or three numbers [r, g, b]"),
+            ("[defaults]\nrho = [0.5, 0.5]", "invalid length 2"),
+            ("[defaults]\nemission = [1, 1, 1, 1]", "invalid length 4"),
             (
                 "[[faces]]\nname = \"a\"\nvertices = [[0,0,0],[1,0,0],[0,1,0]]\nrh = 1",
                 "unknown field",
