@@ -509,6 +509,11 @@ fn bad_up_directions_and_band_names_are_refused() {
         let (ok, _, err) = radiosity(&all);
         assert!(!ok && err.contains(expect), "{args:?}: {err}");
     }
+    // inspect reports the file's repairs too, and solves no bands.
+    let (ok, _, err) = radiosity(&["inspect", "--scene", CORNELL_BOX, "--refine", "0"]);
+    assert!(ok && err.lines().filter(|l| l.starts_with("note: ")).count() == 2, "{err}");
+    let (ok, _, err) = radiosity(&["inspect", "--scene", CORNELL_BOX, "--bands", "rgb"]);
+    assert!(!ok && err.contains("belong to solve"), "{err}");
     // Bands are lit by the scene's emission, not by a true solution.
     let (ok, _, err) = radiosity(&["solve", "--scene", "five-piece", "--bands", "rgb"]);
     assert!(!ok && err.contains("--solution none"), "{err}");
