@@ -4,8 +4,10 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::assembly::CollocationMatrix;
 use crate::assembly::{self, Assembly, AssemblyOptions, Quadrature};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
@@ -17,8 +19,9 @@ use crate::mesh::{
 use crate::operator::{CompressedOperator, CompressionOptions, OperatorChoice, OperatorStats};
 use crate::problems::{EmissionOptions, TrueSolution, emission_at};
 use crate::progress::ProgressSink;
-use crate::scene::{BuiltinScene, Scene, SurfaceParameters};
-use crate::solve::{self, SolverOptions};
+use crate::scene::{BuiltinScene, CHANNELS, ImportOptions, Scene, SurfaceParameters};
+use crate::solution::BandValues;
+use crate::solve::{self, SolveOutcome, SolverOptions};
 use crate::surface_error::{SurfaceErrors, surface_errors};
 use crate::visibility::{PairPlanner, PairStats};
 
@@ -177,8 +180,9 @@ pub enum StudyDevice {
 pub enum SceneSource {
     /// A built-in scene.
     Builtin(BuiltinScene),
-    /// A `.toml` scene file or an `.obj` / `.stl` mesh ([`crate::scene::load`]).
-    File(PathBuf),
+    /// A `.toml` scene file or an `.obj` / `.stl` mesh ([`crate::scene::load_with`]), and what
+    /// to do with its imperfections.
+    File(PathBuf, ImportOptions),
     /// `city:NXxNY`: the generated city of NX x NY buildings ([`crate::scene::city`]).
     City(usize, usize),
 }
@@ -187,7 +191,7 @@ impl SceneSource {
     /// A built-in scene's name, or a path ending in `.toml`, `.obj` or `.stl`.
     pub fn parse(name: &str) -> Result<Self> {
         if crate::scene::is_scene_file(name) {
-            Ok(Self::File(PathBuf::from(name)))
+            Ok(Self::File(PathBuf::from(name), ImportOptions::default()))
         } else if let Some(size) = name.strip_prefix("city:") {
             let parsed =
                 size.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)));
@@ -206,9 +210,23 @@ impl SceneSource {
     pub fn build(&self, params: SurfaceParameters) -> Result<Scene> {
         match self {
             Self::Builtin(b) => b.build(params),
-            Self::File(path) => crate::scene::load(path),
+            Self::File(path, import) => crate::scene::load_with(path, *import),
             Self::City(nx, ny) => crate::scene::city(*nx, *ny),
         }
+    }
+
+    /// The same source with these import options (they concern scene files only).
+    pub fn with_import(self, import: ImportOptions) -> Self {
+        match self {
+            Self::File(path, _) => Self::File(path, import),
+            other => other,
+        }
+    }
+
+    /// Whether the scene comes from an OBJ file (whose convention is y up).
+    pub fn is_obj(&self) -> bool {
+        matches!(self, Self::File(path, _)
+            if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")))
     }
 
     /// Whether this is one of the paper's built-in surfaces.
@@ -256,6 +274,9 @@ pub struct RunConfig {
     pub operator: OperatorChoice,
     /// How the compressed operator is built.
     pub compression: CompressionOptions,
+    /// Colour channels (indices into [`CHANNELS`]) to solve for, each with its own rho and E on
+    /// the one assembled operator; empty: the grey problem (the channels' means).
+    pub bands: Vec<usize>,
 }
 
 /// Relative error estimate of E above which `solve` warns: 1e3 times the quadrature's relative
@@ -286,6 +307,7 @@ impl RunConfig {
             surface_lattice: None,
             operator: OperatorChoice::Dense,
             compression: CompressionOptions::default(),
+            bands: Vec::new(),
         }
     }
 }
@@ -330,6 +352,12 @@ pub struct RunReport {
     /// What the user should know about the scene or the run (no emitter, faces lying on one
     /// another); the binary prints them as warnings.
     pub warnings: Vec<String>,
+    /// What the loader repaired in the scene file ([`Scene::notes`]).
+    pub notes: Vec<String>,
+    /// Per colour band, when bands were solved (then `u`, `solution_range` and the solver's
+    /// fields above are of the bands' mean, summed or worst over the bands).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bands: Vec<BandReport>,
     /// Number of elements.
     pub n: usize,
     /// Number of unknowns.
@@ -369,6 +397,84 @@ pub struct RunReport {
     pub u: Vec<f64>,
 }
 
+/// The solve of one colour band.
+#[derive(Clone, Debug, Serialize)]
+pub struct BandReport {
+    /// Band name (`r`, `g`, `b`).
+    pub band: &'static str,
+    /// Linear solver used.
+    pub solver: &'static str,
+    /// Iterations of the iterative solver.
+    pub iterations: usize,
+    /// Relative residual.
+    pub residual: f64,
+    /// Estimated condition number of I - K_band (LU only).
+    pub condition_estimate: Option<f64>,
+    /// Time to solve this band.
+    pub solve_seconds: f64,
+    /// Smallest, mean and largest nodal value.
+    pub solution_range: [f64; 3],
+}
+
+/// K for colour channel `channel` from the grey K: node i's row scaled by rho_channel / rho
+/// (K includes rho/π per row, and rho = 0 only where every channel is 0).
+fn band_matrix(
+    grey: &CollocationMatrix,
+    scene: &Scene,
+    disc: &Discretization,
+    channel: usize,
+) -> CollocationMatrix {
+    let mut k = grey.clone();
+    k.rows_mut().zip(disc.nodes.par_iter()).for_each(|(row, node)| {
+        let face = &scene.faces[node.face];
+        let scale = if face.rho == 0.0 { 0.0 } else { face.channel(channel).0 / face.rho };
+        if scale != 1.0 {
+            row.iter_mut().for_each(|x| *x *= scale);
+        }
+    });
+    k
+}
+
+/// Solves each band in `channels` on the grey K: one scaled copy of K at a time.
+fn solve_bands(
+    grey: &CollocationMatrix,
+    scene: &Scene,
+    disc: &Discretization,
+    channels: &[usize],
+    options: SolverOptions,
+) -> Result<Vec<(BandValues, BandReport, SolveOutcome)>> {
+    channels
+        .iter()
+        .map(|&channel| {
+            let emission: Vec<f64> =
+                disc.nodes.iter().map(|n| scene.faces[n.face].channel(channel).1).collect();
+            let k = band_matrix(grey, scene, disc, channel);
+            let started = Instant::now();
+            let outcome = solve::solve(&k, &emission, options)?;
+            let report = BandReport {
+                band: CHANNELS[channel],
+                solver: outcome.solver,
+                iterations: outcome.iterations,
+                residual: outcome.residual,
+                condition_estimate: outcome.condition_estimate,
+                solve_seconds: started.elapsed().as_secs_f64(),
+                solution_range: range(&outcome.u),
+            };
+            let values = BandValues { channel, u: outcome.u.clone(), emission };
+            Ok((values, report, outcome))
+        })
+        .collect()
+}
+
+/// Smallest, mean and largest value.
+fn range(u: &[f64]) -> [f64; 3] {
+    let (lo, hi, sum) =
+        u.iter().fold((f64::INFINITY, f64::NEG_INFINITY, 0.0), |(lo, hi, s), &v| {
+            (lo.min(v), hi.max(v), s + v)
+        });
+    [lo, sum / u.len() as f64, hi]
+}
+
 /// The scene, mesh and discretization of a configuration.
 pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
     let scene = config.scene.build(config.params)?;
@@ -404,6 +510,8 @@ pub struct Run {
     pub disc: Discretization,
     /// E at the nodes.
     pub emission: Vec<f64>,
+    /// The colour bands' solutions (empty for a grey run).
+    pub bands: Vec<BandValues>,
 }
 
 impl Run {
@@ -415,6 +523,7 @@ impl Run {
             disc: &self.disc,
             u: &self.report.u,
             emission: &self.emission,
+            bands: &self.bands,
         }
     }
 }
@@ -546,6 +655,14 @@ fn build_operator(
                 .into(),
         });
     }
+    if !config.bands.is_empty() {
+        return Err(Error::InvalidParameter {
+            name: "bands",
+            value: format!("{} bands", config.bands.len()),
+            reason: "colour bands scale the rows of the dense matrix; choose the dense operator"
+                .into(),
+        });
+    }
     if config.solver.choice == solve::SolverChoice::Lu {
         return Err(Error::InvalidParameter {
             name: "solver",
@@ -561,14 +678,15 @@ fn build_operator(
 }
 
 /// Whether `config` stores the compressed operator for `dof` unknowns: when asked for, or under
-/// [`OperatorChoice::Auto`] above its size unless the GPU backend or LU (which need the dense
-/// matrix) are asked for.
+/// [`OperatorChoice::Auto`] above its size unless the GPU backend, LU or colour bands (which need
+/// the dense matrix) are asked for.
 pub fn compresses(config: &RunConfig, dof: usize) -> bool {
     match config.operator {
         OperatorChoice::Auto => {
             config.operator.compresses(dof)
                 && config.backend == Backend::Cpu
                 && config.solver.choice != solve::SolverChoice::Lu
+                && config.bands.is_empty()
         }
         choice => choice.compresses(dof),
     }
@@ -610,6 +728,13 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
 
 /// Runs one configuration and keeps the scene, mesh and emissivity.
 pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
+    if !config.bands.is_empty() && config.solution.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "bands",
+            value: config.bands.iter().map(|&c| CHANNELS[c]).collect::<Vec<_>>().join(","),
+            reason: "colour bands are lit by the scene's own emission: use --solution none".into(),
+        });
+    }
     let (scene, mesh, disc) = build(config)?;
     let u_faces = match &config.solution {
         Some(sol) => Some(sol.on_faces(&scene, &config.params)?),
@@ -642,12 +767,26 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     }
 
     let started = Instant::now();
-    let outcome = match &built {
-        BuiltOperator::Dense(timed) => solve::solve(&timed.assembled.matrix, &rhs, config.solver)?,
+    let (outcome, bands, band_reports) = match &built {
+        BuiltOperator::Dense(timed) if !config.bands.is_empty() => {
+            let (mut values, mut reports, mut outcomes) = (Vec::new(), Vec::new(), Vec::new());
+            for (v, r, o) in
+                solve_bands(&timed.assembled.matrix, &scene, &disc, &config.bands, config.solver)?
+            {
+                values.push(v);
+                reports.push(r);
+                outcomes.push(o);
+            }
+            (mean_outcome(outcomes), values, reports)
+        }
+        BuiltOperator::Dense(timed) => {
+            (solve::solve(&timed.assembled.matrix, &rhs, config.solver)?, Vec::new(), Vec::new())
+        }
         BuiltOperator::Compressed { op, .. } => {
             let rho: Vec<f64> = disc.nodes.iter().map(|n| n.rho).collect();
             let tolerance = config.compression.tolerance;
-            solve::solve_compressed(op, &rhs, &rho, config.solver, tolerance)?
+            let outcome = solve::solve_compressed(op, &rhs, &rho, config.solver, tolerance)?;
+            (outcome, Vec::new(), Vec::new())
         }
     };
     let solve_seconds = started.elapsed().as_secs_f64();
@@ -675,10 +814,6 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         )?),
         _ => None,
     };
-    let (lo, hi, sum) =
-        u.iter().fold((f64::INFINITY, f64::NEG_INFINITY, 0.0), |(lo, hi, s), &v| {
-            (lo.min(v), hi.max(v), s + v)
-        });
     let report = RunReport {
         surface: scene.name.clone(),
         mesh: config.mesh.name(),
@@ -695,6 +830,8 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         refinement_steps: outcome.refinement_steps,
         rows_eliminated: outcome.rows_eliminated,
         warnings,
+        notes: scene.notes.clone(),
+        bands: band_reports,
         n: mesh.len(),
         dof: disc.dof(),
         error,
@@ -710,9 +847,29 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
         operator_bytes: summary.operator_bytes,
         blocks: summary.blocks,
         peak_rss_bytes: peak_rss_bytes(),
-        solution_range: [lo, sum / u.len() as f64, hi],
+        solution_range: range(&u),
         over_surface,
         u,
     };
-    Ok(Run { report, scene, mesh, disc, emission: rhs })
+    Ok(Run { report, scene, mesh, disc, emission: rhs, bands })
+}
+
+/// The bands' solves as one: u their mean, iterations summed, the worst residual, condition
+/// and refinement.
+fn mean_outcome(outcomes: Vec<SolveOutcome>) -> SolveOutcome {
+    let count = outcomes.len() as f64;
+    let mut mean = outcomes[0].clone();
+    mean.u.iter_mut().for_each(|x| *x = 0.0);
+    mean.iterations = 0;
+    for o in &outcomes {
+        mean.u.iter_mut().zip(&o.u).for_each(|(m, x)| *m += x / count);
+        mean.iterations += o.iterations;
+        mean.residual = mean.residual.max(o.residual);
+        mean.refinement_steps = mean.refinement_steps.max(o.refinement_steps);
+        mean.condition_estimate = match (mean.condition_estimate, o.condition_estimate) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+    }
+    mean
 }

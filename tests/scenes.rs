@@ -373,3 +373,148 @@ fn imperfect_scenes_are_named_where_they_go_wrong() {
         "{err}"
     );
 }
+
+const CORNELL_BOX: &str = "examples/cornell-box/CornellBox-Original.obj";
+
+/// A run of a scene file, in grey or per band, with the default import options.
+fn file_run(path: &std::path::Path, refine: u32, bands: Vec<usize>) -> radiosity::pipeline::Run {
+    use radiosity::pipeline::{RunConfig, SceneSource};
+    let mut config = RunConfig::paper(radiosity::scene::BuiltinScene::Cube, refine);
+    config.scene = SceneSource::parse(path.to_str().unwrap()).unwrap();
+    config.solution = None;
+    config.bands = bands;
+    radiosity::pipeline::run_keeping_mesh(&config).unwrap()
+}
+
+#[test]
+fn a_band_solve_equals_the_grey_solve_with_that_bands_rho_and_e() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    // A grey scene: one band is the grey problem, bit for bit (the rows are scaled by 1).
+    let grey_scene = root.join("examples/occluded-box.toml");
+    let (grey, band) = (file_run(&grey_scene, 2, vec![]), file_run(&grey_scene, 2, vec![1]));
+    assert_eq!(band.bands[0].u, grey.report.u);
+    assert_eq!(band.report.u, grey.report.u);
+
+    // The Cornell box per band, against separate grey runs of copies of it whose materials have
+    // that band's Kd and Ke in every channel (one assembly there, three here).
+    let rgb = file_run(&root.join(CORNELL_BOX), 1, vec![0, 1, 2]);
+    let dir = temp_dir("bands");
+    let obj = std::fs::read_to_string(root.join(CORNELL_BOX)).unwrap();
+    let mtl = std::fs::read_to_string(root.join(CORNELL_BOX).with_extension("mtl")).unwrap();
+    for (k, band) in rgb.bands.iter().enumerate() {
+        assert_eq!(band.channel, k);
+        let one_channel: String = mtl
+            .lines()
+            .map(|l| match l.split_whitespace().collect::<Vec<_>>()[..] {
+                [key @ ("Kd" | "Ke"), r, g, b] => {
+                    let c = [r, g, b][k];
+                    format!("{key} {c} {c} {c}\n")
+                }
+                _ => format!("{l}\n"),
+            })
+            .collect();
+        std::fs::write(dir.join("CornellBox-Original.mtl"), one_channel).unwrap();
+        std::fs::write(dir.join("CornellBox-Original.obj"), &obj).unwrap();
+        let separate = file_run(&dir.join("CornellBox-Original.obj"), 1, vec![]);
+        let scale = separate.report.u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let worst =
+            band.u.iter().zip(&separate.report.u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst <= 1e-13 * scale, "band {k}: {worst:.2e} of {scale:.2e}");
+        assert_eq!(band.emission, separate.emission, "band {k}");
+    }
+}
+
+#[test]
+fn the_cornell_box_solves_in_colour_from_its_unmodified_file() {
+    let dir = temp_dir("cornell");
+    let (png, csv) = (dir.join("cb.png"), dir.join("cb.csv"));
+    let args = [
+        "solve",
+        "--scene",
+        CORNELL_BOX,
+        "--bands",
+        "rgb",
+        "--refine",
+        "2",
+        "--png",
+        png.to_str().unwrap(),
+        "--png-size",
+        "600x400",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--json",
+        "-",
+    ];
+    let (ok, stdout, stderr) = radiosity(&args);
+    assert!(ok, "{stderr}");
+    // The file's quirks, one line each, naming faces by file line.
+    let notes: Vec<&str> = stderr.lines().filter(|l| l.starts_with("note: ")).collect();
+    assert_eq!(notes.len(), 2, "{stderr}");
+    assert!(
+        notes[0].contains("split 1 non-planar") && notes[0].contains("CornellBox-Original.obj:62")
+    );
+    assert!(notes[1].contains("dropped 2 face(s)"), "{}", notes[1]);
+    let r: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(r["notes"].as_array().unwrap().len(), 2);
+    let bands: Vec<&str> =
+        r["bands"].as_array().unwrap().iter().map(|b| b["band"].as_str().unwrap()).collect();
+    assert_eq!(bands, ["r", "g", "b"]);
+
+    // Colour bleeding: on the (nearly white) floor, red over green is larger beside the red left
+    // wall (x = -1) than beside the green right wall (x = +1).
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (x, u_r, u_g) = (col("x"), col("u_r"), col("u_g"));
+    let (mut left, mut right) = (Vec::new(), Vec::new());
+    for line in lines.filter(|l| l.contains("usemtl floor")) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let value = |k: usize| cells[k].parse::<f64>().unwrap();
+        let ratio = value(u_r) / value(u_g);
+        if value(x) < -0.6 {
+            left.push(ratio);
+        } else if value(x) > 0.6 {
+            right.push(ratio);
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    assert!(mean(&left) > 1.2 * mean(&right), "{} vs {}", mean(&left), mean(&right));
+
+    // The picture is in colour: reddish pixels on the left, greenish on the right.
+    let image = image::open(&png).unwrap().to_rgb8();
+    let count = |red: bool| {
+        image
+            .enumerate_pixels()
+            .filter(|(px, _, p)| {
+                let [r, g, _] = p.0.map(i32::from);
+                (*px < 300) == red && if red { r > 2 * g + 20 } else { g > r + 10 }
+            })
+            .count()
+    };
+    assert!(count(true) > 2000 && count(false) > 2000, "{} {}", count(true), count(false));
+}
+
+#[test]
+fn bad_up_directions_and_band_names_are_refused() {
+    for (args, expect) in [
+        (&["--up", "0,0,0", "--png", "x.png"][..], "non-zero"),
+        (&["--up", "0,1"][..], "three finite numbers"),
+        (&["--bands", "rgbx"][..], "unknown band 'rgbx'"),
+        (&["--bands", "r,q"][..], "unknown band 'q'"),
+        (&["--bands", "r,r"][..], "named twice"),
+    ] {
+        let mut all = vec!["solve", "--scene", CORNELL_BOX, "--refine", "0"];
+        all.extend(args);
+        let (ok, _, err) = radiosity(&all);
+        assert!(!ok && err.contains(expect), "{args:?}: {err}");
+    }
+    // inspect reports the file's repairs too, and solves no bands.
+    let (ok, _, err) = radiosity(&["inspect", "--scene", CORNELL_BOX, "--refine", "0"]);
+    assert!(ok && err.lines().filter(|l| l.starts_with("note: ")).count() == 2, "{err}");
+    let (ok, _, err) = radiosity(&["inspect", "--scene", CORNELL_BOX, "--bands", "rgb"]);
+    assert!(!ok && err.contains("belong to solve"), "{err}");
+    // Bands are lit by the scene's emission, not by a true solution.
+    let (ok, _, err) = radiosity(&["solve", "--scene", "five-piece", "--bands", "rgb"]);
+    assert!(!ok && err.contains("--solution none"), "{err}");
+}

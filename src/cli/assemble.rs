@@ -14,6 +14,7 @@ pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
     let mut config = args.geometry.config()?;
     config.backend = backend(args.device.backend, args.device.precision);
     let (scene, mesh, disc) = pipeline::build(&config)?;
+    super::output::print_notes(&scene);
     let a = assemble_without_progress(&config, &scene, &mesh, &disc, &PairPlanner::new(&scene))?;
     radiosity::report::write_npy(&args.output, a.matrix.dof(), a.matrix.as_slice())?;
     eprintln!(

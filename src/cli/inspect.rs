@@ -48,8 +48,16 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
             reason: "inspect solves nothing; the outputs belong to solve".into(),
         });
     }
+    if !args.colour.channels()?.is_empty() {
+        return Err(Error::InvalidParameter {
+            name: "bands",
+            value: args.colour.bands.clone(),
+            reason: "inspect solves nothing; the colour bands belong to solve".into(),
+        });
+    }
     let config = args.config()?;
     let (scene, mesh, disc) = pipeline::build(&config)?;
+    super::output::print_notes(&scene);
     let started = std::time::Instant::now();
     let planner = PairPlanner::new(&scene);
     let dof = disc.dof();

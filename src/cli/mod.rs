@@ -21,7 +21,8 @@ use radiosity::mesh::{LineExtent, S5Diagonals};
 use radiosity::operator::{CompressionOptions, OperatorChoice};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
 use radiosity::problems::{EmissionOptions, TrueSolution};
-use radiosity::scene::SurfaceParameters;
+use radiosity::report::Tone;
+use radiosity::scene::{CHANNELS, Duplicates, ImportOptions, NonPlanar, SurfaceParameters};
 use radiosity::solve::{SolverChoice, SolverOptions};
 
 #[derive(Parser)]
@@ -205,6 +206,8 @@ pub(crate) struct GeometryArgs {
     /// (slower, and less accurate there, where the closed forms cancel)
     #[arg(long)]
     pub(crate) no_far_field: bool,
+    #[command(flatten)]
+    pub(crate) import: ImportArgs,
 }
 
 /// Where the matrix is assembled.
@@ -282,6 +285,8 @@ pub(crate) struct SolveArgs {
     pub(crate) json: Option<String>,
     #[command(flatten)]
     pub(crate) outputs: OutputArgs,
+    #[command(flatten)]
+    pub(crate) colour: ColourArgs,
 }
 
 /// Files written from a solution.
@@ -398,7 +403,7 @@ impl GeometryArgs {
 
     /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere.
     pub(crate) fn config(&self) -> Result<RunConfig> {
-        let scene = SceneSource::parse(&self.scene)?;
+        let scene = SceneSource::parse(&self.scene)?.with_import(self.import.options());
         let method = match self.method {
             MethodArg::Centroid if self.alpha.is_some() => {
                 return Err(Error::InvalidParameter {
@@ -452,6 +457,7 @@ impl GeometryArgs {
             surface_lattice: None,
             operator: OperatorChoice::Dense,
             compression: CompressionOptions::default(),
+            bands: Vec::new(),
         })
     }
 }
@@ -494,6 +500,132 @@ impl SolveArgs {
             },
             tolerance: self.tolerance,
         };
+        config.bands = self.colour.channels()?;
         Ok(config)
     }
+}
+
+// Imperfect scene files, colour bands and pictures (issue 16).
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum NonPlanarArg {
+    /// Into planar triangles: a quadrilateral along its shorter diagonal, others by ear clipping
+    Split,
+    Refuse,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum DuplicatesArg {
+    /// Keep the first of faces with the same vertices (same order) and properties
+    Drop,
+    Refuse,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum ToneArg {
+    Linear,
+    Log,
+    Gamma,
+}
+
+/// How imperfect scene files are read.
+#[derive(Args)]
+pub(crate) struct ImportArgs {
+    /// Non-planar polygons [default: split for OBJ/STL polygons, refuse for TOML faces]
+    #[arg(long, value_enum)]
+    pub(crate) nonplanar: Option<NonPlanarArg>,
+    /// Faces that repeat an earlier face exactly [default: drop for OBJ/STL polygons, refuse
+    /// for TOML faces]; partial overlaps are always refused
+    #[arg(long, value_enum)]
+    pub(crate) duplicates: Option<DuplicatesArg>,
+}
+
+impl ImportArgs {
+    pub(crate) fn options(&self) -> ImportOptions {
+        ImportOptions {
+            nonplanar: self.nonplanar.map(|n| match n {
+                NonPlanarArg::Split => NonPlanar::Split,
+                NonPlanarArg::Refuse => NonPlanar::Refuse,
+            }),
+            duplicates: self.duplicates.map(|d| match d {
+                DuplicatesArg::Drop => Duplicates::Drop,
+                DuplicatesArg::Refuse => Duplicates::Refuse,
+            }),
+        }
+    }
+}
+
+/// Colour bands, and how the picture is drawn.
+#[derive(Args)]
+pub(crate) struct ColourArgs {
+    /// Solve per colour band on one assembled operator, each with its channel of rho and E (OBJ:
+    /// Kd, Ke; grey faces the same in every band): rgb, a list such as r,g, or grey (one solve
+    /// with the channels' means)
+    #[arg(long, value_name = "BANDS", default_value = "grey")]
+    pub(crate) bands: String,
+    /// The direction that is up in the picture [default: 0,1,0 for OBJ files, 0,0,1 otherwise]
+    #[arg(long, value_name = "X,Y,Z")]
+    pub(crate) up: Option<String>,
+    /// How u becomes colour: linear, log (three decades) or gamma (2.2)
+    #[arg(long, value_enum, default_value_t = ToneArg::Gamma)]
+    pub(crate) tone: ToneArg,
+}
+
+impl ColourArgs {
+    /// The channels of --bands (empty: grey).
+    pub(crate) fn channels(&self) -> Result<Vec<usize>> {
+        parse_bands(&self.bands)
+    }
+
+    /// The tone map of --tone.
+    pub(crate) fn tone(&self) -> Tone {
+        match self.tone {
+            ToneArg::Linear => Tone::Linear,
+            ToneArg::Log => Tone::Log,
+            ToneArg::Gamma => Tone::Gamma,
+        }
+    }
+
+    /// The up direction of --up, or the default for `scene`.
+    pub(crate) fn up(&self, scene: &SceneSource) -> Result<glam::DVec3> {
+        let Some(text) = &self.up else {
+            return Ok(if scene.is_obj() { glam::DVec3::Y } else { glam::DVec3::Z });
+        };
+        let up = solve::parse_point("up", text)?;
+        if up.length() == 0.0 || !up.length().is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "up",
+                value: text.clone(),
+                reason: "the up direction must be a non-zero vector".into(),
+            });
+        }
+        Ok(up)
+    }
+}
+
+/// `rgb`, `grey`, or comma-separated channel names (each once).
+pub(crate) fn parse_bands(text: &str) -> Result<Vec<usize>> {
+    if text == "grey" {
+        return Ok(Vec::new());
+    }
+    let names: Vec<&str> =
+        if text == "rgb" { CHANNELS.to_vec() } else { text.split(',').map(str::trim).collect() };
+    let mut channels = Vec::new();
+    for name in names {
+        let channel =
+            CHANNELS.iter().position(|&c| c == name).ok_or_else(|| Error::UnknownName {
+                kind: "band",
+                name: name.into(),
+                expected: "rgb, grey, or a comma-separated list of r, g, b".into(),
+            })?;
+        if channels.contains(&channel) {
+            return Err(Error::InvalidParameter {
+                name: "bands",
+                value: text.into(),
+                reason: format!("band '{name}' is named twice"),
+            });
+        }
+        channels.push(channel);
+    }
+    Ok(channels)
 }

@@ -19,3 +19,10 @@ pub(crate) fn emit<T: Serialize>(
     }
     Ok(())
 }
+
+/// What the loader repaired in the scene file, one line each on standard error.
+pub(crate) fn print_notes(scene: &radiosity::scene::Scene) {
+    for note in &scene.notes {
+        eprintln!("note: {note}");
+    }
+}

@@ -22,7 +22,11 @@ pub(crate) fn parse_point(name: &'static str, text: &str) -> Result<glam::DVec3>
     }
 }
 
-pub(crate) fn write_outputs(run: &pipeline::Run, out: &OutputArgs) -> Result<()> {
+pub(crate) fn write_outputs(
+    run: &pipeline::Run,
+    out: &OutputArgs,
+    picture: (glam::DVec3, report::Tone),
+) -> Result<()> {
     let field = run.field();
     if let Some(path) = &out.vtu {
         report::write_vtu(&field, std::path::Path::new(path))?;
@@ -40,7 +44,7 @@ pub(crate) fn write_outputs(run: &pipeline::Run, out: &OutputArgs) -> Result<()>
                 value: out.png_size.clone(),
                 reason: "expected WIDTHxHEIGHT in pixels".into(),
             })?;
-        let mut camera = report::Camera::overview(&field, report::DEFAULT_VIEW);
+        let mut camera = report::Camera::default_view(&field, picture.0);
         // The user gives points in their coordinates; the scene is drawn in its local frame.
         let origin = run.scene.origin;
         if let Some(t) = &out.target {
@@ -51,7 +55,7 @@ pub(crate) fn write_outputs(run: &pipeline::Run, out: &OutputArgs) -> Result<()>
         }
         let r = &run.report;
         let title = format!("{}: u, {} method, n = {}", r.surface, r.method, r.n);
-        report::render_png(&field, &camera, size, &title, std::path::Path::new(path))?;
+        report::render_png(&field, &camera, size, &title, picture.1, std::path::Path::new(path))?;
     }
     Ok(())
 }
@@ -77,16 +81,28 @@ pub(crate) fn print_run(r: &RunReport) {
             s.points, s.interpolant, s.iterated
         );
     }
+    let of = if r.bands.is_empty() { "" } else { " (mean of the bands)" };
     println!(
-        "solution at the nodes: min {:.6}, mean {:.6}, max {:.6}",
+        "solution at the nodes{of}: min {:.6}, mean {:.6}, max {:.6}",
         r.solution_range[0], r.solution_range[1], r.solution_range[2]
     );
+    for b in &r.bands {
+        let [lo, mean, hi] = b.solution_range;
+        println!(
+            "band {}: min {lo:.6}, mean {mean:.6}, max {hi:.6}; solve {:.3} s ({}, {} iterations, \
+             relative residual {:.1e})",
+            b.band, b.solve_seconds, b.solver, b.iterations, b.residual
+        );
+    }
     let mut iterations = match r.condition_estimate {
         Some(k) => format!(", condition ~{k:.1e}, {} refinement steps", r.refinement_steps),
         None => format!(", {} iterations", r.iterations),
     };
     if r.rows_eliminated > 0 {
-        iterations += &format!(", {} unknowns known as u = E (rho = 0)", r.rows_eliminated);
+        iterations += &format!(
+            ", {} unknowns known as u = E (rho = 0 or nothing in view)",
+            r.rows_eliminated
+        );
     }
     println!(
         "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",
@@ -104,9 +120,15 @@ pub(crate) fn print_run(r: &RunReport) {
 
 /// Solves, writes the outputs asked for, and prints the summary (or JSON).
 pub(crate) fn run(args: &SolveArgs) -> Result<()> {
-    let run = pipeline::run_keeping_mesh(&args.config()?)?;
-    write_outputs(&run, &args.outputs)?;
+    let config = args.config()?;
+    // Checked before the solve, which may take long.
+    let picture = (args.colour.up(&config.scene)?, args.colour.tone());
+    let run = pipeline::run_keeping_mesh(&config)?;
+    write_outputs(&run, &args.outputs, picture)?;
     let r = &run.report;
+    for note in &r.notes {
+        eprintln!("note: {note}");
+    }
     for w in &r.warnings {
         eprintln!("warning: {w}");
     }

@@ -20,6 +20,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     }
     let config = args.geometry.config()?;
     let (scene, mesh, _) = pipeline::build(&config)?;
+    super::output::print_notes(&scene);
     let started = std::time::Instant::now();
     let planner = PairPlanner::new(&scene);
     if args.max_depth > 6 {

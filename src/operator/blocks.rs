@@ -7,12 +7,13 @@ use super::CompressionOptions;
 use super::cluster::{Cluster, ClusterTree};
 use crate::discretization::ElementFrame;
 use crate::scene::Scene;
-use crate::visibility::PairPlanner;
+use crate::visibility::{PairPlanner, Shaft};
 
 /// What a block of nodes on face a and elements on face b needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum PairClass {
-    /// G = 0 for every pair: one plane, or one box wholly behind the other face's plane.
+    /// G V = 0 for every pair: one plane, one box wholly behind the other face's plane, or one
+    /// occluder crossing every segment between the boxes.
     Nothing,
     /// Every element in front of every node's plane and facing it, no occluder in the shaft.
     Smooth,
@@ -49,13 +50,13 @@ impl<'a> FacePairs<'a> {
         // G is analytic up to cos = 0; only a part behind it would need clipping. The margin is
         // the dense plan's (no clip within 1e-12 of the size).
         let margin = -1e-12 * (nodes.diameter() + elements.diameter() + nodes.distance(elements));
-        if elo >= margin
-            && nlo >= margin
-            && self.planner.shaft_is_clear(a, b, nodes.bounds(), elements.bounds())
-        {
-            PairClass::Smooth
-        } else {
-            PairClass::Mixed
+        if elo < margin || nlo < margin {
+            return PairClass::Mixed;
+        }
+        match self.planner.shaft(a, b, nodes.bounds(), elements.bounds()) {
+            Shaft::Clear => PairClass::Smooth,
+            Shaft::Hidden => PairClass::Nothing,
+            Shaft::Partial => PairClass::Mixed,
         }
     }
 

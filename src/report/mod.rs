@@ -7,7 +7,7 @@ mod study_figures;
 mod vtk;
 
 pub use nodes_csv::write_node_csv;
-pub use render::{Camera, DEFAULT_VIEW, render_png};
+pub use render::{Camera, DEFAULT_VIEW, Tone, render_png};
 pub use study_figures::write_study_figures;
 pub use vtk::write_vtu;
 

@@ -1,11 +1,13 @@
 //! The solution as a VTK XML unstructured grid (`.vtu`) for ParaView: one triangle per element
 //! (three points of its own, since collocation meshes need not conform), u_n at the points, and
-//! u_n, E, rho and the face index per cell.
+//! u_n, E, rho and the face index per cell; per colour band B, `u_B` at the points and `u_B`,
+//! `E_B`, `rho_B` per cell.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::Result;
+use crate::scene::CHANNELS;
 use crate::solution::SolutionField;
 
 /// Writes `field` to `path` as ASCII VTU.
@@ -30,6 +32,30 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
     let cell_e = cells(&|j| format!("{:e}", field.element_emission(j)));
     let cell_rho = cells(&|j| format!("{:e}", field.scene.faces[elements[j].face].rho));
     let cell_face = cells(&|j| elements[j].face.to_string());
+    let (mut point_bands, mut cell_bands) = (String::new(), String::new());
+    for band in field.bands {
+        let name = CHANNELS[band.channel];
+        let values: String = (0..n)
+            .flat_map(|j| field.vertex_values_of(&band.u, j))
+            .map(|u| format!("{u:e}\n"))
+            .collect();
+        let _ = writeln!(
+            point_bands,
+            r#"        <DataArray type="Float64" Name="u_{name}" format="ascii">
+{values}        </DataArray>"#
+        );
+        let u = cells(&|j| format!("{:e}", field.element_mean(&band.u, j)));
+        let e = cells(&|j| format!("{:e}", field.element_mean(&band.emission, j)));
+        let rho = cells(&|j| {
+            format!("{:e}", field.scene.faces[elements[j].face].channel(band.channel).0)
+        });
+        for (what, text) in [("u", u), ("E", e), ("rho", rho)] {
+            let _ = writeln!(
+                cell_bands,
+                r#"        <DataArray type="Float64" Name="{what}_{name}" format="ascii">{text}</DataArray>"#
+            );
+        }
+    }
     let text = format!(
         r#"<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">
@@ -47,13 +73,13 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
       <PointData Scalars="u">
         <DataArray type="Float64" Name="u" format="ascii">
 {point_u}        </DataArray>
-      </PointData>
+{point_bands}      </PointData>
       <CellData Scalars="u">
         <DataArray type="Float64" Name="u" format="ascii">{cell_u}</DataArray>
         <DataArray type="Float64" Name="E" format="ascii">{cell_e}</DataArray>
         <DataArray type="Float64" Name="rho" format="ascii">{cell_rho}</DataArray>
         <DataArray type="Int64" Name="face" format="ascii">{cell_face}</DataArray>
-      </CellData>
+{cell_bands}      </CellData>
     </Piece>
   </UnstructuredGrid>
 </VTKFile>

@@ -41,7 +41,23 @@ pub struct Face {
     pub emission: f64,
     /// The diagonal used when the face is a quadrilateral split into two triangles.
     pub diagonal: Diagonal,
+    /// Red, green and blue channels of rho and E where the scene gives them (an OBJ material's
+    /// Kd and Ke); `rho` and `emission` are then their means.
+    pub colour: Colour,
 }
+
+/// The colour channels (r, g, b) behind a face's rho and E; `None`: grey (every channel equals
+/// the scalar).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Colour {
+    /// rho per channel.
+    pub rho: Option<[f64; 3]>,
+    /// E per channel.
+    pub emission: Option<[f64; 3]>,
+}
+
+/// The names of the colour channels, in order.
+pub const CHANNELS: [&str; 3] = ["r", "g", "b"];
 
 /// Largest coordinate magnitude accepted. The pair plan and the face checks work with fourth
 /// powers of lengths (squared lengths of vector areas, cross products of cross products), which
@@ -128,8 +144,15 @@ impl Face {
             area,
             size,
         })?;
-        let face =
-            Self { name, vertices, frame, rho, emission: 0.0, diagonal: Diagonal::default() };
+        let face = Self {
+            name,
+            vertices,
+            frame,
+            rho,
+            emission: 0.0,
+            diagonal: Diagonal::default(),
+            colour: Colour::default(),
+        };
         face.check_simple()?;
         Ok(face)
     }
@@ -155,6 +178,32 @@ impl Face {
         }
         self.emission = emission;
         Ok(self)
+    }
+
+    /// Sets the colour channels (rho in [0, 1], E finite and non-negative).
+    pub fn with_colour(mut self, colour: Colour) -> Result<Self> {
+        for (k, &rho) in colour.rho.iter().flatten().enumerate() {
+            if !(0.0..=1.0).contains(&rho) {
+                let face = format!("{} (channel {})", self.name, CHANNELS[k]);
+                return Err(Error::ReflectivityOutOfRange { face, rho });
+            }
+        }
+        for (k, &value) in colour.emission.iter().flatten().enumerate() {
+            if !(value.is_finite() && value >= 0.0) {
+                let face = format!("{} (channel {})", self.name, CHANNELS[k]);
+                return Err(Error::InvalidEmission { face, value });
+            }
+        }
+        self.colour = colour;
+        Ok(self)
+    }
+
+    /// rho and E in colour channel `channel` (0, 1, 2: r, g, b); a grey face's in every channel.
+    pub fn channel(&self, channel: usize) -> (f64, f64) {
+        (
+            self.colour.rho.map_or(self.rho, |c| c[channel]),
+            self.colour.emission.map_or(self.emission, |c| c[channel]),
+        )
     }
 
     /// Sets the diagonal of a quadrilateral.

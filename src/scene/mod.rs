@@ -8,8 +8,11 @@ mod file;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use city::city;
-pub use face::{Diagonal, Face, MIN_RELATIVE_AREA};
-pub use file::{IMPORT_RHO, Side, is_scene_file, load, parse_toml};
+pub use face::{CHANNELS, Colour, Diagonal, Face, MIN_RELATIVE_AREA};
+pub use file::{
+    Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, is_scene_file, load, load_with,
+    parse_toml,
+};
 
 use glam::{DVec2, DVec3};
 use rstar::primitives::{GeomWithData, Rectangle};
@@ -29,6 +32,9 @@ pub struct Scene {
     /// Where the local frame's origin lies in the user's coordinates (zero unless the scene lies
     /// far from the origin for its size; [`local_origin`]).
     pub origin: DVec3,
+    /// What the loader repaired in the file (non-planar polygons split, duplicates dropped), one
+    /// line per kind, for the user.
+    pub notes: Vec<String>,
 }
 
 /// Largest ratio of the scene's largest coordinate to its smallest face: beyond it, the kernels'
@@ -78,7 +84,7 @@ impl Scene {
         } else {
             faces.iter().map(|f| f.moved_by(origin)).collect()
         };
-        let scene = Self { name, faces, origin };
+        let scene = Self { name, faces, origin, notes: Vec::new() };
         scene.check_no_overlap()?;
         Ok(scene)
     }

@@ -182,30 +182,43 @@ impl PairPlanner {
         found
     }
 
-    /// Whether no occluder can meet a segment between a point of the box `nodes` on face `a` and a
-    /// point of the box `elements` on face `b`, both in front of the other's plane (a block of the
-    /// compressed operator): no occluder piece other than `a`'s and `b`'s reaches into the shaft
-    /// (Haines and Wallace 1994), the convex hull of the two boxes in front of both planes. The
-    /// shaft is bounded by supporting planes of the two boxes (their faces, and planes along each
-    /// axis through corresponding corners), so the test only errs towards "not clear".
-    pub fn shaft_is_clear(
+    /// What segments between a point of the box `nodes` on face `a` and a point of the box
+    /// `elements` on face `b` (a block of the compressed operator, each box in front of the other
+    /// face's plane) meet: nothing, when no occluder piece other than `a`'s and `b`'s reaches into
+    /// the shaft (Haines and Wallace 1994), the convex hull of the two boxes in front of both
+    /// planes; one piece that every such segment crosses (the block is hidden); or something in
+    /// between. The shaft is bounded by supporting planes of the two boxes (their faces, and
+    /// planes along each axis through corresponding corners), so the test only errs towards
+    /// [`Shaft::Partial`].
+    pub fn shaft(
         &self,
         a: usize,
         b: usize,
         nodes: (DVec3, DVec3),
         elements: (DVec3, DVec3),
-    ) -> bool {
+    ) -> Shaft {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
         let tol = 1e-12 * fa.size.max(fb.size);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
-        let corners = box_corners(nodes).into_iter().chain(box_corners(elements));
-        let corners: Vec<DVec3> = corners.collect();
+        let corners: Vec<DVec3> =
+            box_corners(nodes).into_iter().chain(box_corners(elements)).collect();
         for n in shaft_normals(nodes, elements) {
             let reach = corners.iter().map(|c| n.dot(*c)).fold(f64::NEG_INFINITY, f64::max);
-            // Inside: n·x <= reach, grown by the tolerance (a piece touching it counts).
-            volume.push(-n, reach, -tol);
+            // Inside: n·x <= reach, shrunk by the tolerance: a piece that only touches the shaft
+            // from outside (a plate level with the top of a wall) blocks no segment inside it.
+            volume.push(-n, reach, tol);
         }
-        self.occluders.inside(a, b, &volume).next().is_none()
+        let mut found = self.occluders.inside(a, b, &volume).peekable();
+        if found.peek().is_none() {
+            return Shaft::Clear;
+        }
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        if found.any(|o| crosses_every_segment(&self.occluders.pieces[o].polygon, &from, &to, tol))
+        {
+            Shaft::Hidden
+        } else {
+            Shaft::Partial
+        }
     }
 
     /// The convex occluder pieces of the scene.
@@ -364,6 +377,48 @@ impl PairPlanner {
             })
             .collect()
     }
+}
+
+/// What an occluder does to the segments between two boxes ([`PairPlanner::shaft`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shaft {
+    /// No occluder meets any segment.
+    Clear,
+    /// One occluder crosses every segment.
+    Hidden,
+    /// Anything else.
+    Partial,
+}
+
+/// Whether the convex planar `polygon` crosses every segment from a point of the convex hull of
+/// `from` to one of `to`: the two sets lie strictly on opposite sides of its plane, and every
+/// segment between their corners crosses the plane inside the polygon (the crossings of all
+/// segments are the convex hull of those, central projection keeping convexity).
+fn crosses_every_segment(polygon: &[DVec3], from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
+    let normal = (1..polygon.len() - 1)
+        .map(|k| (polygon[k] - polygon[0]).cross(polygon[k + 1] - polygon[0]))
+        .fold(DVec3::ZERO, |s, n| s + n);
+    if normal.length_squared() == 0.0 {
+        return false;
+    }
+    let normal = normal.normalize();
+    let height = |p: DVec3| normal.dot(p - polygon[0]);
+    let (hf, ht): (Vec<f64>, Vec<f64>) =
+        (from.iter().map(|&p| height(p)).collect(), to.iter().map(|&p| height(p)).collect());
+    let opposite = (hf.iter().all(|&h| h > tol) && ht.iter().all(|&h| h < -tol))
+        || (hf.iter().all(|&h| h < -tol) && ht.iter().all(|&h| h > tol));
+    if !opposite {
+        return false;
+    }
+    from.iter().zip(&hf).all(|(&p, &hp)| {
+        to.iter().zip(&ht).all(|(&q, &hq)| {
+            let x = p + (q - p) * (hp / (hp - hq));
+            (0..polygon.len()).all(|k| {
+                let (v, w) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+                normal.dot((w - v).cross(x - v)) > tol * (w - v).length()
+            })
+        })
+    })
 }
 
 /// The eight corners of a box.
