@@ -481,3 +481,28 @@ fn the_compressed_operator_solves_like_the_dense_one() {
         assert!(c["operator_bytes"].as_u64() < d["operator_bytes"].as_u64(), "{method}");
     }
 }
+
+#[test]
+fn the_compression_study_compares_every_tolerance_with_the_dense_solution() {
+    let dir = std::env::temp_dir().join(format!("radiosity-compression-{}", std::process::id()));
+    let v = json(&[
+        "study",
+        "compression",
+        "--max-n",
+        "2560",
+        "--figures",
+        dir.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    let rows = v["rows"].as_array().unwrap();
+    // Centroid and linear at n = 2 560: one dense run and three tolerances each.
+    assert_eq!(rows.len(), 8, "{v}");
+    for r in rows.iter().filter(|r| r["operator"] == "compressed") {
+        let tol = r["compression_tolerance"].as_f64().unwrap();
+        let diff = r["difference_from_dense"].as_f64().unwrap();
+        assert!(diff <= 10.0 * tol, "{r}");
+    }
+    assert!(dir.join("compression.png").exists() && dir.join("compression.svg").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

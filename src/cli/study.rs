@@ -30,6 +30,13 @@ pub(crate) fn run(
             let result = radiosity::stability::run_stability(device)?;
             emit(&result, json, || report::stability_table(&result, format))
         }
+        "compression" => {
+            let progress = super::progress::on_stderr();
+            let mut result = radiosity::study::compression::run_compression(max_n, &progress)?;
+            result.figures =
+                report::write_compression_figure(&result, std::path::Path::new(figures))?;
+            emit(&result, json, || report::compression_table(&result, format))
+        }
         "stiff" => {
             let result = radiosity::stability::run_stiff(device)?;
             emit(&result, json, || report::stiff_table(&result, format))

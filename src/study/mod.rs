@@ -2,6 +2,7 @@
 //! [`crate::pipeline::run`], with the paper's printed value beside ours where it has one.
 
 mod analysis;
+pub mod compression;
 mod specs;
 
 pub use analysis::{fit_rate, pareto_front};

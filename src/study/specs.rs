@@ -448,5 +448,6 @@ impl StudySpec {
 pub fn study_ids() -> Vec<&'static str> {
     let mut ids: Vec<&'static str> = StudySpec::all().iter().map(|s| s.id).collect();
     ids.extend(crate::stability::STUDY_IDS);
+    ids.push("compression");
     ids
 }

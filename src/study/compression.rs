@@ -1,0 +1,206 @@
+//! `study compression`: the compressed operator ([`crate::operator`]) on the five-piece surface
+//! as n grows, centroid and linear, at several tolerances, against the dense operator where that
+//! fits: E_n, the difference of the solutions, time, memory, and fitted growth exponents.
+
+use serde::Serialize;
+
+use crate::discretization::Method;
+use crate::error::Result;
+use crate::operator::{CompressionOptions, OperatorChoice};
+use crate::pipeline::{self, RunConfig};
+use crate::progress::ProgressSink;
+use crate::scene::BuiltinScene;
+use crate::solve::{SolverChoice, SolverOptions};
+
+/// Tolerances of the compressed runs.
+pub const TOLERANCES: [f64; 3] = [1e-3, 1e-6, 1e-9];
+
+/// Dense runs (the reference) up to this many unknowns: the matrix takes 8 dof² bytes.
+pub const DENSE_LIMIT: usize = 12_288;
+
+/// Largest n by default: the runs up to it take a few minutes on two cores.
+pub const DEFAULT_MAX_N: usize = 40_960;
+
+/// Smallest n of the study.
+const FIRST_REFINE: u32 = 4;
+
+/// One run.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompressionRow {
+    /// `centroid` or `linear`.
+    pub method: &'static str,
+    /// Elements.
+    pub n: usize,
+    /// Unknowns.
+    pub dof: usize,
+    /// `dense` or `compressed`.
+    pub operator: &'static str,
+    /// Tolerance of the compressed operator.
+    pub compression_tolerance: Option<f64>,
+    /// E_n, the largest nodal error against u = x² + y².
+    pub error: f64,
+    /// `max |u - u_dense| / max |u_dense|`, where the dense run fits.
+    pub difference_from_dense: Option<f64>,
+    /// Building the operator.
+    pub setup_seconds: f64,
+    /// Solving.
+    pub solve_seconds: f64,
+    /// Memory of the stored operator.
+    pub operator_bytes: u64,
+    /// Peak resident memory of the process so far.
+    pub peak_rss_bytes: Option<u64>,
+    /// Largest rank of a low-rank block.
+    pub max_rank: Option<usize>,
+    /// GMRES iterations (0 for LU).
+    pub iterations: usize,
+}
+
+/// Growth of time and memory in n, fitted by least squares on log-log data.
+#[derive(Clone, Debug, Serialize)]
+pub struct GrowthFit {
+    /// Method.
+    pub method: &'static str,
+    /// Tolerance (`None`: dense).
+    pub compression_tolerance: Option<f64>,
+    /// Exponent p of setup + solve time ~ n^p.
+    pub time_exponent: f64,
+    /// Exponent of the stored operator's memory.
+    pub memory_exponent: f64,
+    /// Smallest and largest n fitted.
+    pub n_range: [usize; 2],
+}
+
+/// The study's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompressionStudy {
+    /// Study id.
+    pub study: &'static str,
+    /// Every run.
+    pub rows: Vec<CompressionRow>,
+    /// Growth exponents per method and tolerance.
+    pub fits: Vec<GrowthFit>,
+    /// Plots written.
+    pub figures: Vec<String>,
+}
+
+/// Runs the study up to `max_n` elements (default [`DEFAULT_MAX_N`]).
+pub fn run_compression(max_n: Option<usize>, progress: &ProgressSink) -> Result<CompressionStudy> {
+    let max_n = max_n.unwrap_or(DEFAULT_MAX_N);
+    let mut rows = Vec::new();
+    for method in [Method::Centroid, Method::linear(Method::PAPER_ALPHA)?] {
+        // Five-piece: n = 10 · 4^refine.
+        for refine in (FIRST_REFINE..=12).take_while(|&r| 10 * 4usize.pow(r) <= max_n) {
+            let dof = 10 * 4usize.pow(refine) * method.nodes_per_element();
+            let config = |operator, tolerance| {
+                let mut c = RunConfig::paper(BuiltinScene::FivePiece, refine);
+                c.method = method;
+                c.operator = operator;
+                c.compression = CompressionOptions { tolerance, ..Default::default() };
+                c.solver = SolverOptions::with(SolverChoice::Auto);
+                c.progress = progress.clone();
+                c
+            };
+            let dense = if dof <= DENSE_LIMIT {
+                progress.note(&format!("compression study: {method}, dof = {dof}, dense"));
+                let r = pipeline::run(&config(OperatorChoice::Dense, TOLERANCES[0]))?;
+                let row = row_of(&r, None, None);
+                rows.push(row);
+                Some(r.u)
+            } else {
+                None
+            };
+            for tolerance in TOLERANCES {
+                progress.note(&format!(
+                    "compression study: {method}, dof = {dof}, tolerance {tolerance:.0e}"
+                ));
+                let r = pipeline::run(&config(OperatorChoice::Compressed, tolerance))?;
+                let difference = dense.as_ref().map(|d| relative_difference(&r.u, d));
+                rows.push(row_of(&r, Some(tolerance), difference));
+            }
+        }
+    }
+    let fits = growth_fits(&rows);
+    Ok(CompressionStudy { study: "compression", rows, fits, figures: Vec::new() })
+}
+
+fn row_of(
+    r: &pipeline::RunReport,
+    tolerance: Option<f64>,
+    difference: Option<f64>,
+) -> CompressionRow {
+    CompressionRow {
+        method: r.method,
+        n: r.n,
+        dof: r.dof,
+        operator: r.operator,
+        compression_tolerance: tolerance,
+        error: r.error.unwrap_or(f64::NAN),
+        difference_from_dense: difference,
+        setup_seconds: r.setup_seconds,
+        solve_seconds: r.solve_seconds,
+        operator_bytes: r.operator_bytes,
+        peak_rss_bytes: r.peak_rss_bytes,
+        max_rank: r.blocks.map(|b| b.max_rank),
+        iterations: r.iterations,
+    }
+}
+
+/// `max |a - b| / max |b|`.
+fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    let d = a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    d / b.iter().fold(0.0f64, |m, y| m.max(y.abs())).max(f64::MIN_POSITIVE)
+}
+
+/// Least-squares slopes of log time and log memory against log n, per method and tolerance,
+/// where at least two sizes ran.
+fn growth_fits(rows: &[CompressionRow]) -> Vec<GrowthFit> {
+    let mut keys: Vec<(&'static str, Option<f64>)> =
+        rows.iter().map(|r| (r.method, r.compression_tolerance)).collect();
+    keys.dedup();
+    keys.sort_by(|a, b| a.0.cmp(b.0).then(a.1.partial_cmp(&b.1).expect("finite")));
+    keys.dedup();
+    keys.into_iter()
+        .filter_map(|(method, tolerance)| {
+            let series: Vec<&CompressionRow> = rows
+                .iter()
+                .filter(|r| r.method == method && r.compression_tolerance == tolerance)
+                .collect();
+            (series.len() >= 2).then(|| {
+                let x: Vec<f64> = series.iter().map(|r| (r.n as f64).ln()).collect();
+                let time: Vec<f64> =
+                    series.iter().map(|r| (r.setup_seconds + r.solve_seconds).ln()).collect();
+                let memory: Vec<f64> =
+                    series.iter().map(|r| (r.operator_bytes as f64).ln()).collect();
+                GrowthFit {
+                    method,
+                    compression_tolerance: tolerance,
+                    time_exponent: slope(&x, &time),
+                    memory_exponent: slope(&x, &memory),
+                    n_range: [series[0].n, series[series.len() - 1].n],
+                }
+            })
+        })
+        .collect()
+}
+
+/// Least-squares slope of y against x.
+fn slope(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slopes_of_power_laws_are_their_exponents() {
+        let x: Vec<f64> = [1.0f64, 2.0, 4.0, 8.0].iter().map(|v| v.ln()).collect();
+        let y: Vec<f64> =
+            [1.0f64, 2.0, 4.0, 8.0].iter().map(|v| (3.0 * v.powf(1.25)).ln()).collect();
+        assert!((slope(&x, &y) - 1.25).abs() < 1e-12);
+    }
+}
