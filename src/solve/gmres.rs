@@ -9,7 +9,7 @@
 //! the recurrence. A cycle that does not halve the residual is stagnation: the solver stops there
 //! and says how far it got, instead of running to an iteration limit.
 
-use super::system::dot;
+use super::system::{ReducedSystem, dot};
 use crate::error::{Error, IterationFailure, Result};
 
 /// Krylov vectors kept per cycle (memory: `(RESTART + 1) n` values).
@@ -29,6 +29,21 @@ pub trait KrylovSystem: Sync {
     fn apply(&self, x: &[f64]) -> Vec<f64>;
     /// `b - A x`, as accurately as the system can give it (restarts stop on it).
     fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64>;
+}
+
+/// The dense system without its zero rows; restarts use its compensated residual.
+impl KrylovSystem for ReducedSystem<'_> {
+    fn dim(&self) -> usize {
+        ReducedSystem::dim(self)
+    }
+
+    fn apply(&self, x: &[f64]) -> Vec<f64> {
+        ReducedSystem::apply(self, x)
+    }
+
+    fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64> {
+        self.compensated_residual(x, b)
+    }
 }
 
 /// A GMRES solution.

@@ -129,20 +129,6 @@ impl<'a> ReducedSystem<'a> {
     }
 }
 
-impl super::gmres::KrylovSystem for ReducedSystem<'_> {
-    fn dim(&self) -> usize {
-        ReducedSystem::dim(self)
-    }
-
-    fn apply(&self, x: &[f64]) -> Vec<f64> {
-        ReducedSystem::apply(self, x)
-    }
-
-    fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64> {
-        self.compensated_residual(x, b)
-    }
-}
-
 /// `a · b`.
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
