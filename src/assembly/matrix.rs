@@ -12,7 +12,7 @@ pub struct CollocationMatrix {
     data: Vec<f64>,
 }
 
-/// Fraction of the available memory a dense matrix may take.
+/// Fraction of the available memory one large allocation may take.
 const MEMORY_SHARE: f64 = 0.8;
 
 /// Memory the system reports as available, in bytes (`MemAvailable` of /proc/meminfo), if known.
@@ -23,20 +23,27 @@ pub fn available_memory() -> Option<u64> {
     Some(kib * 1024)
 }
 
+/// [`Error::TooLarge`] (naming `dof` and both sizes) when `bytes` exceed [`MEMORY_SHARE`] of the
+/// available memory: checked before a large allocation, so that a size that cannot fit is
+/// refused with a message instead of ending in the out-of-memory killer.
+pub fn check_fits(bytes: f64, dof: usize) -> Result<()> {
+    if let Some(avail) = available_memory() {
+        let allowed = MEMORY_SHARE * avail as f64;
+        if bytes > allowed {
+            return Err(Error::TooLarge {
+                dof,
+                needed_gib: bytes / (1u64 << 30) as f64,
+                available_gib: allowed / (1u64 << 30) as f64,
+            });
+        }
+    }
+    Ok(())
+}
+
 impl CollocationMatrix {
     /// A zero matrix, or [`Error::TooLarge`] when it would not fit in memory.
     pub fn zeros(dof: usize) -> Result<Self> {
-        let bytes = (dof as f64) * (dof as f64) * 8.0;
-        if let Some(avail) = available_memory() {
-            let allowed = MEMORY_SHARE * avail as f64;
-            if bytes > allowed {
-                return Err(Error::TooLarge {
-                    dof,
-                    needed_gib: bytes / (1u64 << 30) as f64,
-                    available_gib: allowed / (1u64 << 30) as f64,
-                });
-            }
-        }
+        check_fits((dof as f64) * (dof as f64) * 8.0, dof)?;
         Ok(Self { dof, data: vec![0.0; dof * dof] })
     }
 

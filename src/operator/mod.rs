@@ -26,7 +26,7 @@ use std::f64::consts::PI;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairIntegrator, available_memory};
+use crate::assembly::{AssemblyOptions, PairIntegrator, check_fits};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -176,9 +176,6 @@ pub struct CompressedOperator {
 /// Admissible blocks whose break-even rank is below this are stored exactly.
 const MIN_USEFUL_RANK: usize = 4;
 
-/// Fraction of the available memory the near blocks may take.
-const MEMORY_SHARE: f64 = 0.8;
-
 impl CompressedOperator {
     /// Builds K for `disc` on `mesh` of `scene`; `progress` counts the blocks (stage
     /// `compression`).
@@ -212,7 +209,8 @@ impl CompressedOperator {
         let elements = ClusterTree::new(&element_items, tree_leaf);
         let faces = FacePairs::new(scene, planner);
         let plan = BlockPlan::new(&nodes, &elements, &faces, options);
-        check_memory(plan.near_entries(&nodes, &elements, per), disc.dof())?;
+        // The exact blocks alone must fit before any is computed.
+        check_fits(8.0 * plan.near_entries(&nodes, &elements, per) as f64, disc.dof())?;
 
         let integrator = PairIntegrator::new(disc.method, assembly);
         let entries = Entries {
@@ -322,22 +320,6 @@ impl CompressedOperator {
         }
         y
     }
-}
-
-/// Refuses a plan whose exact blocks alone would not fit in memory.
-fn check_memory(near_entries: u64, dof: usize) -> Result<()> {
-    let bytes = near_entries as f64 * 8.0;
-    if let Some(avail) = available_memory() {
-        let allowed = MEMORY_SHARE * avail as f64;
-        if bytes > allowed {
-            return Err(Error::TooLarge {
-                dof,
-                needed_gib: bytes / (1u64 << 30) as f64,
-                available_gib: allowed / (1u64 << 30) as f64,
-            });
-        }
-    }
-    Ok(())
 }
 
 /// Computes entries of K for blocks.

@@ -5,26 +5,8 @@ use faer::prelude::*;
 
 use super::system::ReducedSystem;
 use super::{CONDITION_LIMIT, max_abs};
-use crate::assembly::{CollocationMatrix, available_memory};
+use crate::assembly::{CollocationMatrix, check_fits};
 use crate::error::{Error, Result};
-
-/// Fraction of the available memory LU's two dense copies may take.
-const MEMORY_SHARE: f64 = 0.8;
-
-fn check_memory(n: usize) -> Result<()> {
-    let bytes = 2.0 * (n as f64) * (n as f64) * 8.0;
-    if let Some(avail) = available_memory() {
-        let allowed = MEMORY_SHARE * avail as f64;
-        if bytes > allowed {
-            return Err(Error::TooLarge {
-                dof: n,
-                needed_gib: bytes / (1u64 << 30) as f64,
-                available_gib: allowed / (1u64 << 30) as f64,
-            });
-        }
-    }
-    Ok(())
-}
 
 /// An LU solution of `(I - K) u = rhs` with its condition estimate.
 #[derive(Clone, Debug)]
@@ -52,7 +34,8 @@ impl LuSolution {
     /// not fit in the available memory.
     pub fn of_system(sys: &ReducedSystem, rhs: &[f64], max_steps: usize) -> Result<Self> {
         let n = rhs.len();
-        check_memory(n)?;
+        // LU keeps two dense copies.
+        check_fits(2.0 * (n as f64) * (n as f64) * 8.0, n)?;
         let a = sys.matrix();
         let lu = a.partial_piv_lu();
         let solve = |b: &[f64], transpose: bool| -> Vec<f64> {
