@@ -164,3 +164,105 @@ pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<B
     }
     Ok(report)
 }
+
+/// `bench --operator compressed`: the compressed operator's build timed (best of `repeats`)
+/// against the dense assembly on the CPU where the dense matrix fits, and their products compared.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompressedBenchReport {
+    /// Scene.
+    pub scene: String,
+    /// Method.
+    pub method: &'static str,
+    /// Elements.
+    pub n: usize,
+    /// Unknowns.
+    pub dof: usize,
+    /// Always `compressed`.
+    pub operator: &'static str,
+    /// Relative tolerance of the low-rank blocks.
+    pub compression_tolerance: f64,
+    /// Best build time of the compressed operator.
+    pub setup_seconds: f64,
+    /// Memory of the compressed operator.
+    pub operator_bytes: u64,
+    /// Its block statistics.
+    #[serde(flatten)]
+    pub blocks: crate::operator::OperatorStats,
+    /// Best dense assembly time on the CPU, when the dense matrix fits (at most
+    /// [`DENSE_BENCH_LIMIT`] unknowns).
+    pub dense_setup_seconds: Option<f64>,
+    /// Dense time / compressed time.
+    pub speedup: Option<f64>,
+    /// Largest `max_i |(K_c x - K x)_i| / max_i |(K x)_i|` over three vectors (ones, one of one
+    /// sign, one of both signs), against the dense matrix.
+    pub max_product_rel_diff: Option<f64>,
+    /// Peak resident memory of the process.
+    pub peak_rss_bytes: Option<u64>,
+    /// Repetitions.
+    pub repeats: usize,
+}
+
+/// The dense reference of [`run_compressed`] runs up to this many unknowns (1.2 GB).
+pub const DENSE_BENCH_LIMIT: usize = 12_288;
+
+/// Builds the compressed operator of `config` `repeats` times (best time), and the dense matrix
+/// once as reference where it fits.
+pub fn run_compressed(config: &RunConfig, repeats: usize) -> Result<CompressedBenchReport> {
+    let (scene, mesh, disc) = pipeline::build(config)?;
+    let repeats = repeats.max(1);
+    let mut best = f64::INFINITY;
+    let mut op = None;
+    for _ in 0..repeats {
+        let started = Instant::now();
+        op = Some(pipeline::build_compressed(config, &scene, &mesh, &disc)?);
+        best = best.min(started.elapsed().as_secs_f64());
+    }
+    let op = op.expect("at least one repetition");
+    let dof = disc.dof();
+    let (dense_setup_seconds, max_product_rel_diff) = if dof <= DENSE_BENCH_LIMIT {
+        let assembler = Assembler::new(Backend::Cpu, disc.method, config.assembly.quadrature)?;
+        let planner = PairPlanner::new(&scene);
+        let mut dense_best = f64::INFINITY;
+        let mut dense = None;
+        for _ in 0..repeats {
+            let started = Instant::now();
+            let a =
+                assembler.assemble(&scene, &mesh, &disc, &planner, &config.assembly, &|_| {})?;
+            dense_best = dense_best.min(started.elapsed().as_secs_f64());
+            dense = Some(a.matrix);
+        }
+        let k = dense.expect("at least one repetition");
+        let vectors = [
+            vec![1.0; dof],
+            (0..dof).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
+            (0..dof).map(|i| (i as f64 * 1.3).cos()).collect::<Vec<f64>>(),
+        ];
+        let worst = vectors
+            .iter()
+            .map(|x| {
+                let (a, b) = (op.apply(x), k.apply(x));
+                let d = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                d / b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE)
+            })
+            .fold(0.0, f64::max);
+        (Some(dense_best), Some(worst))
+    } else {
+        (None, None)
+    };
+    Ok(CompressedBenchReport {
+        scene: scene.name.clone(),
+        method: config.method.name(),
+        n: mesh.len(),
+        dof,
+        operator: "compressed",
+        compression_tolerance: config.compression.tolerance,
+        setup_seconds: best,
+        operator_bytes: op.stats.operator_bytes,
+        blocks: op.stats,
+        dense_setup_seconds,
+        speedup: dense_setup_seconds.map(|d| d / best),
+        max_product_rel_diff,
+        peak_rss_bytes: pipeline::peak_rss_bytes(),
+        repeats,
+    })
+}

@@ -692,6 +692,12 @@ pub fn compresses(config: &RunConfig, dof: usize) -> bool {
     }
 }
 
+/// Number of unknowns of `config` (the mesh is built to count them).
+pub fn dof_of(config: &RunConfig) -> Result<usize> {
+    let (_, _, disc) = build(config)?;
+    Ok(disc.dof())
+}
+
 /// Peak resident set size of this process (`VmHWM` of /proc/self/status), in bytes.
 pub fn peak_rss_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;

@@ -506,3 +506,27 @@ fn the_compression_study_compares_every_tolerance_with_the_dense_solution() {
     assert!(dir.join("compression.png").exists() && dir.join("compression.svg").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bench_times_the_compressed_operator_against_the_dense_one() {
+    let v = json(&[
+        "bench",
+        "--scene",
+        "five-piece",
+        "--refine",
+        "3",
+        "--operator",
+        "compressed",
+        "--repeats",
+        "1",
+        "--json",
+        "-",
+    ]);
+    assert_eq!(v["operator"], "compressed");
+    let diff = v["max_product_rel_diff"].as_f64().unwrap();
+    assert!(diff <= 10.0 * 1e-6, "{v}");
+    for key in ["setup_seconds", "dense_setup_seconds", "speedup"] {
+        assert!(v[key].as_f64().is_some_and(|x| x > 0.0), "{key}: {v}");
+    }
+    assert!(v["operator_bytes"].as_u64().is_some_and(|b| b > 0));
+}

@@ -1,7 +1,8 @@
 //! `radiosity bench`: the same matrix on each backend, timed and compared.
 
 use radiosity::error::{Error, Result};
-use radiosity::pipeline::Backend;
+use radiosity::operator::OperatorChoice;
+use radiosity::pipeline::{self, Backend};
 use radiosity::report;
 
 use super::*;
@@ -33,6 +34,27 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
             });
         }
         backends.push(b);
+    }
+    args.operator.apply(&mut config)?;
+    // The compressed operator is built on the CPU only: asked for, it is benched against the
+    // dense CPU assembly; under auto only a CPU-only bench of a large system switches to it.
+    let gpu_named = backends.iter().any(|b| *b != Backend::Cpu);
+    let compressed_bench = match config.operator {
+        OperatorChoice::Compressed => true,
+        OperatorChoice::Auto => {
+            !gpu_named && pipeline::compresses(&config, pipeline::dof_of(&config)?)
+        }
+        OperatorChoice::Dense => false,
+    };
+    if compressed_bench && gpu_named && args.backends.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "backends",
+            value: backends.iter().map(|b| b.name()).collect::<Vec<_>>().join(","),
+            reason: "the compressed operator is built on the CPU backend only".into(),
+        });
+    }
+    if compressed_bench {
+        return compressed(&config, args);
     }
     let r = radiosity::bench::run(&config, &backends, args.repeats)?;
     if let Some(target) = &args.json {
@@ -66,6 +88,36 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
             "speedup (cpu time / gpu time): {s:.2}; max |difference| {a:.2e}, relative to the \
              row's largest entry {rel:.2e}, to the row's 1-norm {norm:.2e}"
         );
+    }
+    Ok(())
+}
+
+/// `bench` of the compressed operator against the dense CPU assembly.
+fn compressed(config: &radiosity::pipeline::RunConfig, args: &BenchArgs) -> Result<()> {
+    let r = radiosity::bench::run_compressed(config, args.repeats)?;
+    if let Some(target) = &args.json {
+        return report::write_json(&r, target);
+    }
+    println!("{} ({} method): n = {}, dof = {}", r.scene, r.method, r.n, r.dof);
+    println!(
+        "compressed (tolerance {:.0e}): setup {:.3} s (best of {}), {:.1} MB, {} exact and {} \
+         low-rank blocks (rank <= {})",
+        r.compression_tolerance,
+        r.setup_seconds,
+        r.repeats,
+        r.operator_bytes as f64 / 1e6,
+        r.blocks.near_blocks,
+        r.blocks.far_blocks,
+        r.blocks.max_rank
+    );
+    match (r.dense_setup_seconds, r.speedup, r.max_product_rel_diff) {
+        (Some(d), Some(s), Some(diff)) => println!(
+            "dense: setup {d:.3} s; speedup (dense / compressed) {s:.2}; products differ by \
+             {diff:.2e} (relative)"
+        ),
+        _ => {
+            println!("dense: not assembled above {} unknowns", radiosity::bench::DENSE_BENCH_LIMIT)
+        }
     }
     Ok(())
 }

@@ -317,6 +317,8 @@ pub(crate) struct OutputArgs {
 pub(crate) struct BenchArgs {
     #[command(flatten)]
     pub(crate) geometry: GeometryArgs,
+    #[command(flatten)]
+    pub(crate) operator: OperatorArgs,
     /// Backends to run, comma separated [default: cpu, and gpu where an adapter can run the
     /// precision asked for]
     #[arg(long, value_enum, value_delimiter = ',')]
