@@ -131,11 +131,6 @@ impl ClusterTree {
         self.clusters[index].children = Some((left, right));
         index
     }
-
-    /// The root cluster.
-    pub fn root(&self) -> &Cluster {
-        &self.clusters[0]
-    }
 }
 
 /// Cuts items on several faces between faces: at the middle of the longest side of the box of
