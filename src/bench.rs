@@ -8,9 +8,12 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::assembly::{AssemblyOptions, CollocationMatrix};
+use crate::discretization::Discretization;
 use crate::error::Result;
 use crate::gpu::GpuTimings;
+use crate::mesh::Mesh;
 use crate::pipeline::{self, Assembler, Backend, RunConfig};
+use crate::scene::Scene;
 use crate::visibility::PairPlanner;
 
 /// One backend's figures.
@@ -93,10 +96,15 @@ pub fn matrix_differences(a: &CollocationMatrix, b: &CollocationMatrix) -> Matri
     diff
 }
 
-/// Assembles the matrix of `config` on each of `backends`, `repeats` times each.
-pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<BenchReport> {
-    let (scene, mesh, disc) = pipeline::build(config)?;
-    let planner = PairPlanner::new(&scene);
+/// Assembles the matrix of `config` (built as `scene`, `mesh`, `disc` by [`pipeline::build`]) on
+/// each of `backends`, `repeats` times each.
+pub fn run(
+    config: &RunConfig,
+    (scene, mesh, disc): &(Scene, Mesh, Discretization),
+    backends: &[Backend],
+    repeats: usize,
+) -> Result<BenchReport> {
+    let planner = PairPlanner::new(scene);
     let options: &AssemblyOptions = &config.assembly;
     let repeats = repeats.max(1);
     let mut report = BenchReport {
@@ -130,7 +138,7 @@ pub fn run(config: &RunConfig, backends: &[Backend], repeats: usize) -> Result<B
         let mut last = None;
         for _ in 0..repeats {
             let started = Instant::now();
-            let a = assembler.assemble(&scene, &mesh, &disc, &planner, options, &|_| {})?;
+            let a = assembler.assemble(scene, mesh, disc, &planner, options, &|_| {})?;
             let elapsed = started.elapsed().as_secs_f64();
             if elapsed < best {
                 best = elapsed;
@@ -205,46 +213,37 @@ pub struct CompressedBenchReport {
 /// The dense reference of [`run_compressed`] runs up to this many unknowns (1.2 GB).
 pub const DENSE_BENCH_LIMIT: usize = 12_288;
 
-/// Builds the compressed operator of `config` `repeats` times (best time), and the dense matrix
-/// once as reference where it fits.
-pub fn run_compressed(config: &RunConfig, repeats: usize) -> Result<CompressedBenchReport> {
-    let (scene, mesh, disc) = pipeline::build(config)?;
+/// Builds the compressed operator of `config` (built as `scene`, `mesh`, `disc`) `repeats` times
+/// (best time), and the dense matrix as reference where it fits; both with one pair planner,
+/// built outside the timings.
+pub fn run_compressed(
+    config: &RunConfig,
+    (scene, mesh, disc): &(Scene, Mesh, Discretization),
+    repeats: usize,
+) -> Result<CompressedBenchReport> {
+    let planner = PairPlanner::new(scene);
     let repeats = repeats.max(1);
     let mut best = f64::INFINITY;
     let mut op = None;
     for _ in 0..repeats {
         let started = Instant::now();
-        op = Some(pipeline::build_compressed(config, &scene, &mesh, &disc)?);
+        op = Some(pipeline::build_compressed(config, scene, mesh, disc, &planner)?);
         best = best.min(started.elapsed().as_secs_f64());
     }
     let op = op.expect("at least one repetition");
     let dof = disc.dof();
     let (dense_setup_seconds, max_product_rel_diff) = if dof <= DENSE_BENCH_LIMIT {
         let assembler = Assembler::new(Backend::Cpu, disc.method, config.assembly.quadrature)?;
-        let planner = PairPlanner::new(&scene);
         let mut dense_best = f64::INFINITY;
         let mut dense = None;
         for _ in 0..repeats {
             let started = Instant::now();
-            let a =
-                assembler.assemble(&scene, &mesh, &disc, &planner, &config.assembly, &|_| {})?;
+            let a = assembler.assemble(scene, mesh, disc, &planner, &config.assembly, &|_| {})?;
             dense_best = dense_best.min(started.elapsed().as_secs_f64());
             dense = Some(a.matrix);
         }
         let k = dense.expect("at least one repetition");
-        let vectors = [
-            vec![1.0; dof],
-            (0..dof).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
-            (0..dof).map(|i| (i as f64 * 1.3).cos()).collect::<Vec<f64>>(),
-        ];
-        let worst = vectors
-            .iter()
-            .map(|x| {
-                let (a, b) = (op.apply(x), k.apply(x));
-                let d = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-                d / b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE)
-            })
-            .fold(0.0, f64::max);
+        let worst = op.max_product_difference(&k);
         (Some(dense_best), Some(worst))
     } else {
         (None, None)

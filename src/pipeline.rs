@@ -617,35 +617,15 @@ impl BuiltOperator {
     }
 }
 
-/// The compressed operator of `config` for a built scene (CPU).
+/// The compressed operator of `config` for a built scene, on the CPU with `planner`; refused
+/// where the configuration needs the dense matrix (GPU backend, LU, colour bands).
 pub fn build_compressed(
     config: &RunConfig,
     scene: &Scene,
     mesh: &Mesh,
     disc: &Discretization,
+    planner: &PairPlanner,
 ) -> Result<CompressedOperator> {
-    CompressedOperator::build(
-        scene,
-        mesh,
-        disc,
-        &PairPlanner::new(scene),
-        &config.assembly,
-        &config.compression,
-        &*config.progress,
-    )
-}
-
-/// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
-/// size, the compressed operator (built once; CPU only).
-fn build_operator(
-    config: &RunConfig,
-    scene: &Scene,
-    mesh: &Mesh,
-    disc: &Discretization,
-) -> Result<BuiltOperator> {
-    if !compresses(config, disc.dof()) {
-        return Ok(BuiltOperator::Dense(assemble_timed(config, scene, mesh, disc)?));
-    }
     if config.backend != Backend::Cpu {
         return Err(Error::InvalidParameter {
             name: "backend",
@@ -672,8 +652,31 @@ fn build_operator(
                 .into(),
         });
     }
+    CompressedOperator::build(
+        scene,
+        mesh,
+        disc,
+        planner,
+        &config.assembly,
+        &config.compression,
+        &*config.progress,
+    )
+}
+
+/// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
+/// size, the compressed operator (built once, its pair planner included in the setup time, as
+/// the dense assembly's is).
+fn build_operator(
+    config: &RunConfig,
+    scene: &Scene,
+    mesh: &Mesh,
+    disc: &Discretization,
+) -> Result<BuiltOperator> {
+    if !compresses(config, disc.dof()) {
+        return Ok(BuiltOperator::Dense(assemble_timed(config, scene, mesh, disc)?));
+    }
     let started = Instant::now();
-    let op = build_compressed(config, scene, mesh, disc)?;
+    let op = build_compressed(config, scene, mesh, disc, &PairPlanner::new(scene))?;
     Ok(BuiltOperator::Compressed { op, setup_seconds: started.elapsed().as_secs_f64() })
 }
 
@@ -690,12 +693,6 @@ pub fn compresses(config: &RunConfig, dof: usize) -> bool {
         }
         choice => choice.compresses(dof),
     }
-}
-
-/// Number of unknowns of `config` (the mesh is built to count them).
-pub fn dof_of(config: &RunConfig) -> Result<usize> {
-    let (_, _, disc) = build(config)?;
-    Ok(disc.dof())
 }
 
 /// Peak resident set size of this process (`VmHWM` of /proc/self/status), in bytes.

@@ -1,9 +1,12 @@
 //! `radiosity bench`: the same matrix on each backend, timed and compared.
 
+use radiosity::discretization::Discretization;
 use radiosity::error::{Error, Result};
+use radiosity::mesh::Mesh;
 use radiosity::operator::OperatorChoice;
 use radiosity::pipeline::{self, Backend};
 use radiosity::report;
+use radiosity::scene::Scene;
 
 use super::*;
 
@@ -36,14 +39,13 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
         backends.push(b);
     }
     args.operator.apply(&mut config)?;
+    let built = pipeline::build(&config)?;
     // The compressed operator is built on the CPU only: asked for, it is benched against the
     // dense CPU assembly; under auto only a CPU-only bench of a large system switches to it.
     let gpu_named = backends.iter().any(|b| *b != Backend::Cpu);
     let compressed_bench = match config.operator {
         OperatorChoice::Compressed => true,
-        OperatorChoice::Auto => {
-            !gpu_named && pipeline::compresses(&config, pipeline::dof_of(&config)?)
-        }
+        OperatorChoice::Auto => !gpu_named && pipeline::compresses(&config, built.2.dof()),
         OperatorChoice::Dense => false,
     };
     if compressed_bench && gpu_named && args.backends.is_some() {
@@ -54,9 +56,9 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
         });
     }
     if compressed_bench {
-        return compressed(&config, args);
+        return compressed(&config, &built, args);
     }
-    let r = radiosity::bench::run(&config, &backends, args.repeats)?;
+    let r = radiosity::bench::run(&config, &built, &backends, args.repeats)?;
     if let Some(target) = &args.json {
         return report::write_json(&r, target);
     }
@@ -93,8 +95,12 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
 }
 
 /// `bench` of the compressed operator against the dense CPU assembly.
-fn compressed(config: &radiosity::pipeline::RunConfig, args: &BenchArgs) -> Result<()> {
-    let r = radiosity::bench::run_compressed(config, args.repeats)?;
+fn compressed(
+    config: &radiosity::pipeline::RunConfig,
+    built: &(Scene, Mesh, Discretization),
+    args: &BenchArgs,
+) -> Result<()> {
+    let r = radiosity::bench::run_compressed(config, built, args.repeats)?;
     if let Some(target) = &args.json {
         return report::write_json(&r, target);
     }

@@ -322,6 +322,27 @@ impl CompressedOperator {
     }
 }
 
+impl CompressedOperator {
+    /// Largest `max_i |(K_c x - K x)_i| / max_i |(K x)_i|` against the dense matrix `k` over
+    /// three vectors: ones (the row sums), one of one sign, one of both signs.
+    pub fn max_product_difference(&self, k: &crate::assembly::CollocationMatrix) -> f64 {
+        let n = k.dof();
+        let vectors: [Vec<f64>; 3] = [
+            vec![1.0; n],
+            (0..n).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
+            (0..n).map(|i| (i as f64 * 1.3).cos()).collect(),
+        ];
+        vectors
+            .iter()
+            .map(|x| {
+                let (a, b) = (self.apply(x), k.apply(x));
+                let diff = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                diff / b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE)
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
 /// Computes entries of K for blocks.
 struct Entries<'a> {
     mesh: &'a Mesh,

@@ -42,24 +42,6 @@ fn dense(c: &Case) -> CollocationMatrix {
     assemble(&c.mesh, &c.disc, &c.planner, &AssemblyOptions::default(), &|_| {}).unwrap().matrix
 }
 
-/// Largest `|K_c x - K x| / |K x|` (max norms) over a few vectors of one sign and of both signs.
-fn worst_product_difference(op: &CompressedOperator, k: &CollocationMatrix) -> f64 {
-    let n = k.dof();
-    let vectors: Vec<Vec<f64>> = vec![
-        vec![1.0; n],
-        (0..n).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
-        (0..n).map(|i| (i as f64 * 1.3).cos()).collect(),
-    ];
-    vectors
-        .iter()
-        .map(|x| {
-            let (a, b) = (op.apply(x), k.apply(x));
-            let diff = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-            diff / b.iter().fold(0.0f64, |m, v| m.max(v.abs()))
-        })
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn five_piece_products_match_the_dense_matrix_to_the_tolerance() {
     let scene = || five_piece(SurfaceParameters::default()).unwrap();
@@ -68,7 +50,7 @@ fn five_piece_products_match_the_dense_matrix_to_the_tolerance() {
         let k = dense(&c);
         for tol in [1e-4, 1e-8] {
             let op = compressed(&c, tol, 8);
-            let d = worst_product_difference(&op, &k);
+            let d = op.max_product_difference(&k);
             assert!(d <= 10.0 * tol, "{method}, tol {tol}: {d:.2e} ({:?})", op.stats);
             assert!(op.stats.far_blocks > 0 && op.stats.near_blocks > 0, "{:?}", op.stats);
             assert!(op.stats.max_rank > 0);
@@ -84,7 +66,7 @@ fn partly_visible_leaves_are_exact() {
     let k = dense(&c);
     let op = compressed(&c, 1e-13, 8);
     assert!(op.pairs.partial > 0 && op.pairs.hidden > 0, "{:?}", op.pairs);
-    let d = worst_product_difference(&op, &k);
+    let d = op.max_product_difference(&k);
     assert!(d <= 1e-12, "{d:.2e}");
 }
 
@@ -149,7 +131,7 @@ fn hidden_and_facing_away_blocks_store_nothing() {
     let c = case(scene, Method::Centroid, 2);
     let k = dense(&c);
     let op = compressed(&c, 1e-10, 8);
-    assert!(worst_product_difference(&op, &k) <= 1e-9);
+    assert!(op.max_product_difference(&k) <= 1e-9);
     assert!(op.stats.empty_blocks > 0, "{:?}", op.stats);
     // The plate hides the ceiling from the floor entirely (dense matrix).
     for (i, node) in c.disc.nodes.iter().enumerate().filter(|(_, n)| n.face == 0) {

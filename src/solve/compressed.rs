@@ -2,8 +2,10 @@
 //! products alone, since no matrix is there to factor.
 
 use super::gmres::{self, KrylovSystem};
-use super::{CLOSED_ROW_TOLERANCE, SolveOutcome, SolverOptions, check_tolerance};
-use crate::error::{Error, Result};
+use super::{
+    CLOSED_ROW_TOLERANCE, SolveOutcome, SolverOptions, check_tolerance, reject_unit_row_sums,
+};
+use crate::error::Result;
 use crate::operator::CompressedOperator;
 
 /// `I - K` with K compressed.
@@ -43,13 +45,7 @@ pub fn solve_compressed(
     if !rho.is_empty() && rho.iter().all(|&r| r == 1.0) {
         let ones = vec![1.0; k.dof()];
         let sums = k.apply(&ones);
-        let limit = CLOSED_ROW_TOLERANCE.max(10.0 * compression_tolerance);
-        if sums.iter().all(|s| (s - 1.0).abs() <= limit) {
-            return Err(Error::SingularSystem {
-                condition: f64::INFINITY,
-                reason: "every row of K sums to 1, so I - K maps constants to 0".into(),
-            });
-        }
+        reject_unit_row_sums(&sums, CLOSED_ROW_TOLERANCE.max(10.0 * compression_tolerance))?;
     }
     let g = gmres::gmres(&sys, rhs, options.tolerance)?;
     let mut u = g.x;
