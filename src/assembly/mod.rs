@@ -22,7 +22,7 @@ use crate::kernels::graded::GradedRule;
 use crate::kernels::{Affine2, Observer, exact};
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
-use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
+use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
 
 /// Evaluates the collocation integrals of one (node, element) pair.
 pub struct PairIntegrator {
@@ -255,9 +255,10 @@ pub(crate) fn assemble_row(
     }
     let scale = node.rho / PI;
     let mut stats = PairStats::default();
+    let mut hiders = RecentHiders::default();
     for face in 0..mesh.face_count() {
         let range = mesh.face_range(face);
-        let view = planner.face_view(node.position, node.normal, node.face, face);
+        let view = planner.face_view_with(node.position, node.normal, node.face, face, &mut hiders);
         if let FaceView::Skip(reason) = view {
             stats.record(&Visibility::Skip(reason), range.len() as u64);
             continue;

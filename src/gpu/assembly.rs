@@ -24,7 +24,7 @@ use crate::kernels::far_field::FarFieldRule;
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
+use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
 
 /// Upper bounds on the work of one tile, below what the device allows (for tests and tuning).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -111,9 +111,10 @@ fn plan_row(
         plan.stats = PairStats::not_reflecting_row(disc.elements.len());
         return plan;
     }
+    let mut hiders = RecentHiders::default();
     for face in 0..faces {
         let range = mesh.face_range(face);
-        let view = planner.face_view(node.position, node.normal, node.face, face);
+        let view = planner.face_view_with(node.position, node.normal, node.face, face, &mut hiders);
         if let FaceView::Skip(reason) = view {
             plan.stats.record(&Visibility::Skip(reason), range.len() as u64);
             continue;

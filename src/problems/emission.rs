@@ -16,7 +16,7 @@ use crate::geometry::{HalfPlane, PlaneFrame, clip_convex};
 use crate::kernels::{Observer, Quadratic2, exact};
 use crate::quadrature::{ImtRule, Tolerance, integrate_triangle};
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner};
+use crate::visibility::{FaceView, PairPlanner, RecentHiders};
 
 /// Accuracy settings for the emissivity integrals.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,8 +58,10 @@ pub fn emission_at(
         .par_iter()
         .map(|node| {
             let (mut integral, mut error) = (0.0, 0.0);
+            let mut hiders = RecentHiders::default();
             for (k, face) in scene.faces.iter().enumerate() {
-                let view = planner.face_view(node.position, node.normal, node.face, k);
+                let view =
+                    planner.face_view_with(node.position, node.normal, node.face, k, &mut hiders);
                 if matches!(view, FaceView::Skip(_)) {
                     continue;
                 }

@@ -228,6 +228,20 @@ impl PairPlanner {
 
     /// What the point `p` with unit normal `normal`, on face `own_face`, sees of face `face`.
     pub fn face_view(&self, p: DVec3, normal: DVec3, own_face: usize, face: usize) -> FaceView {
+        self.face_view_with(p, normal, own_face, face, &mut RecentHiders::default())
+    }
+
+    /// As [`PairPlanner::face_view`], for one of many faces seen from `p`: the occluders in
+    /// `hiders` (those that hid earlier faces from `p`) are tried before any search, and one that
+    /// hides this face joins them. The view is the same as without them.
+    pub fn face_view_with(
+        &self,
+        p: DVec3,
+        normal: DVec3,
+        own_face: usize,
+        face: usize,
+        hiders: &mut RecentHiders,
+    ) -> FaceView {
         let f = &self.faces[face];
         let own = &self.faces[own_face];
         let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
@@ -265,7 +279,8 @@ impl PairPlanner {
         };
         // Segments from p to the visible window lie in the pyramid with apex p over it, in front
         // of both faces.
-        let sides = pyramid_sides(p, f, &window);
+        let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
+        let sides = pyramid_sides(p, &corners);
         if self.occluders.acceleration == Acceleration::BoxScan {
             // The core solver's plan: every occluder in the box of the two faces and in front of
             // both, each shadow computed, in index order.
@@ -279,6 +294,17 @@ impl PairPlanner {
             return FaceView::Visible { clip, shadows };
         }
         let tol = 1e-12 * own.size.max(f.size);
+        let pieces = &self.occluders.pieces;
+        let hides = |o: usize| {
+            let piece = &pieces[o];
+            !piece.faces.contains(&own_face)
+                && !piece.faces.contains(&face)
+                && crosses_every_segment(&piece.polygon, &[p], &corners, tol)
+        };
+        if let Some(k) = hiders.list.iter().position(|&o| hides(o)) {
+            hiders.list[..=k].rotate_right(1);
+            return FaceView::Skip(SkipReason::Hidden);
+        }
         let mut volume = ViewVolume::between(&own.face.frame, &f.face.frame, tol);
         for side in &sides {
             let unit = side.normalize_or_zero();
@@ -288,7 +314,6 @@ impl PairPlanner {
         }
         // One shadow that covers the whole window hides the face (most faces of a large scene,
         // seen from most nodes): the search stops there.
-        let pieces = &self.occluders.pieces;
         let mut shadows = Vec::new();
         // The pair's list holds every occluder in the box of the two faces, a superset of those
         // in the pyramid; the same filter then finds the same ones as the tree.
@@ -299,8 +324,15 @@ impl PairPlanner {
             None => self.occluders.inside(own_face, face, &volume),
         };
         for o in found {
+            // The crossing test is cheaper than the shadow; the shadow also catches an occluder
+            // whose outline meets the window's.
+            if hides(o) {
+                hiders.remember(o);
+                return FaceView::Skip(SkipReason::Hidden);
+            }
             if let Some(s) = shadow(p, z, f, &window, &sides, &pieces[o].polygon) {
                 if covers(&s, &window) {
+                    hiders.remember(o);
                     return FaceView::Skip(SkipReason::Hidden);
                 }
                 shadows.push(s);
@@ -379,6 +411,25 @@ impl PairPlanner {
     }
 }
 
+/// The occluders that last hid a whole face from one point, most recent first: a building that
+/// hides one face of another from a node usually hides its neighbours too, so they are tried
+/// before any search ([`PairPlanner::face_view_with`]). One per point and thread.
+#[derive(Clone, Debug, Default)]
+pub struct RecentHiders {
+    list: Vec<usize>,
+}
+
+/// How many occluders [`RecentHiders`] keeps.
+const RECENT_HIDERS: usize = 8;
+
+impl RecentHiders {
+    fn remember(&mut self, occluder: usize) {
+        self.list.retain(|&o| o != occluder);
+        self.list.insert(0, occluder);
+        self.list.truncate(RECENT_HIDERS);
+    }
+}
+
 /// What an occluder does to the segments between two boxes ([`PairPlanner::shaft`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shaft {
@@ -403,16 +454,15 @@ fn crosses_every_segment(polygon: &[DVec3], from: &[DVec3], to: &[DVec3], tol: f
     }
     let normal = normal.normalize();
     let height = |p: DVec3| normal.dot(p - polygon[0]);
-    let (hf, ht): (Vec<f64>, Vec<f64>) =
-        (from.iter().map(|&p| height(p)).collect(), to.iter().map(|&p| height(p)).collect());
-    let opposite = (hf.iter().all(|&h| h > tol) && ht.iter().all(|&h| h < -tol))
-        || (hf.iter().all(|&h| h < -tol) && ht.iter().all(|&h| h > tol));
-    if !opposite {
+    let above = |points: &[DVec3]| points.iter().all(|&p| height(p) > tol);
+    let below = |points: &[DVec3]| points.iter().all(|&p| height(p) < -tol);
+    if !((above(from) && below(to)) || (below(from) && above(to))) {
         return false;
     }
-    from.iter().zip(&hf).all(|(&p, &hp)| {
-        to.iter().zip(&ht).all(|(&q, &hq)| {
-            let x = p + (q - p) * (hp / (hp - hq));
+    from.iter().all(|&p| {
+        let hp = height(p);
+        to.iter().all(|&q| {
+            let x = p + (q - p) * (hp / (hp - height(q)));
             (0..polygon.len()).all(|k| {
                 let (v, w) = (polygon[k], polygon[(k + 1) % polygon.len()]);
                 normal.dot((w - v).cross(x - v)) > tol * (w - v).length()
@@ -456,10 +506,9 @@ fn polygon_scale(poly: &[DVec2]) -> f64 {
     (hi - lo).length()
 }
 
-/// The inward normals (not normalised) of the planes through `p` and each edge of the convex
-/// `window` of face `f`: the sides of the pyramid with apex `p` over the window.
-fn pyramid_sides(p: DVec3, f: &PlannerFace, window: &[DVec2]) -> Vec<DVec3> {
-    let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
+/// The inward normals (not normalised) of the planes through `p` and each edge of a convex window
+/// (its `corners`, in space): the sides of the pyramid with apex `p` over the window.
+fn pyramid_sides(p: DVec3, corners: &[DVec3]) -> Vec<DVec3> {
     let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
     let m = corners.len();
     (0..m)
