@@ -9,8 +9,9 @@ mod polygon;
 
 pub use frame::PlaneFrame;
 pub use polygon::{
-    HalfPlane, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d, convex_contains,
-    distance_to_convex, polygon_contains, signed_area, subtract_convex, triangulate,
+    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
+    convex_contains, distance_to_convex, polygon_contains, signed_area, subtract_convex,
+    triangulate,
 };
 
 /// Vectors used throughout: glam's f64 vectors.

@@ -6,6 +6,14 @@
 //! general polygon Boolean, so the pieces are exact up to rounding of line intersections.
 
 use glam::{DVec2, DVec3};
+use smallvec::SmallVec;
+
+/// Vertices a clipped polygon holds without a heap allocation (clipping runs for every candidate
+/// occluder of every view).
+const INLINE_VERTICES: usize = 12;
+
+/// A polygon as clipping returns it.
+pub type SmallPolygon<P> = SmallVec<[P; INLINE_VERTICES]>;
 
 /// Relative tolerance (of a polygon's size) under which a vertex counts as lying on a clipping line.
 const ON_LINE: f64 = 1e-13;
@@ -105,8 +113,9 @@ pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
     if d.iter().all(|&v| v <= 0.0) {
         return None;
     }
-    let out = keep_nonnegative_side(poly, &d);
-    cleaned(out, ON_LINE * scale)
+    let mut out = SmallPolygon::new();
+    keep_nonnegative_side(poly, &d, &mut out);
+    cleaned(out.into_vec(), ON_LINE * scale)
 }
 
 /// Whether a point lies in a counter-clockwise convex polygon, boundary included up to a relative
@@ -180,7 +189,7 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
 
 /// One Sutherland–Hodgman pass: the part of the polygon where the signed distances `d` (one per
 /// vertex, snapped to 0 on the line) are non-negative, with the crossing points interpolated.
-fn keep_nonnegative_side<P>(poly: &[P], d: &[f64]) -> Vec<P>
+fn keep_nonnegative_side<P>(poly: &[P], d: &[f64], out: &mut SmallPolygon<P>)
 where
     P: Copy
         + std::ops::Add<Output = P>
@@ -188,7 +197,6 @@ where
         + std::ops::Mul<f64, Output = P>,
 {
     let n = poly.len();
-    let mut out = Vec::with_capacity(n + 2);
     for k in 0..n {
         let (p, q) = (poly[k], poly[(k + 1) % n]);
         let (dp, dq) = (d[k], d[(k + 1) % n]);
@@ -199,16 +207,23 @@ where
             out.push(p + (q - p) * (dp / (dp - dq)));
         }
     }
-    out
 }
 
-/// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`.
-/// For a convex polygon the result is convex; returns `None` when nothing with area is left.
-pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec<DVec3>> {
+/// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`,
+/// into `out` (cleared first; no allocation for small polygons: clipping runs for every candidate
+/// occluder of every view). For a convex polygon the result is convex; returns whether anything
+/// with area is left.
+pub fn clip_polygon_3d(
+    poly: &[DVec3],
+    normal: DVec3,
+    offset: f64,
+    out: &mut SmallPolygon<DVec3>,
+) -> bool {
+    out.clear();
     let (lo, hi) = bounding_box_3d(poly);
     let scale = (hi - lo).length();
     let eps = ON_LINE * scale * normal.length();
-    let d: Vec<f64> = poly
+    let d: SmallVec<[f64; INLINE_VERTICES]> = poly
         .iter()
         .map(|&p| {
             let v = normal.dot(p) + offset;
@@ -216,12 +231,13 @@ pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec
         })
         .collect();
     if d.iter().all(|&v| v <= 0.0) {
-        return None;
+        return false;
     }
     if d.iter().all(|&v| v > 0.0) {
-        return Some(poly.to_vec()); // wholly inside: nothing to cut
+        out.extend_from_slice(poly); // wholly inside: nothing to cut
+        return true;
     }
-    let mut out = keep_nonnegative_side(poly, &d);
+    keep_nonnegative_side(poly, &d, out);
     out.dedup_by(|a, b| (*a - *b).length() <= ON_LINE * scale);
     while out.len() > 1 && (out[0] - out[out.len() - 1]).length() <= ON_LINE * scale {
         out.pop();
@@ -230,10 +246,7 @@ pub fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec
         .map(|k| (out[k] - out[0]).cross(out[k + 1] - out[0]))
         .sum::<DVec3>()
         .length();
-    if out.len() < 3 || area2 <= (ON_LINE * scale).powi(2) {
-        return None;
-    }
-    Some(out)
+    out.len() >= 3 && area2 > (ON_LINE * scale).powi(2)
 }
 
 #[cfg(test)]
@@ -310,11 +323,12 @@ mod tests {
     #[test]
     fn clipping_in_3d_cuts_a_square_in_half() {
         let sq: Vec<DVec3> = square(0.0, 1.0).iter().map(|p| p.extend(1.0)).collect();
-        let half = clip_polygon_3d(&sq, DVec3::X, -0.5).unwrap();
+        let mut half = SmallPolygon::new();
+        assert!(clip_polygon_3d(&sq, DVec3::X, -0.5, &mut half));
         let area2: f64 =
             (1..half.len() - 1).map(|k| (half[k] - half[0]).cross(half[k + 1] - half[0]).z).sum();
         assert!((0.5 * area2 - 0.5).abs() < 1e-15);
-        assert!(clip_polygon_3d(&sq, DVec3::X, -2.0).is_none());
+        assert!(!clip_polygon_3d(&sq, DVec3::X, -2.0, &mut half));
     }
 }
 

@@ -233,9 +233,11 @@ impl Face {
     /// tolerance of a face (1e-9 of the larger size) and a 1e-6 angle between their normals.
     /// See [`crate::scene::Scene::coplanar`].
     pub fn is_coplanar_with(&self, other: &Face) -> bool {
+        if self.frame.normal.cross(other.frame.normal).length() >= COPLANAR_ANGLE {
+            return false; // most pairs: decided before the sizes are measured
+        }
         let tol = COPLANAR_DISTANCE * self.size().max(other.size());
-        self.frame.normal.cross(other.frame.normal).length() < COPLANAR_ANGLE
-            && other.vertices.iter().all(|&v| self.frame.height(v).abs() <= tol)
+        other.vertices.iter().all(|&v| self.frame.height(v).abs() <= tol)
             && self.vertices.iter().all(|&v| other.frame.height(v).abs() <= tol)
     }
 

@@ -30,7 +30,8 @@ pub use stats::PairStats;
 use glam::{DVec2, DVec3};
 
 use crate::geometry::{
-    HalfPlane, bounding_box, clip_convex, clip_polygon_3d, signed_area, subtract_convex,
+    HalfPlane, SmallPolygon, bounding_box, clip_convex, clip_polygon_3d, signed_area,
+    subtract_convex,
 };
 use crate::scene::Scene;
 
@@ -213,8 +214,7 @@ impl PairPlanner {
             return Shaft::Clear;
         }
         let (from, to) = (box_corners(nodes), box_corners(elements));
-        if found.any(|o| crosses_every_segment(&self.occluders.pieces[o].polygon, &from, &to, tol))
-        {
+        if found.any(|o| self.occluders.pieces[o].crosses_every_segment(&from, &to, tol, tol)) {
             Shaft::Hidden
         } else {
             Shaft::Partial
@@ -299,17 +299,20 @@ impl PairPlanner {
             let piece = &pieces[o];
             !piece.faces.contains(&own_face)
                 && !piece.faces.contains(&face)
-                && crosses_every_segment(&piece.polygon, &[p], &corners, tol)
+                && piece.crosses_every_segment(&[p], &corners, tol, -tol)
         };
         if let Some(k) = hiders.list.iter().position(|&o| hides(o)) {
             hiders.list[..=k].rotate_right(1);
             return FaceView::Skip(SkipReason::Hidden);
         }
         let mut volume = ViewVolume::between(&own.face.frame, &f.face.frame, tol);
+        // A piece that reaches into the pyramid by less than the tolerance (the faces next to
+        // the window, touching it along an edge) would shadow a sliver under the clipping's own
+        // tolerance: it is no candidate.
         for side in &sides {
             let unit = side.normalize_or_zero();
             if unit != DVec3::ZERO {
-                volume.push(unit, -unit.dot(p), -tol);
+                volume.push(unit, -unit.dot(p), tol);
             }
         }
         // One shadow that covers the whole window hides the face (most faces of a large scene,
@@ -324,8 +327,12 @@ impl PairPlanner {
             None => self.occluders.inside(own_face, face, &volume),
         };
         for o in found {
-            // The crossing test is cheaper than the shadow; the shadow also catches an occluder
-            // whose outline meets the window's.
+            // Most candidates found by boxes miss the pyramid, and a separating plane shows it;
+            // the crossing test is cheaper than the shadow, which also catches an occluder whose
+            // outline meets the window's.
+            if !pieces[o].may_shadow(p, &corners) {
+                continue;
+            }
             if hides(o) {
                 hiders.remember(o);
                 return FaceView::Skip(SkipReason::Hidden);
@@ -441,36 +448,6 @@ pub enum Shaft {
     Partial,
 }
 
-/// Whether the convex planar `polygon` crosses every segment from a point of the convex hull of
-/// `from` to one of `to`: the two sets lie strictly on opposite sides of its plane, and every
-/// segment between their corners crosses the plane inside the polygon (the crossings of all
-/// segments are the convex hull of those, central projection keeping convexity).
-fn crosses_every_segment(polygon: &[DVec3], from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
-    let normal = (1..polygon.len() - 1)
-        .map(|k| (polygon[k] - polygon[0]).cross(polygon[k + 1] - polygon[0]))
-        .fold(DVec3::ZERO, |s, n| s + n);
-    if normal.length_squared() == 0.0 {
-        return false;
-    }
-    let normal = normal.normalize();
-    let height = |p: DVec3| normal.dot(p - polygon[0]);
-    let above = |points: &[DVec3]| points.iter().all(|&p| height(p) > tol);
-    let below = |points: &[DVec3]| points.iter().all(|&p| height(p) < -tol);
-    if !((above(from) && below(to)) || (below(from) && above(to))) {
-        return false;
-    }
-    from.iter().all(|&p| {
-        let hp = height(p);
-        to.iter().all(|&q| {
-            let x = p + (q - p) * (hp / (hp - height(q)));
-            (0..polygon.len()).all(|k| {
-                let (v, w) = (polygon[k], polygon[(k + 1) % polygon.len()]);
-                normal.dot((w - v).cross(x - v)) > tol * (w - v).length()
-            })
-        })
-    })
-}
-
 /// The eight corners of a box.
 fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
     std::array::from_fn(|k| {
@@ -532,11 +509,17 @@ fn shadow(
     occluder: &[DVec3],
 ) -> Option<Vec<DVec2>> {
     let normal = f.face.frame.normal;
+    let (mut poly, mut next) = (SmallPolygon::new(), SmallPolygon::new());
     // In front of the face's plane.
-    let mut poly = clip_polygon_3d(occluder, normal, -normal.dot(f.face.frame.origin))?;
+    if !clip_polygon_3d(occluder, normal, -normal.dot(f.face.frame.origin), &mut poly) {
+        return None;
+    }
     // Inside the pyramid.
     for &side in sides {
-        poly = clip_polygon_3d(&poly, side, -side.dot(p))?;
+        if !clip_polygon_3d(&poly, side, -side.dot(p), &mut next) {
+            return None;
+        }
+        std::mem::swap(&mut poly, &mut next);
     }
     // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
     let mut projected: Vec<DVec2> = poly

@@ -19,6 +19,10 @@ pub struct Occluder {
     pub polygon: Vec<DVec3>,
     lo: DVec3,
     hi: DVec3,
+    /// Unit normal of its plane (the orientation of `polygon`).
+    normal: DVec3,
+    /// Per edge (from vertex k to k + 1), the unit normal in the plane pointing into the polygon.
+    edge_normals: Vec<DVec3>,
 }
 
 /// How candidate occluders of a view are found. All three give the same views.
@@ -157,7 +161,7 @@ fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
         };
         for polygon in polygons {
             let tol = 1e-12 * face.size();
-            let (lo, hi) = crate::geometry::bounding_box_3d(&polygon);
+            let (lo, _) = crate::geometry::bounding_box_3d(&polygon);
             let key = |c: DVec3| (c / (64.0 * tol).max(f64::MIN_POSITIVE)).round().as_i64vec3();
             let near: Vec<[i64; 3]> = neighbour_keys(key(lo));
             let same = near
@@ -169,7 +173,7 @@ fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
                 continue;
             }
             by_corner.entry(key(lo).into()).or_default().push(pieces.len());
-            pieces.push(Occluder { faces: vec![k], polygon, lo, hi });
+            pieces.push(Occluder::new(k, polygon));
         }
     }
     pieces
@@ -189,6 +193,77 @@ fn neighbour_keys(c: glam::I64Vec3) -> Vec<[i64; 3]> {
 }
 
 impl Occluder {
+    fn new(face: usize, polygon: Vec<DVec3>) -> Self {
+        let (lo, hi) = crate::geometry::bounding_box_3d(&polygon);
+        let m = polygon.len();
+        let normal = (1..m - 1)
+            .map(|k| (polygon[k] - polygon[0]).cross(polygon[k + 1] - polygon[0]))
+            .sum::<DVec3>()
+            .normalize_or_zero();
+        let edge_normals = (0..m)
+            .map(|k| normal.cross(polygon[(k + 1) % m] - polygon[k]).normalize_or_zero())
+            .collect();
+        Self { faces: vec![face], polygon, lo, hi, normal, edge_normals }
+    }
+
+    /// Whether this piece may cast a shadow of positive area seen from `p` on the convex window
+    /// with corners `corners` (in space): false when a plane separates the pyramid with apex `p`
+    /// over the window from this piece's cone from `p` (its own plane, or the plane through `p`
+    /// and one of its edges); cheaper than clipping the piece to the pyramid, which most
+    /// candidates found by boxes miss.
+    pub(super) fn may_shadow(&self, p: DVec3, corners: &[DVec3]) -> bool {
+        let origin = self.polygon[0];
+        let hp = self.normal.dot(p - origin);
+        if hp == 0.0 {
+            return true;
+        }
+        if corners.iter().all(|&c| hp * self.normal.dot(c - origin) >= 0.0) {
+            return false;
+        }
+        // Interior points x of the piece have (v_k - p) x (v_k+1 - p) . (x - p) of the sign of -hp.
+        let m = self.polygon.len();
+        !(0..m).any(|k| {
+            let n = (self.polygon[k] - p).cross(self.polygon[(k + 1) % m] - p);
+            corners.iter().all(|&c| hp * n.dot(c - p) >= 0.0)
+        })
+    }
+
+    /// Whether this piece crosses every segment from a point of the convex hull of `from` to one
+    /// of `to`: the two sets lie strictly (beyond `tol`) on opposite sides of its plane, and every
+    /// segment between their corners crosses the plane inside the polygon (the crossings of all
+    /// segments are the convex hull of those, central projection keeping convexity). A crossing
+    /// counts as inside when it is at least `edge_margin` inside each edge: positive for a strict
+    /// test, negative (the margin of a shadow covering a window) where a crossing on the outline
+    /// still hides, as from a node on the ground looking along the foot of a wall.
+    pub(super) fn crosses_every_segment(
+        &self,
+        from: &[DVec3],
+        to: &[DVec3],
+        tol: f64,
+        edge_margin: f64,
+    ) -> bool {
+        if self.normal == DVec3::ZERO {
+            return false;
+        }
+        let origin = self.polygon[0];
+        let height = |p: DVec3| self.normal.dot(p - origin);
+        let above = |points: &[DVec3]| points.iter().all(|&p| height(p) > tol);
+        let below = |points: &[DVec3]| points.iter().all(|&p| height(p) < -tol);
+        if !((above(from) && below(to)) || (below(from) && above(to))) {
+            return false;
+        }
+        from.iter().all(|&p| {
+            let hp = height(p);
+            to.iter().all(|&q| {
+                let x = p + (q - p) * (hp / (hp - height(q)));
+                self.polygon
+                    .iter()
+                    .zip(&self.edge_normals)
+                    .all(|(&v, e)| e.dot(x - v) > edge_margin)
+            })
+        })
+    }
+
     /// Centre of its bounding box.
     pub fn centre(&self) -> DVec3 {
         0.5 * (self.lo + self.hi)
