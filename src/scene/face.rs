@@ -233,10 +233,16 @@ impl Face {
     /// tolerance of a face (1e-9 of the larger size) and a 1e-6 angle between their normals.
     /// See [`crate::scene::Scene::coplanar`].
     pub fn is_coplanar_with(&self, other: &Face) -> bool {
+        self.is_coplanar_at_size(other, || self.size().max(other.size()))
+    }
+
+    /// As [`Face::is_coplanar_with`], the larger size of the two faces given (measured only for
+    /// faces with parallel normals): for callers that keep the sizes.
+    pub fn is_coplanar_at_size(&self, other: &Face, size: impl FnOnce() -> f64) -> bool {
         if self.frame.normal.cross(other.frame.normal).length() >= COPLANAR_ANGLE {
             return false; // most pairs: decided before the sizes are measured
         }
-        let tol = COPLANAR_DISTANCE * self.size().max(other.size());
+        let tol = COPLANAR_DISTANCE * size();
         other.vertices.iter().all(|&v| self.frame.height(v).abs() <= tol)
             && self.vertices.iter().all(|&v| other.frame.height(v).abs() <= tol)
     }

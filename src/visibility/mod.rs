@@ -169,7 +169,8 @@ impl PairPlanner {
 
     /// Whether faces `a` and `b` are one face or lie in one plane.
     fn same_plane(&self, a: usize, b: usize) -> bool {
-        a == b || self.faces[a].face.is_coplanar_with(&self.faces[b].face)
+        let (fa, fb) = (&self.faces[a], &self.faces[b]);
+        a == b || fa.face.is_coplanar_at_size(&fb.face, || fa.size.max(fb.size))
     }
 
     /// Occluders in the box of faces `a` and `b` and in front of both, in index order.
@@ -313,6 +314,24 @@ impl PairPlanner {
             let unit = side.normalize_or_zero();
             if unit != DVec3::ZERO {
                 volume.push(unit, -unit.dot(p), tol);
+            }
+        }
+        // Further supporting planes of the pyramid, which the boxes of the index meet: its
+        // bounding box, and the planes through a lateral edge parallel to an axis.
+        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+        volume.push_box(lo, hi, -tol);
+        for &c in &corners {
+            for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+                let n = axis.cross(c - p).normalize_or_zero();
+                let side = |q: &DVec3| n.dot(*q - p);
+                if n == DVec3::ZERO {
+                    continue;
+                }
+                if corners.iter().all(|q| side(q) >= 0.0) {
+                    volume.push(n, -n.dot(p), -tol);
+                } else if corners.iter().all(|q| side(q) <= 0.0) {
+                    volume.push(-n, n.dot(p), -tol);
+                }
             }
         }
         // One shadow that covers the whole window hides the face (most faces of a large scene,
