@@ -338,11 +338,12 @@ pub(crate) struct BenchArgs {
 pub(crate) struct ViewFactorArgs {
     #[command(flatten)]
     pub(crate) geometry: GeometryArgs,
-    /// Absolute tolerance of each F_ij (outer quadrature)
+    /// Absolute tolerance of the outer tanh-sinh rule on parts of elements that touch (separated
+    /// parts use Gauss orders fitted to 1e-13)
     #[arg(long, default_value_t = 1e-10)]
     pub(crate) tolerance: f64,
-    /// Most times an element is split into four where the outer rule's levels disagree (shadow
-    /// lines crossing it); each split costs up to 4x the time of the element
+    /// Most times a touching part is split into four where the tanh-sinh levels disagree; each
+    /// split costs up to 4x its time
     #[arg(long, default_value_t = 1)]
     pub(crate) max_depth: u32,
     /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv

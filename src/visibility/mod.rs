@@ -199,6 +199,41 @@ impl PairPlanner {
         nodes: (DVec3, DVec3),
         elements: (DVec3, DVec3),
     ) -> Shaft {
+        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
+        let mut found = self.occluders.inside(a, b, &volume).peekable();
+        if found.peek().is_none() {
+            return Shaft::Clear;
+        }
+        if found.any(|o| self.hides_shaft(o, nodes, elements, tol)) {
+            Shaft::Hidden
+        } else {
+            Shaft::Partial
+        }
+    }
+
+    /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether one
+    /// of them crosses every segment (hides the boxes from each other).
+    pub fn shaft_occluders(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+    ) -> (Vec<usize>, bool) {
+        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
+        let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
+        let hidden = found.iter().any(|&o| self.hides_shaft(o, nodes, elements, tol));
+        (found, hidden)
+    }
+
+    /// The shaft between two boxes on faces `a` and `b`, and the tolerance of its planes.
+    fn shaft_volume(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+    ) -> (ViewVolume, f64) {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
         let tol = 1e-12 * fa.size.max(fb.size);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
@@ -210,16 +245,18 @@ impl PairPlanner {
             // from outside (a plate level with the top of a wall) blocks no segment inside it.
             volume.push(-n, reach, tol);
         }
-        let mut found = self.occluders.inside(a, b, &volume).peekable();
-        if found.peek().is_none() {
-            return Shaft::Clear;
-        }
+        (volume, tol)
+    }
+
+    fn hides_shaft(
+        &self,
+        occluder: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+        tol: f64,
+    ) -> bool {
         let (from, to) = (box_corners(nodes), box_corners(elements));
-        if found.any(|o| self.occluders.pieces[o].crosses_every_segment(&from, &to, tol, tol)) {
-            Shaft::Hidden
-        } else {
-            Shaft::Partial
-        }
+        self.occluders.pieces[occluder].crosses_every_segment(&from, &to, tol, tol)
     }
 
     /// The convex occluder pieces of the scene.

@@ -268,6 +268,16 @@ impl Occluder {
     pub fn centre(&self) -> DVec3 {
         0.5 * (self.lo + self.hi)
     }
+
+    /// Unit normal of its plane.
+    pub fn normal(&self) -> DVec3 {
+        self.normal
+    }
+
+    /// Its bounding box (smallest and largest corner).
+    pub fn bounding_box(&self) -> (DVec3, DVec3) {
+        (self.lo, self.hi)
+    }
 }
 
 fn same_vertex_set(a: &[DVec3], b: &[DVec3], tol: f64) -> bool {
