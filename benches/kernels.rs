@@ -1,11 +1,12 @@
 //! The collocation integrals on the CPU, one (node, element) pair at a time: the production closed
 //! form (constant and affine weights), Lambert's contour formula, the paper's right-triangle
-//! formula, and the far-field rule. `cargo bench --bench kernels`.
+//! formula, and the far-field rule; and the constant weight four pairs at a time in vector lanes
+//! against four scalar calls. `cargo bench --bench kernels`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DVec2, DVec3};
 use radiosity::kernels::far_field::FarFieldRule;
-use radiosity::kernels::{Affine2, Observer, exact, lambert, paper_closed_form};
+use radiosity::kernels::{Affine2, Observer, exact, lambert, lanes, paper_closed_form};
 use radiosity::quadrature::ImtRule;
 use std::hint::black_box;
 
@@ -36,6 +37,14 @@ fn kernels(c: &mut Criterion) {
     });
     group.bench_function("paper right triangles (4.10), constant weight", |b| {
         b.iter(|| paper_closed_form::constant_weight(black_box(&near), &tri))
+    });
+    let observers = [near, Observer { position: DVec3::new(-0.2, 0.9, 0.1), ..near }, far, near];
+    let triangles = [tri; lanes::LANES];
+    group.bench_function("closed form, constant weight, 4 pairs scalar", |b| {
+        b.iter(|| black_box(&observers).map(|o| exact::constant_weight(&o, loops)))
+    });
+    group.bench_function("closed form, constant weight, 4 pairs in lanes", |b| {
+        b.iter(|| lanes::constant_weight(black_box(&observers), &triangles))
     });
     let rule = FarFieldRule::standard();
     group.bench_function("far-field rule, three affine weights", |b| {

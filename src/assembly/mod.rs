@@ -19,7 +19,7 @@ use crate::discretization::{Discretization, ElementFrame, Method, Node};
 use crate::error::Result;
 use crate::kernels::far_field::{self, FarFieldRule};
 use crate::kernels::graded::GradedRule;
-use crate::kernels::{Affine2, Observer, exact};
+use crate::kernels::{Affine2, Observer, exact, lanes};
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
 use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
@@ -33,6 +33,16 @@ pub struct PairIntegrator {
     /// For thin elements ([`far_field::is_thin`]) under the exact method, unless the closed forms
     /// are asked for everywhere (`far_field` off).
     subdivision: Option<FarFieldRule>,
+    /// Whether fully visible elements may be evaluated in lanes ([`PairIntegrator::full_pair`]).
+    lanes: bool,
+}
+
+/// A fully visible element's integrals, or what to evaluate with others in lanes.
+pub(crate) enum FullPair {
+    /// Already evaluated (another rule than the closed form, or nothing to see).
+    Values([f64; 3]),
+    /// The centroid method's closed form for this observer and triangle (element units).
+    Lane(Observer, [DVec2; 3]),
 }
 
 impl PairIntegrator {
@@ -47,7 +57,66 @@ impl PairIntegrator {
             far_field,
             graded,
             subdivision: options.far_field.then(FarFieldRule::standard),
+            lanes: options.lanes
+                && method == Method::Centroid
+                && options.quadrature.graded_rule().is_none(),
         }
+    }
+
+    /// Whether [`PairIntegrator::full_pair`] may hand out lanes.
+    pub(crate) fn uses_lanes(&self) -> bool {
+        self.lanes
+    }
+
+    /// As [`PairIntegrator::integrate`] for a fully visible element, except that where the
+    /// centroid method's closed form applies, the observer and triangle are handed back to be
+    /// evaluated in lanes ([`crate::kernels::lanes`]).
+    pub(crate) fn full_pair(
+        &self,
+        el: &ElementFrame,
+        basis: &[Affine2; 3],
+        p: glam::DVec3,
+        normal: glam::DVec3,
+    ) -> FullPair {
+        let full = || FullPair::Values(self.integrate(el, basis, p, normal, &Visibility::Full));
+        if !self.lanes {
+            return full();
+        }
+        let Some((obs, local, _)) = self.scaled(el, p, normal) else {
+            return FullPair::Values([0.0; 3]);
+        };
+        let thin = self.subdivision.is_some() && far_field::is_thin(&local);
+        let banded = self
+            .far_field
+            .as_ref()
+            .is_some_and(|rule| rule.band(&obs, far_field::radius(&local)).is_some());
+        if thin || banded { full() } else { FullPair::Lane(obs, local) }
+    }
+
+    /// The observer and the element in units of the element's size, or `None` when the node is
+    /// not above the element's plane.
+    fn scaled(
+        &self,
+        el: &ElementFrame,
+        p: glam::DVec3,
+        normal: glam::DVec3,
+    ) -> Option<(Observer, [DVec2; 3], f64)> {
+        // The integrals are invariant under scaling (G dS is dimensionless), so the pair is
+        // integrated in units of the element's size, a power of two (exact): no square or fourth
+        // power of a length can under- or overflow, whatever the scene's unit.
+        let unit = crate::geometry::power_of_two_unit(far_field::radius(&el.local));
+        let obs = Observer {
+            position: el.frame.to_local(p) * unit,
+            normal: el.frame.dir_to_local(normal),
+        };
+        // The pair plan decided the node is above the face's plane in the face's frame; in the
+        // element's frame (origin at its centroid) the height carries another rounding, and a
+        // face that is planar only to within its tolerance (1e-9 of its size) can put the node
+        // on the other side. Such a node is in the plane as far as the data can tell: G = 0.
+        if obs.position.z.is_nan() || obs.position.z <= 0.0 {
+            return None;
+        }
+        Some((obs, el.local.map(|v| v * unit), unit))
     }
 
     /// `∫ G φ_l` over the visible part of element `el` for each of its basis functions, seen from a
@@ -63,22 +132,9 @@ impl PairIntegrator {
         if let Visibility::Skip(_) = visibility {
             return [0.0; 3];
         }
-        // The integrals are invariant under scaling (G dS is dimensionless), so the pair is
-        // integrated in units of the element's size, a power of two (exact): no square or fourth
-        // power of a length can under- or overflow, whatever the scene's unit.
-        let unit = crate::geometry::power_of_two_unit(far_field::radius(&el.local));
-        let obs = Observer {
-            position: el.frame.to_local(p) * unit,
-            normal: el.frame.dir_to_local(normal),
-        };
-        // The pair plan decided the node is above the face's plane in the face's frame; in the
-        // element's frame (origin at its centroid) the height carries another rounding, and a
-        // face that is planar only to within its tolerance (1e-9 of its size) can put the node
-        // on the other side. Such a node is in the plane as far as the data can tell: G = 0.
-        if obs.position.z.is_nan() || obs.position.z <= 0.0 {
+        let Some((obs, local, unit)) = self.scaled(el, p, normal) else {
             return [0.0; 3];
-        }
-        let local = el.local.map(|v| v * unit);
+        };
         let basis = basis.map(|b| Affine2 { c0: b.c0, cx: b.cx / unit, cy: b.cy / unit });
         match visibility {
             Visibility::Partial(pieces) => {
@@ -256,6 +312,7 @@ pub(crate) fn assemble_row(
     let scale = node.rho / PI;
     let mut stats = PairStats::default();
     let mut hiders = RecentHiders::default();
+    let mut batch = LaneBatch::default();
     for face in 0..mesh.face_count() {
         let range = mesh.face_range(face);
         let view = planner.face_view_with(node.position, node.normal, node.face, face, &mut hiders);
@@ -272,14 +329,61 @@ pub(crate) fn assemble_row(
             if matches!(vis, Visibility::Skip(_)) {
                 continue;
             }
-            let values = integrator.integrate(el, &disc.bases[j], node.position, node.normal, &vis);
+            let values = if matches!(vis, Visibility::Full) && integrator.uses_lanes() {
+                match integrator.full_pair(el, &disc.bases[j], node.position, node.normal) {
+                    FullPair::Values(values) => values,
+                    FullPair::Lane(obs, tri) => {
+                        batch.push(j, obs, tri, row, scale);
+                        continue;
+                    }
+                }
+            } else {
+                integrator.integrate(el, &disc.bases[j], node.position, node.normal, &vis)
+            };
             let l = per as usize;
             for (c, v) in values.iter().take(l).enumerate() {
                 row[j * l + c] = scale * v;
             }
         }
     }
+    batch.flush(row, scale);
     stats
+}
+
+/// Centroid-method pairs of one row waiting to be evaluated together.
+#[derive(Default)]
+struct LaneBatch {
+    len: usize,
+    columns: [usize; lanes::LANES],
+    observers: [Observer; lanes::LANES],
+    triangles: [[DVec2; 3]; lanes::LANES],
+}
+
+impl LaneBatch {
+    /// Adds column `j`'s pair; a full batch is evaluated into `row` (times `scale`).
+    fn push(&mut self, j: usize, obs: Observer, tri: [DVec2; 3], row: &mut [f64], scale: f64) {
+        (self.columns[self.len], self.observers[self.len], self.triangles[self.len]) =
+            (j, obs, tri);
+        self.len += 1;
+        if self.len == lanes::LANES {
+            self.flush(row, scale);
+        }
+    }
+
+    /// Evaluates the waiting pairs (the empty lanes repeat the first).
+    fn flush(&mut self, row: &mut [f64], scale: f64) {
+        if self.len == 0 {
+            return;
+        }
+        for l in self.len..lanes::LANES {
+            (self.observers[l], self.triangles[l]) = (self.observers[0], self.triangles[0]);
+        }
+        let values = lanes::constant_weight(&self.observers, &self.triangles);
+        for (&j, v) in self.columns[..self.len].iter().zip(values) {
+            row[j] = scale * v;
+        }
+        self.len = 0;
+    }
 }
 
 #[cfg(test)]

@@ -129,12 +129,22 @@ pub struct AssemblyOptions {
     /// thin elements in both methods. Off: the paper's closed forms for every pair. Exact method
     /// only.
     pub far_field: bool,
+    /// Evaluate the centroid method's closed form for fully visible elements several at a time
+    /// in vector registers ([`crate::kernels::lanes`]); off: one at a time, the scalar reference
+    /// (the two agree to a few ulps).
+    pub lanes: bool,
 }
 
 impl Default for AssemblyOptions {
-    /// The exact method with 128 IMT nodes, and the far-field rule for the linear method.
+    /// The exact method with 128 IMT nodes, the far-field rule for the linear method, and the
+    /// vectorised closed forms.
     fn default() -> Self {
-        Self { quadrature: Quadrature::Exact, imt_nodes: ImtRule::PAPER_NODES, far_field: true }
+        Self {
+            quadrature: Quadrature::Exact,
+            imt_nodes: ImtRule::PAPER_NODES,
+            far_field: true,
+            lanes: true,
+        }
     }
 }
 

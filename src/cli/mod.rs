@@ -452,6 +452,7 @@ impl GeometryArgs {
                 quadrature: self.quadrature()?,
                 imt_nodes: self.imt_nodes,
                 far_field: !self.no_far_field,
+                ..Default::default()
             },
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,

@@ -27,6 +27,7 @@ pub mod exact;
 pub mod far_field;
 pub mod graded;
 pub mod lambert;
+pub mod lanes;
 mod moments;
 pub mod paper_closed_form;
 pub mod reference;
@@ -39,7 +40,7 @@ use crate::quadrature::TriangleRule;
 
 /// A collocation node seen from an element's frame: its local position (x, y, z) and unit normal
 /// (i, j, k).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Observer {
     /// Local position; `z` is the height above the element's plane.
     pub position: DVec3,

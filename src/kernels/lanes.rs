@@ -1,0 +1,209 @@
+//! The centroid method's closed form ([`super::exact::constant_weight`], eqs. 4.5 and 4.7 in edge
+//! form) for [`LANES`] (node, triangle) pairs at once. The pairs are laid out as structure of
+//! arrays and every step is a loop over the lanes without branches, so the compiler turns each
+//! into one vector instruction (AVX2 and FMA when the CPU has them, chosen at run time). The one
+//! transcendental function, the arctangent of each edge's term, is our own branch-free one (the
+//! reduction and polynomial of `shaders/math_f64.wgsl`, 1-2 ulp); everything else is the same
+//! IEEE arithmetic as the scalar form, so the two agree to a few ulps (tests below and in
+//! `assembly`). The scalar form stays the reference.
+
+use glam::DVec2;
+
+use super::Observer;
+
+/// Pairs evaluated together.
+pub const LANES: usize = 4;
+
+/// `∫_T G(P, Q) dS_Q` for each lane's observer and triangle (counter-clockwise, the observer's
+/// local coordinates, height `z > 0`).
+pub fn constant_weight(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [f64; LANES] {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: AVX2 and FMA were detected at run time just above.
+        return unsafe { constant_weight_avx2(obs, tris) };
+    }
+    constant_weight_portable(obs, tris)
+}
+
+/// [`constant_weight`] compiled for AVX2 and FMA (the same operations; no fused multiply-add is
+/// asked for, so the results are those of the portable form).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn constant_weight_avx2(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [f64; LANES] {
+    constant_weight_portable(obs, tris)
+}
+
+type Lanes = [f64; LANES];
+
+#[inline(always)]
+fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
+    std::array::from_fn(f)
+}
+
+#[inline(always)]
+fn constant_weight_portable(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> Lanes {
+    let z = lanes(|l| obs[l].position.z);
+    let z2 = lanes(|l| z[l] * z[l]);
+    let (mut m00, mut m10, mut m01) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    for k in 0..3 {
+        // Edge k from p to q, relative to the projection O of the observer.
+        let px = lanes(|l| tris[l][k].x - obs[l].position.x);
+        let py = lanes(|l| tris[l][k].y - obs[l].position.y);
+        let qx = lanes(|l| tris[l][(k + 1) % 3].x - obs[l].position.x);
+        let qy = lanes(|l| tris[l][(k + 1) % 3].y - obs[l].position.y);
+        let (dx, dy) = (lanes(|l| qx[l] - px[l]), lanes(|l| qy[l] - py[l]));
+        let len = lanes(|l| (dx[l] * dx[l] + dy[l] * dy[l]).sqrt());
+        // Unit tangent e and outward normal ν = (e_y, -e_x); a zero-length edge adds nothing.
+        let (ex, ey) = (lanes(|l| dx[l] / len[l]), lanes(|l| dy[l] / len[l]));
+        let h = lanes(|l| 0.5 * ((px[l] + qx[l]) * ey[l] + (py[l] + qy[l]) * -ex[l]));
+        let ta = lanes(|l| px[l] * ex[l] + py[l] * ey[l]);
+        let tb = lanes(|l| qx[l] * ex[l] + qy[l] * ey[l]);
+        let s2 = lanes(|l| h[l] * h[l] + z2[l]);
+        let s = lanes(|l| s2[l].sqrt());
+        // atan(tb/S) - atan(ta/S) as one atan2 of (S len, S² + ta tb): S len > 0.
+        let angle = atan2_positive_y(lanes(|l| s[l] * len[l]), lanes(|l| s2[l] + ta[l] * tb[l]));
+        for l in 0..LANES {
+            let a = if len[l] > 0.0 { angle[l] / s[l] } else { 0.0 };
+            m00[l] += 0.5 * h[l] * a;
+            m10[l] -= 0.5 * z[l] * ey[l] * a;
+            m01[l] -= 0.5 * z[l] * -ex[l] * a;
+        }
+    }
+    lanes(|l| {
+        let n = obs[l].normal;
+        -n.z * m00[l] + n.x * m10[l] + n.y * m01[l]
+    })
+}
+
+/// `atan2(y, x)` for `y > 0` (a result in (0, π)): `atan(y/|x|)`, reflected for `x < 0`.
+#[inline(always)]
+fn atan2_positive_y(y: Lanes, x: Lanes) -> Lanes {
+    const PI_HI: f64 = std::f64::consts::PI;
+    const PI_LO: f64 = 1.2246467991473532e-16;
+    let r = atan_positive(lanes(|l| y[l] / x[l].abs()));
+    lanes(|l| if x[l] < 0.0 { (PI_HI - r[l]) + PI_LO } else { r[l] })
+}
+
+/// `atan(a)` for `a >= 0` (infinity included): reduced to `|t| <= 7/16` by
+/// `t = (a - c)/(1 + c a)`, c in {0, 1/2, 1, 3/2, inf} (breakpoints 7/16, 11/16, 19/16, 39/16),
+/// written with small integer coefficients so that every lane runs one division; then
+/// `atan(t) = t + t u P(u)`, `u = t²`, P a degree-11 near-minimax fit on [0, (7/16)²].
+#[inline(always)]
+fn atan_positive(a: Lanes) -> Lanes {
+    // (n1, n0, d0, d1, atan(c) high, atan(c) low) per interval.
+    const REDUCTIONS: [[f64; 6]; 5] = [
+        [1.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+        [2.0, 1.0, 2.0, 1.0, 0.4636476090008061, 2.2698777452961687e-17],
+        [1.0, 1.0, 1.0, 1.0, std::f64::consts::FRAC_PI_4, 3.061616997868383e-17],
+        [2.0, 3.0, 2.0, 3.0, 0.982793723247329, 1.3903311031230998e-17],
+        [0.0, 1.0, 0.0, 1.0, std::f64::consts::FRAC_PI_2, 6.123233995736766e-17],
+    ];
+    const BREAKS: [f64; 4] = [0.4375, 0.6875, 1.1875, 2.4375];
+    // P's coefficients from the highest degree down.
+    const P: [f64; 12] = [
+        0.014773184616983806,
+        -0.033128134256069586,
+        0.04492259293193656,
+        -0.05216679739313656,
+        0.05876946456755061,
+        -0.06666241923359964,
+        0.07692285554889286,
+        -0.09090908355602592,
+        0.11111111096645038,
+        -0.14285714285566806,
+        0.1999999999999941,
+        -0.3333333333333333,
+    ];
+    // Infinity as the largest argument that matters: beyond 1e300, atan is π/2 to rounding
+    // (t = -1/a below), and 0·a stays 0.
+    let a = lanes(|l| a[l].min(1e300));
+    let mut c = [REDUCTIONS[0]; LANES];
+    for (k, &b) in BREAKS.iter().enumerate() {
+        for l in 0..LANES {
+            if a[l] >= b {
+                c[l] = REDUCTIONS[k + 1];
+            }
+        }
+    }
+    let t = lanes(|l| (c[l][0] * a[l] - c[l][1]) / (c[l][2] + c[l][3] * a[l]));
+    let u = lanes(|l| t[l] * t[l]);
+    let mut p = [P[0]; LANES];
+    for &coefficient in &P[1..] {
+        p = lanes(|l| coefficient + u[l] * p[l]);
+    }
+    lanes(|l| c[l][4] + (t[l] + (t[l] * u[l] * p[l] + c[l][5])))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use rand::{Rng, SeedableRng};
+
+    use super::*;
+    use crate::kernels::exact;
+
+    #[test]
+    fn arctangent_is_within_two_ulps_of_the_library() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut worst = 0.0f64;
+        for k in 0..200_000 {
+            // Log-uniform over 1e-12 .. 1e12, and the breakpoints' neighbourhoods.
+            let a: f64 = if k % 2 == 0 {
+                10f64.powf(rng.random_range(-12.0..12.0))
+            } else {
+                [0.4375, 0.6875, 1.1875, 2.4375][k % 4] * (1.0 + rng.random_range(-1e-3..1e-3))
+            };
+            let want = a.atan();
+            let got = atan_positive([a; LANES])[0];
+            let ulp = f64::EPSILON * want.abs();
+            worst = worst.max((got - want).abs() / ulp);
+        }
+        assert!(worst <= 2.0, "{worst} ulp");
+        assert_eq!(atan_positive([f64::INFINITY; LANES])[0], std::f64::consts::FRAC_PI_2);
+        let y = [1.0, 1e-300, 3.0, 1.0];
+        let x = [-1.0, -1.0, 0.0, -1e-300];
+        let got = atan2_positive_y(y, x);
+        for l in 0..LANES {
+            let want = y[l].atan2(x[l]);
+            assert!((got[l] - want).abs() <= 2.0 * f64::EPSILON * want, "{} vs {want}", got[l]);
+        }
+    }
+
+    #[test]
+    fn lanes_agree_with_the_scalar_closed_form() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let mut worst = 0.0f64;
+        for _ in 0..20_000 {
+            let mut obs = [Observer { position: DVec3::Z, normal: DVec3::Z }; LANES];
+            let mut tris = [[DVec2::ZERO; 3]; LANES];
+            for l in 0..LANES {
+                let v = |rng: &mut rand::rngs::StdRng| {
+                    DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+                };
+                let mut t = [v(&mut rng), v(&mut rng), v(&mut rng)];
+                if (t[1] - t[0]).perp_dot(t[2] - t[0]) < 0.0 {
+                    t.swap(1, 2);
+                }
+                // Heights from far above down to 1e-6 of the triangle's size, anywhere around.
+                let z = 10f64.powf(rng.random_range(-6.0..1.5));
+                let position =
+                    DVec3::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0), z);
+                let normal = DVec3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                )
+                .normalize();
+                (obs[l], tris[l]) = (Observer { position, normal }, t);
+            }
+            let got = constant_weight(&obs, &tris);
+            for l in 0..LANES {
+                let want = exact::constant_weight(&obs[l], [&tris[l][..]]);
+                // The edge terms are angles of order 1 whatever the value (which cancels to
+                // O(z) near the plane): the rounding is absolute, a few ulps of π.
+                worst = worst.max((got[l] - want).abs());
+            }
+        }
+        assert!(worst < 4e-15, "{worst:e}");
+    }
+}
