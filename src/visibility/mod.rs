@@ -318,8 +318,8 @@ impl PairPlanner {
         // Segments from p to the visible window lie in the pyramid with apex p over it, in front
         // of both faces.
         let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
-        let sides = pyramid_sides(p, &corners);
         if self.occluders.acceleration == Acceleration::BoxScan {
+            let sides = pyramid_sides(p, &corners);
             // The core solver's plan: every occluder in the box of the two faces and in front of
             // both, each shadow computed, in index order.
             let shadows = self
@@ -343,7 +343,13 @@ impl PairPlanner {
             hiders.list[..=k].rotate_right(1);
             return FaceView::Skip(SkipReason::Hidden);
         }
-        let mut volume = ViewVolume::between(&own.face.frame, &f.face.frame, tol);
+        // The planes that reject most boxes of the index first: the pyramid's bounding box,
+        // its sides, the two faces' planes, and the planes through a lateral edge parallel to
+        // an axis.
+        let sides = pyramid_sides(p, &corners);
+        let mut volume = ViewVolume::default();
+        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+        volume.push_box(lo, hi, -tol);
         // A piece that reaches into the pyramid by less than the tolerance (the faces next to
         // the window, touching it along an edge) would shadow a sliver under the clipping's own
         // tolerance: it is no candidate.
@@ -353,10 +359,8 @@ impl PairPlanner {
                 volume.push(unit, -unit.dot(p), tol);
             }
         }
-        // Further supporting planes of the pyramid, which the boxes of the index meet: its
-        // bounding box, and the planes through a lateral edge parallel to an axis.
-        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
-        volume.push_box(lo, hi, -tol);
+        volume.push_front_of(&own.face.frame, tol);
+        volume.push_front_of(&f.face.frame, tol);
         for &c in &corners {
             for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
                 let n = axis.cross(c - p).normalize_or_zero();

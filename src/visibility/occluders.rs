@@ -101,8 +101,15 @@ pub(super) struct ViewVolume {
 impl ViewVolume {
     /// The region in front of both planes (heights above `tol`).
     pub(super) fn between(fa: &PlaneFrame, fb: &PlaneFrame, tol: f64) -> Self {
-        let plane = |f: &PlaneFrame| (f.normal, -f.normal.dot(f.origin), tol);
-        Self { planes: vec![plane(fa), plane(fb)] }
+        let mut volume = Self::default();
+        volume.push_front_of(fa, tol);
+        volume.push_front_of(fb, tol);
+        volume
+    }
+
+    /// Adds the region in front of a plane (heights above `tol`).
+    pub(super) fn push_front_of(&mut self, frame: &PlaneFrame, tol: f64) {
+        self.push(frame.normal, -frame.normal.dot(frame.origin), tol);
     }
 
     /// Adds the half-space `n·x + d > margin`.
