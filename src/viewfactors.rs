@@ -24,14 +24,15 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairIntegrator};
+use crate::assembly::{AssemblyOptions, FullPair, PairIntegrator};
 use crate::discretization::{Discretization, Method};
 use crate::error::Result;
 use crate::geometry::{self, SmallPolygon, bounding_box_3d};
+use crate::kernels::{Observer, lanes};
 use crate::mesh::{Element, Mesh};
 use crate::quadrature::TriangleRule;
 use crate::scene::Scene;
@@ -332,7 +333,14 @@ impl Context<'_> {
                 }
             }
         }
-        let part = Part { target: box_j, poles, g: &|p| self.point_to_element(i, j, p, sight) };
+        let g = |p| self.point_to_element(i, j, p, sight);
+        let whole = |points: &[(DVec3, f64)]| self.whole_sum(i, j, points);
+        let part = Part {
+            target: box_j,
+            poles,
+            g: &g,
+            whole: (sight == Sight::Whole).then_some(&whole as &dyn Fn(&[(DVec3, f64)]) -> f64),
+        };
         let mut sum = 0.0;
         for piece in &pieces {
             for k in 1..piece.len() - 1 {
@@ -355,6 +363,29 @@ impl Context<'_> {
             },
         };
         self.integrator.integrate(el, &self.disc.bases[j], p, normal, &vis)[0] / PI
+    }
+
+    /// `Σ w (1/π) ∫ G` over element `j`, seen whole from each point `p` of element `i` (with its
+    /// weight `w`): the closed forms four points at a time in vector lanes.
+    fn whole_sum(&self, i: usize, j: usize, points: &[(DVec3, f64)]) -> f64 {
+        let (el, basis) = (&self.disc.elements[j], &self.disc.bases[j]);
+        let normal = self.scene.faces[self.mesh.elements()[i].face].frame.normal;
+        let mut sum = 0.0;
+        let mut waiting: Vec<(f64, Observer, [DVec2; 3])> = Vec::with_capacity(points.len());
+        for &(p, w) in points {
+            match self.integrator.full_pair(el, basis, p, normal) {
+                FullPair::Values(values) => sum += w * values[0],
+                FullPair::Lane(obs, tri) => waiting.push((w, obs, tri)),
+            }
+        }
+        for chunk in waiting.chunks(lanes::LANES) {
+            let at = |l: usize| &chunk[l.min(chunk.len() - 1)];
+            let observers = std::array::from_fn(|l| at(l).1);
+            let triangles = std::array::from_fn(|l| at(l).2);
+            let values = lanes::constant_weight(&observers, &triangles);
+            sum += chunk.iter().zip(values).map(|(c, v)| c.0 * v).sum::<f64>();
+        }
+        sum / PI
     }
 
     /// `∫_t g dA` over the triangle `t`: tanh-sinh where it touches an obstacle (d log d
@@ -392,8 +423,12 @@ impl Context<'_> {
             Some(q) => {
                 let rule = &rules.gauss[q];
                 tally.evaluations += rule.points.len() as u64;
-                let sum: f64 =
-                    rule.points.iter().map(|&[u, v, w]| w * g(a + (b - a) * u + (c - a) * v)).sum();
+                let points =
+                    rule.points.iter().map(|&[u, v, w]| (a + (b - a) * u + (c - a) * v, w));
+                let sum = match part.whole {
+                    Some(whole) => whole(&points.collect::<Vec<_>>()),
+                    None => points.map(|(p, w)| w * g(p)).sum(),
+                };
                 2.0 * area * sum
             }
             None => {
@@ -416,6 +451,9 @@ struct Part<'a> {
     poles: Vec<(DVec3, DVec3, f64)>,
     /// The point-to-element integral.
     g: &'a dyn Fn(DVec3) -> f64,
+    /// Where the other element is seen whole from everywhere: `Σ w g(p)` over weighted points,
+    /// evaluated together.
+    whole: Option<&'a dyn Fn(&[(DVec3, f64)]) -> f64>,
 }
 
 impl Part<'_> {
