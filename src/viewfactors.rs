@@ -339,7 +339,7 @@ impl Context<'_> {
             target: box_j,
             poles,
             g: &g,
-            whole: (sight == Sight::Whole).then_some(&whole as &dyn Fn(&[(DVec3, f64)]) -> f64),
+            whole: (sight == Sight::Whole).then_some(&whole as &WeightedSum),
         };
         let mut sum = 0.0;
         for piece in &pieces {
@@ -453,8 +453,11 @@ struct Part<'a> {
     g: &'a dyn Fn(DVec3) -> f64,
     /// Where the other element is seen whole from everywhere: `Σ w g(p)` over weighted points,
     /// evaluated together.
-    whole: Option<&'a dyn Fn(&[(DVec3, f64)]) -> f64>,
+    whole: Option<&'a WeightedSum<'a>>,
 }
+
+/// `Σ w g(p)` over weighted points `(p, w)`.
+type WeightedSum<'a> = dyn Fn(&[(DVec3, f64)]) -> f64 + 'a;
 
 impl Part<'_> {
     /// A lower bound of the distance from the outer triangle `t` to the points where the
