@@ -21,7 +21,9 @@
 //                          entry, point count) and the bands' (u, v, w) points on the unit triangle
 //                          (kernels::far_field); read by all invocations alike, hence a uniform
 //   4 exceptions  storage  4 u32 per exception (row, element, first piece, piece count), then
-//                          2 u32 per piece (first vertex, vertex count) from params.piece_offset
+//                          2 u32 per piece (first vertex, vertex count) from params.piece_offset;
+//                          for `assemble_pairs`, 4 u32 per listed pair (view, element, first
+//                          piece, piece count or WHOLE_ELEMENT)
 //   5 vertices    storage  x, y per vertex of the visible pieces, relative to their element's centroid
 //   6 out         storage  rows x dof of K (rho/pi included), row-major
 //   7 near        storage  the deferred pairs: an atomic count, indirect dispatch arguments, then
@@ -36,6 +38,10 @@
 // invocation. `assemble_pieces` then runs one invocation per exception (1-D index linearised by
 // params.stride) and overwrites that pair's entries with the integral over its visible pieces
 // (zero pieces: a hidden pair).
+//
+// `assemble_pairs` serves the compressed operator (src/operator): one invocation per listed pair
+// of any nodes and elements, views indexed by the pair's record rather than by (row, face), and
+// the values written one after another (out[pair * PER_ELEMENT + l]).
 
 const VIEW_STRIDE: u32 = 8u;
 const ELEMENT_STRIDE: u32 = 18u;
@@ -111,7 +117,12 @@ fn relative_to(obs: Observer, el: u32) -> Observer {
 }
 
 fn observer(row: u32, face: u32) -> Observer {
-    let b = (row * params.faces + face) * VIEW_STRIDE;
+    return view(row * params.faces + face);
+}
+
+// The view at `index` of the views binding.
+fn view(index: u32) -> Observer {
+    let b = index * VIEW_STRIDE;
     return Observer(
         vec3<real>(views[b], views[b + 1u], views[b + 2u]),
         vec3<real>(views[b + 3u], views[b + 4u], views[b + 5u]),
@@ -283,8 +294,7 @@ fn combine(m: Moments, obs: Observer, w: vec3<real>) -> real {
         + i * w.y * zm20 + (i * w.z + j * w.y) * zm11 + j * w.z * zm02;
 }
 
-fn write_pair(row: u32, el: u32, m: Moments, obs: Observer) {
-    let base = row * params.dof + el * PER_ELEMENT;
+fn write_pair(base: u32, el: u32, m: Moments, obs: Observer) {
     for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
         out[base + l] = obs.scale * combine(m, obs, basis(el, l));
     }
@@ -350,8 +360,7 @@ fn far_field_triangle(band: u32, obs: Observer, el: u32, a: vec2<real>, b: vec2<
     return jacobian * vec3<real>(dot(basis(el, 0u), g), dot(basis(el, 1u), g), dot(basis(el, 2u), g));
 }
 
-fn write_values(row: u32, el: u32, scale: real, values: vec3<real>) {
-    let base = row * params.dof + el * PER_ELEMENT;
+fn write_values(base: u32, scale: real, values: vec3<real>) {
     for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
         out[base + l] = scale * values[l];
     }
@@ -373,13 +382,8 @@ fn assemble_full(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let obs = relative_to(seen, el);
-    let band = far_field_band(obs, el);
-    if (band > 0u) {
-        let values = far_field_triangle(band, obs, el, element_vertex(el, 0u), element_vertex(el, 1u), element_vertex(el, 2u));
-        write_values(row, el, obs.scale, values);
-        return;
-    }
-    if (PER_ELEMENT == 3u && needs_log(obs, el)) {
+    let base = row * params.dof + el * PER_ELEMENT;
+    if (PER_ELEMENT == 3u && far_field_band(obs, el) == 0u && needs_log(obs, el)) {
         let slot = atomicAdd(&near.count, 1u);
         if (slot < params.near_capacity) {
             near.pairs[2u * slot] = row;
@@ -387,11 +391,22 @@ fn assemble_full(@builtin(global_invocation_id) gid: vec3<u32>) {
             return;
         }
     }
-    closed_form_pair(row, el, obs);
+    whole_element(base, el, obs);
+}
+
+// The whole element: the far-field rule where the node is far enough, else the closed forms.
+fn whole_element(base: u32, el: u32, obs: Observer) {
+    let band = far_field_band(obs, el);
+    if (band > 0u) {
+        let values = far_field_triangle(band, obs, el, element_vertex(el, 0u), element_vertex(el, 1u), element_vertex(el, 2u));
+        write_values(base, obs.scale, values);
+        return;
+    }
+    closed_form_pair(base, el, obs);
 }
 
 // The closed forms over the whole element (exact::constant_weight, exact::affine_weights).
-fn closed_form_pair(row: u32, el: u32, obs: Observer) {
+fn closed_form_pair(base: u32, el: u32, obs: Observer) {
     let o = obs.position.xy;
     let need_log = needs_log(obs, el);
     let second_order = PER_ELEMENT == 3u;
@@ -399,7 +414,7 @@ fn closed_form_pair(row: u32, el: u32, obs: Observer) {
     for (var k = 0u; k < 3u; k = k + 1u) {
         add_edge(&m, element_vertex(el, k) - o, element_vertex(el, (k + 1u) % 3u) - o, obs.position.z, second_order, need_log);
     }
-    write_pair(row, el, m, obs);
+    write_pair(base, el, m, obs);
 }
 
 @compute @workgroup_size(1)
@@ -418,7 +433,7 @@ fn assemble_near(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let row = near.pairs[2u * index];
     let el = near.pairs[2u * index + 1u];
-    closed_form_pair(row, el, relative_to(observer(row, element_face(el)), el));
+    closed_form_pair(row * params.dof + el * PER_ELEMENT, el, relative_to(observer(row, element_face(el)), el));
 }
 
 @compute @workgroup_size(64)
@@ -429,9 +444,33 @@ fn assemble_pieces(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let row = exceptions[4u * index];
     let el = exceptions[4u * index + 1u];
-    let first_piece = exceptions[4u * index + 2u];
-    let piece_count = exceptions[4u * index + 3u];
     let obs = relative_to(observer(row, element_face(el)), el);
+    visible_pieces(row * params.dof + el * PER_ELEMENT, el, obs, exceptions[4u * index + 2u], exceptions[4u * index + 3u]);
+}
+
+// A piece count that stands for the whole element in `assemble_pairs`.
+const WHOLE_ELEMENT: u32 = 0xffffffffu;
+
+// One invocation per listed pair (1-D index linearised by params.stride): record
+// (view, element, first piece, piece count or WHOLE_ELEMENT), its values to out[index * PER_ELEMENT].
+@compute @workgroup_size(64)
+fn assemble_pairs(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let index = gid.x + gid.y * params.stride;
+    if (index >= params.exception_count) {
+        return;
+    }
+    let el = exceptions[4u * index + 1u];
+    let obs = relative_to(view(exceptions[4u * index]), el);
+    let piece_count = exceptions[4u * index + 3u];
+    if (piece_count == WHOLE_ELEMENT) {
+        whole_element(index * PER_ELEMENT, el, obs);
+    } else {
+        visible_pieces(index * PER_ELEMENT, el, obs, exceptions[4u * index + 2u], piece_count);
+    }
+}
+
+// The integral over the visible pieces of an element (none: a hidden pair), to out[base..].
+fn visible_pieces(base: u32, el: u32, obs: Observer, first_piece: u32, piece_count: u32) {
     let band = far_field_band(obs, el);
     if (band > 0u) {
         var values = vec3<real>(0.0, 0.0, 0.0);
@@ -446,7 +485,7 @@ fn assemble_pieces(@builtin(global_invocation_id) gid: vec3<u32>) {
                 values = values + far_field_triangle(band, obs, el, v0, va, vb);
             }
         }
-        write_values(row, el, obs.scale, values);
+        write_values(base, obs.scale, values);
         return;
     }
     let o = obs.position.xy;
@@ -464,5 +503,5 @@ fn assemble_pieces(@builtin(global_invocation_id) gid: vec3<u32>) {
             add_edge(&m, va - o, vb - o, obs.position.z, second_order, need_log);
         }
     }
-    write_pair(row, el, m, obs);
+    write_pair(base, el, m, obs);
 }

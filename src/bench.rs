@@ -174,11 +174,16 @@ pub fn run(
 }
 
 /// `bench --operator compressed`: the compressed operator's build timed (best of `repeats`)
-/// against the dense assembly on the CPU where the dense matrix fits, and their products compared.
+/// against the dense assembly on the CPU where the dense matrix fits, and their products compared;
+/// with a second backend (the GPU) its build timed against the first and their products compared.
 #[derive(Clone, Debug, Serialize)]
 pub struct CompressedBenchReport {
     /// Scene.
     pub scene: String,
+    /// Backend of the build the main figures describe (`cpu`, or `gpu` when only it is named).
+    pub backend: &'static str,
+    /// Its GPU (name and backend), when the GPU built it.
+    pub device: Option<String>,
     /// Method.
     pub method: &'static str,
     /// Elements.
@@ -204,33 +209,66 @@ pub struct CompressedBenchReport {
     /// Largest `max_i |(K_c x - K x)_i| / max_i |(K x)_i|` over three vectors (ones, one of one
     /// sign, one of both signs), against the dense matrix.
     pub max_product_rel_diff: Option<f64>,
+    /// The same operator built on the GPU, when both backends are benched.
+    pub gpu: Option<CompressedGpuBench>,
     /// Peak resident memory of the process.
     pub peak_rss_bytes: Option<u64>,
     /// Repetitions.
     pub repeats: usize,
 }
 
+/// The compressed operator built on the GPU beside the CPU's.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompressedGpuBench {
+    /// The GPU (name and backend).
+    pub device: Option<String>,
+    /// Precision of its kernels.
+    pub precision: &'static str,
+    /// Best build time.
+    pub setup_seconds: f64,
+    /// CPU build time / GPU build time, measured in this run.
+    pub speedup: f64,
+    /// Largest relative difference of its products from the CPU-built operator's (three
+    /// vectors, as `max_product_rel_diff`).
+    pub max_product_rel_diff: f64,
+}
+
 /// The dense reference of [`run_compressed`] runs up to this many unknowns (1.2 GB).
 pub const DENSE_BENCH_LIMIT: usize = 12_288;
 
-/// Builds the compressed operator of `config` (built as `scene`, `mesh`, `disc`) `repeats` times
-/// (best time), and the dense matrix as reference where it fits; both with one pair planner,
-/// built outside the timings.
+/// Builds the compressed operator of `config` (built as `scene`, `mesh`, `disc`) on each of
+/// `backends` (one or two: the CPU, then the GPU) `repeats` times (best time), and the dense
+/// matrix on the CPU as reference where it fits; all with one pair planner, built outside the
+/// timings.
 pub fn run_compressed(
     config: &RunConfig,
     (scene, mesh, disc): &(Scene, Mesh, Discretization),
+    backends: &[Backend],
     repeats: usize,
 ) -> Result<CompressedBenchReport> {
     let planner = PairPlanner::new(scene);
     let repeats = repeats.max(1);
-    let mut best = f64::INFINITY;
-    let mut op = None;
-    for _ in 0..repeats {
-        let started = Instant::now();
-        op = Some(pipeline::build_compressed(config, scene, mesh, disc, &planner)?);
-        best = best.min(started.elapsed().as_secs_f64());
+    let mut builds = Vec::new();
+    for &backend in backends {
+        let assembler = Assembler::new(backend, disc.method, config.assembly.quadrature)?;
+        let mut best = f64::INFINITY;
+        let mut op = None;
+        for _ in 0..repeats {
+            let started = Instant::now();
+            op = Some(pipeline::build_compressed(config, &assembler, scene, mesh, disc, &planner)?);
+            best = best.min(started.elapsed().as_secs_f64());
+        }
+        builds.push((backend, op.expect("at least one repetition"), best));
     }
-    let op = op.expect("at least one repetition");
+    let mut builds = builds.into_iter();
+    let (backend, op, best) = builds.next().expect("at least one backend");
+    let gpu = builds.next().map(|(other, other_op, seconds)| CompressedGpuBench {
+        device: other_op.device.clone(),
+        precision: other.precision().name(),
+        setup_seconds: seconds,
+        speedup: best / seconds,
+        max_product_rel_diff: other_op.max_product_difference(&|x| op.apply(x)),
+    });
     let dof = disc.dof();
     let (dense_setup_seconds, max_product_rel_diff) = if dof <= DENSE_BENCH_LIMIT {
         let assembler = Assembler::new(Backend::Cpu, disc.method, config.assembly.quadrature)?;
@@ -243,7 +281,7 @@ pub fn run_compressed(
             dense = Some(a.matrix);
         }
         let k = dense.expect("at least one repetition");
-        let worst = op.max_product_difference(&k);
+        let worst = op.max_product_difference(&|x| k.apply(x));
         (Some(dense_best), Some(worst))
     } else {
         (None, None)
@@ -253,6 +291,8 @@ pub fn run_compressed(
         method: config.method.name(),
         n: mesh.len(),
         dof,
+        backend: backend.name(),
+        device: op.device.clone(),
         operator: "compressed",
         compression_tolerance: config.compression.tolerance,
         setup_seconds: best,
@@ -261,6 +301,7 @@ pub fn run_compressed(
         dense_setup_seconds,
         speedup: dense_setup_seconds.map(|d| d / best),
         max_product_rel_diff,
+        gpu,
         peak_rss_bytes: pipeline::peak_rss_bytes(),
         repeats,
     })

@@ -575,7 +575,7 @@ struct TimedAssembly {
 /// The operator a run solves with.
 enum BuiltOperator {
     Dense(TimedAssembly),
-    Compressed { op: CompressedOperator, setup_seconds: f64 },
+    Compressed { op: CompressedOperator, setup_seconds: f64, preparation_seconds: f64 },
 }
 
 /// What a report says of the operator.
@@ -603,11 +603,11 @@ impl BuiltOperator {
                 operator_bytes: 8 * (dof as u64) * (dof as u64),
                 blocks: None,
             },
-            Self::Compressed { op, setup_seconds } => OperatorSummary {
+            Self::Compressed { op, setup_seconds, preparation_seconds } => OperatorSummary {
                 operator: "compressed",
-                device: None,
+                device: op.device.clone(),
                 setup_seconds: *setup_seconds,
-                preparation_seconds: 0.0,
+                preparation_seconds: *preparation_seconds,
                 pairs: op.pairs,
                 compression_tolerance: Some(config.compression.tolerance),
                 operator_bytes: op.stats.operator_bytes,
@@ -617,24 +617,17 @@ impl BuiltOperator {
     }
 }
 
-/// The compressed operator of `config` for a built scene, on the CPU with `planner`; refused
-/// where the configuration needs the dense matrix (GPU backend, LU, colour bands).
+/// The compressed operator of `config` for a built scene with `planner`, its entries evaluated
+/// by `assembler` (the CPU, or the GPU's pair kernel in batches); refused where the
+/// configuration needs the dense matrix (LU, colour bands).
 pub fn build_compressed(
     config: &RunConfig,
+    assembler: &Assembler,
     scene: &Scene,
     mesh: &Mesh,
     disc: &Discretization,
     planner: &PairPlanner,
 ) -> Result<CompressedOperator> {
-    if config.backend != Backend::Cpu {
-        return Err(Error::InvalidParameter {
-            name: "backend",
-            value: config.backend.name().into(),
-            reason: "the compressed operator is built on the CPU backend only; use the CPU \
-                     backend, or the dense operator on the GPU"
-                .into(),
-        });
-    }
     if !config.bands.is_empty() {
         return Err(Error::InvalidParameter {
             name: "bands",
@@ -652,15 +645,22 @@ pub fn build_compressed(
                 .into(),
         });
     }
-    CompressedOperator::build(
+    let device = match assembler {
+        Assembler::Cpu => None,
+        Assembler::Gpu(g) => Some(gpu::PairEvaluator::new(g, scene, disc, &config.assembly)?),
+    };
+    let mut op = CompressedOperator::build(
         scene,
         mesh,
         disc,
         planner,
         &config.assembly,
         &config.compression,
+        device.as_ref(),
         &*config.progress,
-    )
+    )?;
+    op.device = assembler.device();
+    Ok(op)
 }
 
 /// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
@@ -676,18 +676,21 @@ fn build_operator(
         return Ok(BuiltOperator::Dense(assemble_timed(config, scene, mesh, disc)?));
     }
     let started = Instant::now();
-    let op = build_compressed(config, scene, mesh, disc, &PairPlanner::new(scene))?;
-    Ok(BuiltOperator::Compressed { op, setup_seconds: started.elapsed().as_secs_f64() })
+    let assembler = Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
+    let preparation_seconds = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let op = build_compressed(config, &assembler, scene, mesh, disc, &PairPlanner::new(scene))?;
+    let setup_seconds = started.elapsed().as_secs_f64();
+    Ok(BuiltOperator::Compressed { op, setup_seconds, preparation_seconds })
 }
 
 /// Whether `config` stores the compressed operator for `dof` unknowns: when asked for, or under
-/// [`OperatorChoice::Auto`] above its size unless the GPU backend, LU or colour bands (which need
-/// the dense matrix) are asked for.
+/// [`OperatorChoice::Auto`] above its size unless LU or colour bands (which need the dense
+/// matrix) are asked for.
 pub fn compresses(config: &RunConfig, dof: usize) -> bool {
     match config.operator {
         OperatorChoice::Auto => {
             config.operator.compresses(dof)
-                && config.backend == Backend::Cpu
                 && config.solver.choice != solve::SolverChoice::Lu
                 && config.bands.is_empty()
         }

@@ -151,8 +151,18 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
             "LU needs the dense matrix",
         ),
         (
-            &["solve", "--scene", "cube", "--operator", "compressed", "--backend", "gpu"],
-            "CPU backend only",
+            &[
+                "solve",
+                "--scene",
+                "cube",
+                "--operator",
+                "compressed",
+                "--backend",
+                "gpu",
+                "--quadrature",
+                "gauss",
+            ],
+            "the GPU backend evaluates the exact method only",
         ),
         (&["study", "stiff", "--backend", "cpu", "--max-n", "x"], "--max-n"),
     ];

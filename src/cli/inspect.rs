@@ -62,7 +62,9 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
     let planner = PairPlanner::new(&scene);
     let dof = disc.dof();
     let (row_sums, p, blocks) = if pipeline::compresses(&config, dof) {
-        let op = pipeline::build_compressed(&config, &scene, &mesh, &disc, &planner)?;
+        let assembler =
+            pipeline::Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
+        let op = pipeline::build_compressed(&config, &assembler, &scene, &mesh, &disc, &planner)?;
         (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats))
     } else {
         let assembled = assemble_without_progress(&config, &scene, &mesh, &disc, &planner)?;

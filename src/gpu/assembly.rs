@@ -60,14 +60,16 @@ pub struct GpuTimings {
 
 /// Compiled pipelines for one precision and collocation method.
 pub struct GpuAssembler<'a> {
-    ctx: &'a GpuContext,
-    precision: Precision,
-    method: Method,
-    layout: wgpu::BindGroupLayout,
+    pub(super) ctx: &'a GpuContext,
+    pub(super) precision: Precision,
+    pub(super) method: Method,
+    pub(super) layout: wgpu::BindGroupLayout,
     full: wgpu::ComputePipeline,
     prepare_near: wgpu::ComputePipeline,
     near: wgpu::ComputePipeline,
     pieces: wgpu::ComputePipeline,
+    /// `assemble_pairs`: listed pairs (src/gpu/pairs.rs).
+    pub(super) pairs: wgpu::ComputePipeline,
     timings: std::sync::Mutex<GpuTimings>,
 }
 
@@ -198,10 +200,10 @@ impl TilePlan {
 
 /// Where the rules array's parts start and how long they are.
 #[derive(Clone, Copy)]
-struct RuleCounts {
-    imt: usize,
-    rule_offset: usize,
-    bands: usize,
+pub(super) struct RuleCounts {
+    pub(super) imt: usize,
+    pub(super) rule_offset: usize,
+    pub(super) bands: usize,
 }
 
 /// The far-field rule the kernels use: in f64 the CPU's for the method (when enabled); in f32 the
@@ -216,7 +218,7 @@ fn far_field_rule(precision: Precision, method: Method, enabled: bool) -> Option
 
 /// The uniform tables (TABLE_SIZE entries of 4 reals): IMT nodes (x, w), then one header per
 /// far-field band ((ratio + 1)², first entry, count) and the bands' points (u, v, w).
-fn tables(
+pub(super) fn tables(
     options: &AssemblyOptions,
     method: Method,
     precision: Precision,
@@ -282,10 +284,11 @@ impl<'a> GpuAssembler<'a> {
             method.nodes_per_element() as u32,
             far_field_rule(precision, method, true).is_some(),
         );
-        let entries = ["assemble_full", "prepare_near", "assemble_near", "assemble_pieces"];
+        let entries =
+            ["assemble_full", "prepare_near", "assemble_near", "assemble_pieces", "assemble_pairs"];
         let (layout, pipelines) = compute::pipeline(ctx, &source, &entries, 8, &[0, 3], &[6, 7])?;
-        let [full, prepare_near, near, pieces]: [wgpu::ComputePipeline; 4] =
-            pipelines.try_into().expect("four pipelines");
+        let [full, prepare_near, near, pieces, pairs]: [wgpu::ComputePipeline; 5] =
+            pipelines.try_into().expect("five pipelines");
         Ok(Self {
             ctx,
             precision,
@@ -295,6 +298,7 @@ impl<'a> GpuAssembler<'a> {
             prepare_near,
             near,
             pieces,
+            pairs,
             timings: Default::default(),
         })
     }

@@ -6,10 +6,12 @@ mod compute;
 mod context;
 pub mod layout;
 pub mod math;
+mod pairs;
 pub mod shaders;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
 pub use context::{AdapterRequest, AdapterSummary, GpuContext, INSTALL_HINT};
+pub use pairs::{PairEvaluator, PairTask};
 pub use shaders::Precision;
 
 use std::sync::OnceLock;

@@ -66,96 +66,227 @@ pub fn aca(
     tolerance: f64,
     max_rank: usize,
 ) -> Option<LowRank> {
-    let mut us: Vec<Vec<f64>> = Vec::new();
-    let mut vs: Vec<Vec<f64>> = Vec::new();
-    let mut norm2 = 0.0f64;
-    let mut used_rows = vec![false; m];
-    let mut used_cols = vec![false; c];
-    // Deterministic: the same block always gets the same approximation.
-    let mut rng = rand::rngs::StdRng::seed_from_u64((m as u64) << 32 | c as u64);
-    let residual_row = |i: usize, us: &[Vec<f64>], vs: &[Vec<f64>]| {
-        let mut r = row(i);
-        for (u, v) in us.iter().zip(vs) {
+    let mut cross = Aca::new(m, c, tolerance, max_rank);
+    while let Some(request) = cross.request() {
+        let values = match request {
+            Request::Row(i) => row(i),
+            Request::Column(j) => col(j),
+        };
+        cross.supply(values);
+    }
+    cross.finish()
+}
+
+/// What a cross approximation needs next: a row (`c` values) or a column (`m` values) of M.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Request {
+    /// Row i.
+    Row(usize),
+    /// Column j.
+    Column(usize),
+}
+
+/// [`aca`] as a state machine: it asks for one row or column at a time ([`Aca::request`]) and
+/// resumes when given it ([`Aca::supply`]), so that many blocks can be approximated in lockstep,
+/// their rows and columns evaluated together in one batch (the GPU's pair kernel).
+#[derive(Clone, Debug)]
+pub struct Aca {
+    m: usize,
+    c: usize,
+    tolerance: f64,
+    max_rank: usize,
+    us: Vec<Vec<f64>>,
+    vs: Vec<Vec<f64>>,
+    /// |U V^T|_F², updated with every cross.
+    norm2: f64,
+    used_rows: Vec<bool>,
+    used_cols: Vec<bool>,
+    rng: rand::rngs::StdRng,
+    state: State,
+}
+
+#[derive(Clone, Debug)]
+enum State {
+    /// The pivot row i.
+    PivotRow(usize),
+    /// The column of the pivot j, with the new cross's row part v.
+    PivotColumn { j: usize, v: Vec<f64> },
+    /// A row not used, to check the approximation before accepting it.
+    CheckRow(usize),
+    /// A column not used, likewise.
+    CheckColumn(usize),
+    /// Done: accepted, or refused at the rank limit.
+    Finished { accepted: bool },
+}
+
+impl Aca {
+    /// A cross approximation of an m × c block to `tolerance`, refused at rank `max_rank`.
+    pub fn new(m: usize, c: usize, tolerance: f64, max_rank: usize) -> Self {
+        let mut cross = Self {
+            m,
+            c,
+            tolerance,
+            max_rank,
+            us: Vec::new(),
+            vs: Vec::new(),
+            norm2: 0.0,
+            used_rows: vec![false; m],
+            used_cols: vec![false; c],
+            // Deterministic: the same block always gets the same approximation.
+            rng: rand::rngs::StdRng::seed_from_u64((m as u64) << 32 | c as u64),
+            state: State::Finished { accepted: true },
+        };
+        cross.start_row(0, None);
+        cross
+    }
+
+    /// The row or column needed next, or `None` when finished.
+    pub fn request(&self) -> Option<Request> {
+        match self.state {
+            State::PivotRow(i) | State::CheckRow(i) => Some(Request::Row(i)),
+            State::PivotColumn { j, .. } | State::CheckColumn(j) => Some(Request::Column(j)),
+            State::Finished { .. } => None,
+        }
+    }
+
+    /// Gives the values of the row or column last requested.
+    pub fn supply(&mut self, values: Vec<f64>) {
+        match std::mem::replace(&mut self.state, State::Finished { accepted: false }) {
+            State::PivotRow(i) => {
+                let r = self.residual_row(i, values);
+                self.pivot_row(r);
+            }
+            State::PivotColumn { j, v } => {
+                let u = self.residual_col(j, values);
+                // |S_k|_F² = |S_{k-1}|_F² + 2 Σ_l (u·u_l)(v·v_l) + |u|² |v|².
+                let cross: f64 =
+                    self.us.iter().zip(&self.vs).map(|(ul, vl)| dot(&u, ul) * dot(&v, vl)).sum();
+                let (nu, nv) = (dot(&u, &u), dot(&v, &v));
+                let grown = (self.norm2 + 2.0 * cross + nu * nv).max(0.0);
+                // A cross below the tolerance is left out: it would change the block by less
+                // than the tolerance (and a block of rank r keeps rank r).
+                let small = (nu * nv).sqrt() <= self.tolerance * grown.sqrt();
+                let next_row = argmax_abs(&u, &self.used_rows);
+                if !small {
+                    self.norm2 = grown;
+                    self.us.push(u);
+                    self.vs.push(v);
+                }
+                self.after_cross(small, next_row);
+            }
+            State::CheckRow(i) => {
+                let r = self.residual_row(i, values);
+                if norm(&r) * (self.m as f64).sqrt() > self.limit() {
+                    self.start_row(i, Some(r));
+                } else {
+                    self.check_column();
+                }
+            }
+            State::CheckColumn(j) => {
+                let r = self.residual_col(j, values);
+                let next_row = (norm(&r) * (self.c as f64).sqrt() > self.limit())
+                    .then(|| argmax_abs(&r, &self.used_rows))
+                    .flatten();
+                match next_row {
+                    // Restart from the row where that column's remainder is largest.
+                    Some(i) => self.start_row(i, None),
+                    None => self.state = State::Finished { accepted: true },
+                }
+            }
+            State::Finished { accepted } => {
+                panic!("a finished cross approximation (accepted: {accepted}) was given values")
+            }
+        }
+    }
+
+    /// The approximation, or `None` when it was refused at the rank limit.
+    pub fn finish(self) -> Option<LowRank> {
+        match self.state {
+            State::Finished { accepted: true } => {}
+            State::Finished { accepted: false } => return None,
+            _ => panic!("cross approximation not finished"),
+        }
+        let (m, c, k) = (self.m, self.c, self.us.len());
+        let mut u = vec![0.0; m * k];
+        let mut v = vec![0.0; c * k];
+        for l in 0..k {
+            (0..m).for_each(|i| u[i * k + l] = self.us[l][i]);
+            (0..c).for_each(|j| v[j * k + l] = self.vs[l][j]);
+        }
+        Some(LowRank { m, c, k, u, v })
+    }
+
+    /// Takes row i as the next pivot row; `residual` when its remainder is known already.
+    fn start_row(&mut self, i: usize, residual: Option<Vec<f64>>) {
+        if self.us.len() >= self.max_rank {
+            self.state = State::Finished { accepted: false };
+            return;
+        }
+        self.used_rows[i] = true;
+        match residual {
+            Some(r) => self.pivot_row(r),
+            None => self.state = State::PivotRow(i),
+        }
+    }
+
+    /// With the remainder r of the pivot row: the pivot column, or the next row when the row is
+    /// represented already (or the columns are exhausted).
+    fn pivot_row(&mut self, r: Vec<f64>) {
+        match argmax_abs(&r, &self.used_cols) {
+            Some(j) => {
+                self.used_cols[j] = true;
+                let v = r.iter().map(|x| x / r[j]).collect();
+                self.state = State::PivotColumn { j, v };
+            }
+            None => {
+                let from = self.rng.random_range(0..self.m.max(1));
+                let next_row = first_unused(&self.used_rows, from);
+                self.after_cross(self.norm2 == 0.0 && next_row.is_none(), next_row);
+            }
+        }
+    }
+
+    fn after_cross(&mut self, converged: bool, next_row: Option<usize>) {
+        match next_row {
+            Some(i) if !converged => self.start_row(i, None),
+            _ => {
+                // Check a row and a column not used; the larger remainder decides.
+                let from = self.rng.random_range(0..self.m.max(1));
+                match first_unused(&self.used_rows, from) {
+                    Some(i) => self.state = State::CheckRow(i),
+                    None => self.check_column(),
+                }
+            }
+        }
+    }
+
+    fn check_column(&mut self) {
+        let from = self.rng.random_range(0..self.c.max(1));
+        self.state = match first_unused(&self.used_cols, from) {
+            Some(j) => State::CheckColumn(j),
+            None => State::Finished { accepted: true },
+        };
+    }
+
+    fn limit(&self) -> f64 {
+        self.tolerance * self.norm2.sqrt()
+    }
+
+    fn residual_row(&self, i: usize, mut r: Vec<f64>) -> Vec<f64> {
+        assert_eq!(r.len(), self.c, "a row of the block has {} values", self.c);
+        for (u, v) in self.us.iter().zip(&self.vs) {
             r.iter_mut().zip(v).for_each(|(r, v)| *r -= u[i] * v);
         }
         r
-    };
-    let residual_col = |j: usize, us: &[Vec<f64>], vs: &[Vec<f64>]| {
-        let mut r = col(j);
-        for (u, v) in us.iter().zip(vs) {
+    }
+
+    fn residual_col(&self, j: usize, mut r: Vec<f64>) -> Vec<f64> {
+        assert_eq!(r.len(), self.m, "a column of the block has {} values", self.m);
+        for (u, v) in self.us.iter().zip(&self.vs) {
             r.iter_mut().zip(u).for_each(|(r, u)| *r -= v[j] * u);
         }
         r
-    };
-    let mut next_row = Some(0);
-    let mut pending: Option<Vec<f64>> = None;
-    while let Some(i) = next_row {
-        if us.len() >= max_rank {
-            return None;
-        }
-        used_rows[i] = true;
-        let r = pending.take().unwrap_or_else(|| residual_row(i, &us, &vs));
-        let pivot = argmax_abs(&r, &used_cols);
-        let converged = match pivot {
-            Some(j) if r[j] != 0.0 => {
-                used_cols[j] = true;
-                let v: Vec<f64> = r.iter().map(|x| x / r[j]).collect();
-                let u = residual_col(j, &us, &vs);
-                // |S_k|_F² = |S_{k-1}|_F² + 2 Σ_l (u·u_l)(v·v_l) + |u|² |v|².
-                let cross: f64 = us.iter().zip(&vs).map(|(ul, vl)| dot(&u, ul) * dot(&v, vl)).sum();
-                let (nu, nv) = (dot(&u, &u), dot(&v, &v));
-                let grown = (norm2 + 2.0 * cross + nu * nv).max(0.0);
-                // A cross below the tolerance is left out: it would change the block by less
-                // than the tolerance (and a block of rank r keeps rank r).
-                let small = (nu * nv).sqrt() <= tolerance * grown.sqrt();
-                next_row = argmax_abs(&u, &used_rows);
-                if !small {
-                    norm2 = grown;
-                    us.push(u);
-                    vs.push(v);
-                }
-                small
-            }
-            // The row is represented already (or the columns are exhausted).
-            _ => {
-                next_row = first_unused(&used_rows, rng.random_range(0..m.max(1)));
-                norm2 == 0.0 && next_row.is_none()
-            }
-        };
-        if converged || next_row.is_none() {
-            // Check a row and a column not used; the larger remainder decides.
-            let limit = tolerance * norm2.sqrt();
-            let check_row = first_unused(&used_rows, rng.random_range(0..m.max(1)));
-            if let Some(ci) = check_row {
-                let r = residual_row(ci, &us, &vs);
-                if norm(&r) * (m as f64).sqrt() > limit {
-                    next_row = Some(ci);
-                    pending = Some(r);
-                    continue;
-                }
-            }
-            let check_col = first_unused(&used_cols, rng.random_range(0..c.max(1)));
-            if let Some(cj) = check_col {
-                let r = residual_col(cj, &us, &vs);
-                if norm(&r) * (c as f64).sqrt() > limit {
-                    // Restart from the row where that column's remainder is largest.
-                    next_row = argmax_abs(&r, &used_rows);
-                    if next_row.is_some() {
-                        continue;
-                    }
-                }
-            }
-            break;
-        }
     }
-    let k = us.len();
-    let mut u = vec![0.0; m * k];
-    let mut v = vec![0.0; c * k];
-    for l in 0..k {
-        (0..m).for_each(|i| u[i * k + l] = us[l][i]);
-        (0..c).for_each(|j| v[j * k + l] = vs[l][j]);
-    }
-    Some(LowRank { m, c, k, u, v })
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

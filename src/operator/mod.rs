@@ -18,6 +18,7 @@
 //! user sets, and which tests measure against the dense matrix.
 
 pub mod aca;
+mod batched;
 mod blocks;
 pub mod cluster;
 
@@ -29,6 +30,7 @@ use serde::Serialize;
 use crate::assembly::{AssemblyOptions, PairIntegrator, check_fits};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
+use crate::gpu::PairEvaluator;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -171,6 +173,8 @@ pub struct CompressedOperator {
     pub pairs: PairStats,
     /// Rows of nodes that reflect nothing (rho = 0): zero, u = E there.
     pub zero_rows: usize,
+    /// The GPU that evaluated the entries (name and backend), if one did.
+    pub device: Option<String>,
 }
 
 /// Admissible blocks whose break-even rank is below this are stored exactly.
@@ -178,7 +182,10 @@ const MIN_USEFUL_RANK: usize = 4;
 
 impl CompressedOperator {
     /// Builds K for `disc` on `mesh` of `scene`; `progress` counts the blocks (stage
-    /// `compression`).
+    /// `compression`). With `device`, the entries are evaluated there in batches (the exact
+    /// blocks' pairs planned on the host, the cross approximations in lockstep), else on the CPU
+    /// block by block.
+    #[allow(clippy::too_many_arguments)]
     pub fn build(
         scene: &Scene,
         mesh: &Mesh,
@@ -186,6 +193,7 @@ impl CompressedOperator {
         planner: &PairPlanner,
         assembly: &AssemblyOptions,
         options: &CompressionOptions,
+        device: Option<&PairEvaluator>,
         progress: &dyn Progress,
     ) -> Result<Self> {
         options.validate()?;
@@ -223,23 +231,30 @@ impl CompressedOperator {
             per,
         };
         progress.start("compression", plan.near.len() + plan.far.len());
-        let near = plan.near.par_iter().map(|&(t, s)| {
-            let (block, stats) = entries.exact_block(t, s);
-            progress.advance(1);
-            (block, stats, false)
-        });
-        let far = plan.far.par_iter().map(|&(t, s)| {
-            let r = match entries.compressed_block(t, s, &faces, options.tolerance) {
-                Some(block) => (block, PairStats::default(), false),
-                None => {
+        let built: Vec<(Block, PairStats, bool)> = match device {
+            Some(device) => {
+                batched::build_blocks(&entries, &plan, &faces, options.tolerance, device, progress)?
+            }
+            None => {
+                let near = plan.near.par_iter().map(|&(t, s)| {
                     let (block, stats) = entries.exact_block(t, s);
-                    (block, stats, true)
-                }
-            };
-            progress.advance(1);
-            r
-        });
-        let built: Vec<(Block, PairStats, bool)> = near.chain(far).collect();
+                    progress.advance(1);
+                    (block, stats, false)
+                });
+                let far = plan.far.par_iter().map(|&(t, s)| {
+                    let r = match entries.compressed_block(t, s, &faces, options.tolerance) {
+                        Some(block) => (block, PairStats::default(), false),
+                        None => {
+                            let (block, stats) = entries.exact_block(t, s);
+                            (block, stats, true)
+                        }
+                    };
+                    progress.advance(1);
+                    r
+                });
+                near.chain(far).collect()
+            }
+        };
         progress.finish();
 
         let mut stats = OperatorStats { empty_blocks: plan.empty as u64, ..Default::default() };
@@ -270,7 +285,17 @@ impl CompressedOperator {
         }
         stats.operator_bytes += 8 * (nodes.order.len() + elements.order.len()) as u64;
         let zero_rows = disc.nodes.iter().filter(|n| n.rho == 0.0).count();
-        Ok(Self { dof: disc.dof(), per, nodes, elements, blocks, stats, pairs, zero_rows })
+        Ok(Self {
+            dof: disc.dof(),
+            per,
+            nodes,
+            elements,
+            blocks,
+            stats,
+            pairs,
+            zero_rows,
+            device: None,
+        })
     }
 
     /// Number of unknowns.
@@ -323,10 +348,11 @@ impl CompressedOperator {
 }
 
 impl CompressedOperator {
-    /// Largest `max_i |(K_c x - K x)_i| / max_i |(K x)_i|` against the dense matrix `k` over
-    /// three vectors: ones (the row sums), one of one sign, one of both signs.
-    pub fn max_product_difference(&self, k: &crate::assembly::CollocationMatrix) -> f64 {
-        let n = k.dof();
+    /// Largest `max_i |(K_c x - K x)_i| / max_i |(K x)_i|` against a reference product
+    /// `x -> K x` (the dense matrix's, or another compressed operator's) over three vectors:
+    /// ones (the row sums), one of one sign, one of both signs.
+    pub fn max_product_difference(&self, reference: &dyn Fn(&[f64]) -> Vec<f64>) -> f64 {
+        let n = self.dof;
         let vectors: [Vec<f64>; 3] = [
             vec![1.0; n],
             (0..n).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
@@ -335,7 +361,7 @@ impl CompressedOperator {
         vectors
             .iter()
             .map(|x| {
-                let (a, b) = (self.apply(x), k.apply(x));
+                let (a, b) = (self.apply(x), reference(x));
                 let diff = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
                 diff / b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE)
             })
@@ -355,13 +381,16 @@ struct Entries<'a> {
 }
 
 impl Entries<'_> {
-    /// Every entry of the block, by the dense path's pair plan (views per node and face, exact
-    /// visible parts) and kernels.
-    fn exact_block(&self, t: usize, s: usize) -> (Block, PairStats) {
+    /// Walks the pairs of block (t, s) by the dense path's pair plan (views per node and face,
+    /// exact visible parts), calling `each(r, k, i, j, visibility)` for every pair that is not
+    /// skipped: row r of the block (node i), element k of the block (element j).
+    fn visible_pairs(
+        &self,
+        t: usize,
+        s: usize,
+        mut each: impl FnMut(usize, usize, usize, usize, Visibility),
+    ) -> PairStats {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
-        let per = self.per;
-        let width = sc.len() * per;
-        let mut data = vec![0.0; tc.len() * width];
         let mut stats = PairStats::default();
         let element_ids = &self.elements.order[sc.start..sc.end];
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
@@ -370,7 +399,6 @@ impl Entries<'_> {
                 stats += PairStats::not_reflecting_row(sc.len());
                 continue;
             }
-            let scale = node.rho / PI;
             let mut views: Vec<(usize, FaceView)> = Vec::new();
             for (k, &j) in element_ids.iter().enumerate() {
                 let el = &self.disc.elements[j];
@@ -389,44 +417,84 @@ impl Entries<'_> {
                     v => self.planner.visible(v, &el.in_face()),
                 };
                 stats.record(&vis, 1);
-                if matches!(vis, Visibility::Skip(_)) {
-                    continue;
-                }
-                let values = self.integrator.integrate(
-                    el,
-                    &self.disc.bases[j],
-                    node.position,
-                    node.normal,
-                    &vis,
-                );
-                let at = r * width + k * per;
-                for (c, v) in values.iter().take(per).enumerate() {
-                    data[at + c] = scale * v;
+                if !matches!(vis, Visibility::Skip(_)) {
+                    each(r, k, i, j, vis);
                 }
             }
         }
-        let block =
-            Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data: BlockData::Dense(data) };
-        (block, stats)
+        stats
     }
 
-    /// The values of node `i` (original index) against element `j`, where the block's plan says
+    /// Every entry of the block, by the dense path's pair plan and kernels.
+    fn exact_block(&self, t: usize, s: usize) -> (Block, PairStats) {
+        let per = self.per;
+        let (m, width) = self.block_size(t, s);
+        let mut data = vec![0.0; m * width];
+        let stats = self.visible_pairs(t, s, |r, k, i, j, vis| {
+            let node = &self.disc.nodes[i];
+            let el = &self.disc.elements[j];
+            let values = self.integrator.integrate(
+                el,
+                &self.disc.bases[j],
+                node.position,
+                node.normal,
+                &vis,
+            );
+            let at = r * width + k * per;
+            for (c, v) in values.iter().take(per).enumerate() {
+                data[at + c] = node.rho / PI * v;
+            }
+        });
+        (self.block(t, s, BlockData::Dense(data)), stats)
+    }
+
+    /// Rows and columns (elements × basis functions) of block (t, s).
+    fn block_size(&self, t: usize, s: usize) -> (usize, usize) {
+        (self.nodes.clusters[t].len(), self.elements.clusters[s].len() * self.per)
+    }
+
+    /// Block (t, s) holding `data`.
+    fn block(&self, t: usize, s: usize, data: BlockData) -> Block {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data }
+    }
+
+    /// Whether node i (original index) gives element j anything, where the block's plan says
     /// the element is wholly visible from the node unless their faces give nothing.
-    fn smooth_pair(&self, i: usize, j: usize, faces: &FacePairs) -> [f64; 3] {
+    fn smooth_sees(&self, i: usize, j: usize, faces: &FacePairs) -> bool {
         let node = &self.disc.nodes[i];
         let el = &self.disc.elements[j];
-        let vertices = &self.mesh.elements()[j].vertices;
-        if node.rho == 0.0 || faces.nothing_between(node.face, node.position, el, vertices) {
+        node.rho != 0.0
+            && !faces.nothing_between(
+                node.face,
+                node.position,
+                el,
+                &self.mesh.elements()[j].vertices,
+            )
+    }
+
+    /// The values of node i against element j in a smooth block.
+    fn smooth_pair(&self, i: usize, j: usize, faces: &FacePairs) -> [f64; 3] {
+        if !self.smooth_sees(i, j, faces) {
             return [0.0; 3];
         }
+        let node = &self.disc.nodes[i];
         let values = self.integrator.integrate(
-            el,
+            &self.disc.elements[j],
             &self.disc.bases[j],
             node.position,
             node.normal,
             &Visibility::Full,
         );
         values.map(|v| v * node.rho / PI)
+    }
+
+    /// Rank beyond which block (t, s)'s factors take more memory than the block itself, or
+    /// `None` when that is below [`MIN_USEFUL_RANK`] (computed exactly without trying).
+    fn useful_rank(&self, t: usize, s: usize) -> Option<usize> {
+        let (m, c) = self.block_size(t, s);
+        let max_rank = (m * c) / (m + c);
+        (max_rank >= MIN_USEFUL_RANK).then_some(max_rank)
     }
 
     /// The block as a low-rank product, or `None` when its rank would not save memory.
@@ -454,14 +522,8 @@ impl Entries<'_> {
             let (j, basis) = (element_ids[q / per], q % per);
             node_ids.iter().map(|&i| self.smooth_pair(i, j, faces)[basis]).collect()
         };
-        // Beyond this rank U and V take more memory than the block itself; a block that small
-        // is computed exactly without trying.
-        let max_rank = (m * c) / (m + c);
-        if max_rank < MIN_USEFUL_RANK {
-            return None;
-        }
-        let lr = aca::aca(m, c, row, col, tolerance, max_rank)?;
-        Some(Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data: BlockData::LowRank(lr) })
+        let lr = aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)?;
+        Some(self.block(t, s, BlockData::LowRank(lr)))
     }
 }
 

@@ -1,0 +1,234 @@
+//! Listed (node, element) pairs on the GPU: the compressed operator's exact blocks and the rows
+//! and columns its cross approximations sample (src/operator), evaluated in batches by the
+//! `assemble_pairs` kernel. Unlike the row tiles of [`super::assembly`], nothing here is n × n:
+//! a batch holds exactly the pairs asked for, each with its own view of the element's face.
+
+use rayon::prelude::*;
+
+use super::assembly::{GpuAssembler, RuleCounts, tables};
+use super::compute;
+use super::layout::{self, Params, VIEW_STRIDE};
+use crate::assembly::{AssemblyOptions, PairIntegrator};
+use crate::discretization::Discretization;
+use crate::error::{Error, Result};
+use crate::kernels::far_field;
+use crate::scene::Scene;
+use crate::visibility::Visibility;
+
+/// One pair to evaluate: node `node` against element `element`, wholly visible
+/// ([`Visibility::Full`]) or over its visible pieces ([`Visibility::Partial`], none: hidden).
+#[derive(Clone, Debug)]
+pub struct PairTask {
+    /// Index of the collocation node.
+    pub node: usize,
+    /// Index of the element.
+    pub element: usize,
+    /// What the node sees of the element; a skipped pair is not listed.
+    pub visible: Visibility,
+}
+
+/// Piece count of a record that stands for the whole element (`WHOLE_ELEMENT` in the shader).
+const WHOLE_ELEMENT: u32 = u32::MAX;
+
+/// Each batch's buffers stay below this many bytes (and below the device's binding limit).
+const BATCH_BYTES: u64 = 64 << 20;
+
+/// The device's copy of a discretization, ready to evaluate listed pairs.
+pub struct PairEvaluator<'a> {
+    assembler: &'a GpuAssembler<'a>,
+    scene: &'a Scene,
+    disc: &'a Discretization,
+    /// Thin elements ([`far_field::is_thin`]): their closed forms cancel, so their pairs are
+    /// recomputed on the CPU, as the dense GPU path does.
+    thin: Vec<bool>,
+    integrator: PairIntegrator,
+    unit: f64,
+    elements: wgpu::Buffer,
+    tables: wgpu::Buffer,
+    counts: RuleCounts,
+    budget: u64,
+}
+
+impl<'a> PairEvaluator<'a> {
+    /// Uploads the elements of `disc` for `assembler`'s kernels.
+    pub fn new(
+        assembler: &'a GpuAssembler<'a>,
+        scene: &'a Scene,
+        disc: &'a Discretization,
+        options: &AssemblyOptions,
+    ) -> Result<Self> {
+        if disc.method.nodes_per_element() != assembler.method.nodes_per_element() {
+            return Err(Error::Gpu(format!(
+                "kernels compiled for the {} method cannot evaluate the {} method",
+                assembler.method.name(),
+                disc.method.name()
+            )));
+        }
+        let (ctx, p) = (assembler.ctx, assembler.precision);
+        // Lengths in units of the scene's size, as in the dense path.
+        let largest_face = scene.faces.iter().map(|f| f.size()).fold(0.0, f64::max);
+        let unit = crate::geometry::power_of_two_unit(largest_face);
+        let elements =
+            compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc, unit), p));
+        let (table_values, counts) = tables(options, assembler.method, p)?;
+        let tables = compute::uniform(ctx, &layout::real_bytes(&table_values, p));
+        let budget = ctx
+            .limits
+            .max_storage_buffer_binding_size
+            .min(ctx.limits.max_buffer_size)
+            .min(BATCH_BYTES);
+        let thin = disc
+            .elements
+            .iter()
+            .map(|el| options.far_field && far_field::is_thin(&el.local))
+            .collect();
+        Ok(Self {
+            assembler,
+            scene,
+            disc,
+            thin,
+            integrator: PairIntegrator::new(disc.method, options),
+            unit,
+            elements,
+            tables,
+            counts,
+            budget,
+        })
+    }
+
+    /// The values of every task (rho/pi included, the first `nodes_per_element` used), in
+    /// batches that fit the device's bindings.
+    pub fn evaluate(&self, tasks: &[PairTask]) -> Result<Vec<[f64; 3]>> {
+        let mut out = vec![[0.0; 3]; tasks.len()];
+        let bytes = self.assembler.precision.bytes() as u64;
+        let mut start = 0;
+        while start < tasks.len() {
+            let (mut end, mut vertices, mut words) = (start, 0u64, 0u64);
+            while end < tasks.len() {
+                let (pieces, v) = match &tasks[end].visible {
+                    Visibility::Partial(pieces) => {
+                        (pieces.len() as u64, pieces.iter().map(|p| p.len() as u64).sum())
+                    }
+                    _ => (0, 0),
+                };
+                let views = (end - start + 1) as u64 * (VIEW_STRIDE as u64 * bytes);
+                let over = views > self.budget
+                    || (vertices + v) * 2 * bytes > self.budget
+                    || (words + 4 + 2 * pieces) * 4 > self.budget;
+                if over && end > start {
+                    break;
+                }
+                (vertices, words, end) = (vertices + v, words + 4 + 2 * pieces, end + 1);
+            }
+            self.batch(&tasks[start..end], &mut out[start..end])?;
+            start = end;
+        }
+        out.par_iter_mut().zip(tasks).filter(|(_, t)| self.thin[t.element]).for_each(|(o, t)| {
+            let node = &self.disc.nodes[t.node];
+            let values = self.integrator.integrate(
+                &self.disc.elements[t.element],
+                &self.disc.bases[t.element],
+                node.position,
+                node.normal,
+                &t.visible,
+            );
+            *o = values.map(|v| v * node.rho / std::f64::consts::PI);
+        });
+        Ok(out)
+    }
+
+    /// One batch: views, records and pieces up, `assemble_pairs`, values back.
+    fn batch(&self, tasks: &[PairTask], out: &mut [[f64; 3]]) -> Result<()> {
+        let (disc, unit) = (self.disc, self.unit);
+        let views: Vec<f64> = tasks
+            .par_iter()
+            .flat_map_iter(|t| {
+                let node = &disc.nodes[t.node];
+                let frame = &self.scene.faces[disc.elements[t.element].face].frame;
+                let (p, n) =
+                    (frame.to_local(node.position) * unit, frame.dir_to_local(node.normal));
+                [p.x, p.y, p.z, n.x, n.y, n.z, node.rho / std::f64::consts::PI, 0.0]
+            })
+            .collect();
+        let mut records = Vec::with_capacity(4 * tasks.len());
+        let mut piece_records = Vec::new();
+        let mut vertices = Vec::new();
+        for (k, t) in tasks.iter().enumerate() {
+            let (first, count) = match &t.visible {
+                Visibility::Partial(pieces) => {
+                    let first = (piece_records.len() / 2) as u32;
+                    let c = disc.elements[t.element].centroid_in_face;
+                    for piece in pieces {
+                        piece_records
+                            .extend_from_slice(&[(vertices.len() / 2) as u32, piece.len() as u32]);
+                        vertices.extend(piece.iter().flat_map(|&q| {
+                            let q = (q - c) * unit;
+                            [q.x, q.y]
+                        }));
+                    }
+                    (first, pieces.len() as u32)
+                }
+                _ => (0, WHOLE_ELEMENT),
+            };
+            records.extend_from_slice(&[k as u32, t.element as u32, first, count]);
+        }
+        let piece_offset = records.len() as u32;
+        records.extend(piece_records);
+
+        let (ctx, p) = (self.assembler.ctx, self.assembler.precision);
+        let per = disc.method.nodes_per_element();
+        let values = compute::checked(ctx, "GPU pair evaluation", || {
+            let (x, y, stride) = compute::grid(ctx, tasks.len() as u64);
+            let params = Params {
+                rows: tasks.len() as u32,
+                elements: disc.element_count() as u32,
+                faces: self.scene.faces.len() as u32,
+                dof: disc.dof() as u32,
+                imt_count: self.counts.imt as u32,
+                rule_offset: self.counts.rule_offset as u32,
+                band_count: self.counts.bands as u32,
+                exception_count: tasks.len() as u32,
+                piece_offset,
+                stride,
+                near_capacity: 0,
+                _pad: 0,
+            };
+            let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+            let views = compute::storage(ctx, &layout::real_bytes(&views, p));
+            let records = compute::storage(ctx, bytemuck::cast_slice(&records));
+            let vertices = compute::storage(ctx, &layout::real_bytes(&vertices, p));
+            // Bound by the layout, unused by this kernel.
+            let near = compute::storage(ctx, &[0u8; layout::NEAR_HEADER_BYTES as usize + 8]);
+            let size = (tasks.len() * per * p.bytes()) as u64;
+            let (output, staging) = compute::output(ctx, size);
+            let group = compute::bind_group(
+                ctx,
+                &self.assembler.layout,
+                &[
+                    &params,
+                    &views,
+                    &self.elements,
+                    &self.tables,
+                    &records,
+                    &vertices,
+                    &output,
+                    &near,
+                ],
+            );
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.assembler.pairs);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, size.max(16));
+            ctx.queue.submit([encoder.finish()]);
+            compute::read_back(ctx, &staging, size, p)
+        })??;
+        for (o, v) in out.iter_mut().zip(values.chunks_exact(per)) {
+            o[..per].copy_from_slice(v);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,228 @@
+//! The operator's blocks from batched pair evaluations (the GPU's pair kernel,
+//! [`PairEvaluator`]). Every cross approximation advances in lockstep ([`Aca`] as a state
+//! machine): the rows and columns they all ask for next are listed and evaluated in one batch,
+//! so a block of rank k costs about 2k rounds for all blocks together, not 2k trips to the device
+//! per block. The exact blocks are planned on the host by the dense path's pair plan (in
+//! parallel, partly visible pairs with their exact visible pieces) and evaluated in batches.
+//! The pair lists hold what is evaluated and nothing else: no n × n work anywhere.
+
+use std::ops::Range;
+
+use rayon::prelude::*;
+
+use super::aca::{Aca, Request};
+use super::blocks::{BlockPlan, FacePairs};
+use super::{Block, BlockData, Entries};
+use crate::error::Result;
+use crate::gpu::{PairEvaluator, PairTask};
+use crate::progress::Progress;
+use crate::visibility::{PairStats, Visibility};
+
+/// Pairs listed per round on the host (tasks and their values): bounds the memory of a round;
+/// the device's batches are sized by [`PairEvaluator`] itself.
+const PAIRS_PER_ROUND: usize = 1 << 21;
+
+/// A far block under construction.
+struct Crossing {
+    t: usize,
+    s: usize,
+    aca: Aca,
+}
+
+/// Where a task's values go in the sampled row or column: `len` of them, from value `from` of
+/// the task, to position `at`.
+struct Slot {
+    at: usize,
+    from: usize,
+    len: usize,
+}
+
+/// The blocks of `plan` (near ones exact, far ones compressed to `tolerance` or exact when their
+/// rank would not pay), each with its pair classes and whether it was found incompressible.
+pub(super) fn build_blocks(
+    entries: &Entries,
+    plan: &BlockPlan,
+    faces: &FacePairs,
+    tolerance: f64,
+    device: &PairEvaluator,
+    progress: &dyn Progress,
+) -> Result<Vec<(Block, PairStats, bool)>> {
+    let mut built = Vec::with_capacity(plan.near.len() + plan.far.len());
+    let mut exact: Vec<(usize, usize, bool)> =
+        plan.near.iter().map(|&(t, s)| (t, s, false)).collect();
+    let mut crossings = Vec::new();
+    for &(t, s) in &plan.far {
+        match entries.useful_rank(t, s) {
+            Some(max_rank) => {
+                let (m, c) = entries.block_size(t, s);
+                crossings.push(Crossing { t, s, aca: Aca::new(m, c, tolerance, max_rank) });
+            }
+            None => exact.push((t, s, true)),
+        }
+    }
+
+    while !crossings.is_empty() {
+        let sizes: Vec<usize> = crossings.iter().map(|x| request_len(entries, x)).collect();
+        for range in rounds(&sizes) {
+            advance(entries, faces, device, &mut crossings[range])?;
+        }
+        let mut running = Vec::with_capacity(crossings.len());
+        for x in crossings {
+            if x.aca.request().is_some() {
+                running.push(x);
+                continue;
+            }
+            match x.aca.finish() {
+                Some(lr) => {
+                    built.push((
+                        entries.block(x.t, x.s, BlockData::LowRank(lr)),
+                        PairStats::default(),
+                        false,
+                    ));
+                    progress.advance(1);
+                }
+                None => exact.push((x.t, x.s, true)),
+            }
+        }
+        crossings = running;
+    }
+
+    let sizes: Vec<usize> = exact
+        .iter()
+        .map(|&(t, s, _)| {
+            let (m, c) = entries.block_size(t, s);
+            m * c / entries.per
+        })
+        .collect();
+    for range in rounds(&sizes) {
+        let blocks = &exact[range];
+        let mut planned: Vec<(Vec<PairTask>, Vec<usize>, PairStats)> = blocks
+            .par_iter()
+            .map(|&(t, s, _)| {
+                let width = entries.block_size(t, s).1;
+                let (mut tasks, mut at) = (Vec::new(), Vec::new());
+                let stats = entries.visible_pairs(t, s, |r, k, i, j, visible| {
+                    tasks.push(PairTask { node: i, element: j, visible });
+                    at.push(r * width + k * entries.per);
+                });
+                (tasks, at, stats)
+            })
+            .collect();
+        let offsets = offsets(planned.iter().map(|p| p.0.len()));
+        let tasks: Vec<PairTask> = planned.iter_mut().flat_map(|p| p.0.drain(..)).collect();
+        let values = device.evaluate(&tasks)?;
+        drop(tasks);
+        let per = entries.per;
+        let done: Vec<(Block, PairStats, bool)> = blocks
+            .par_iter()
+            .zip(planned.par_iter())
+            .zip(offsets.par_iter())
+            .map(|((&(t, s, incompressible), (_, at, stats)), &offset)| {
+                let (m, c) = entries.block_size(t, s);
+                let mut data = vec![0.0; m * c];
+                for (&a, v) in at.iter().zip(&values[offset..]) {
+                    data[a..a + per].copy_from_slice(&v[..per]);
+                }
+                (entries.block(t, s, BlockData::Dense(data)), *stats, incompressible)
+            })
+            .collect();
+        progress.advance(done.len());
+        built.extend(done);
+    }
+    Ok(built)
+}
+
+/// One step of every crossing in `crossings`: their requested rows and columns evaluated in one
+/// batch and supplied.
+fn advance(
+    entries: &Entries,
+    faces: &FacePairs,
+    device: &PairEvaluator,
+    crossings: &mut [Crossing],
+) -> Result<()> {
+    let mut samples: Vec<(Vec<PairTask>, Vec<Slot>)> =
+        crossings.par_iter().map(|x| sample(entries, faces, x)).collect();
+    let offsets = offsets(samples.iter().map(|s| s.0.len()));
+    let tasks: Vec<PairTask> = samples.iter_mut().flat_map(|s| s.0.drain(..)).collect();
+    let values = device.evaluate(&tasks)?;
+    crossings.par_iter_mut().zip(samples.par_iter()).zip(offsets.par_iter()).for_each(
+        |((x, (_, slots)), &offset)| {
+            let mut sampled = vec![0.0; request_len(entries, x)];
+            for (slot, v) in slots.iter().zip(&values[offset..]) {
+                sampled[slot.at..slot.at + slot.len]
+                    .copy_from_slice(&v[slot.from..slot.from + slot.len]);
+            }
+            x.aca.supply(sampled);
+        },
+    );
+    Ok(())
+}
+
+/// The pairs of the row or column `x` asks for that are not zero (in a smooth block every pair
+/// is wholly visible or gives nothing), and where their values go.
+fn sample(entries: &Entries, faces: &FacePairs, x: &Crossing) -> (Vec<PairTask>, Vec<Slot>) {
+    let (tc, sc) = (&entries.nodes.clusters[x.t], &entries.elements.clusters[x.s]);
+    let node_ids = &entries.nodes.order[tc.start..tc.end];
+    let element_ids = &entries.elements.order[sc.start..sc.end];
+    let per = entries.per;
+    let (mut tasks, mut slots) = (Vec::new(), Vec::new());
+    let mut list = |i: usize, j: usize, slot: Slot| {
+        if entries.smooth_sees(i, j, faces) {
+            tasks.push(PairTask { node: i, element: j, visible: Visibility::Full });
+            slots.push(slot);
+        }
+    };
+    match x.aca.request().expect("only running crossings are sampled") {
+        Request::Row(r) => {
+            for (k, &j) in element_ids.iter().enumerate() {
+                list(node_ids[r], j, Slot { at: k * per, from: 0, len: per });
+            }
+        }
+        Request::Column(q) => {
+            let (j, basis) = (element_ids[q / per], q % per);
+            for (r, &i) in node_ids.iter().enumerate() {
+                list(i, j, Slot { at: r, from: basis, len: 1 });
+            }
+        }
+    }
+    (tasks, slots)
+}
+
+/// Values in the row or column `x` asks for next.
+fn request_len(entries: &Entries, x: &Crossing) -> usize {
+    let (m, c) = entries.block_size(x.t, x.s);
+    match x.aca.request() {
+        Some(Request::Row(_)) => c,
+        Some(Request::Column(_)) => m,
+        None => 0,
+    }
+}
+
+/// Consecutive ranges of items whose sizes add up to at most [`PAIRS_PER_ROUND`] (one item
+/// alone may exceed it).
+fn rounds(sizes: &[usize]) -> Vec<Range<usize>> {
+    let mut ranges = Vec::new();
+    let (mut start, mut total) = (0, 0);
+    for (k, &size) in sizes.iter().enumerate() {
+        if total + size > PAIRS_PER_ROUND && k > start {
+            ranges.push(start..k);
+            (start, total) = (k, 0);
+        }
+        total += size;
+    }
+    if start < sizes.len() {
+        ranges.push(start..sizes.len());
+    }
+    ranges
+}
+
+/// Where each of a sequence of lists starts in their concatenation.
+fn offsets(lengths: impl Iterator<Item = usize>) -> Vec<usize> {
+    lengths
+        .scan(0, |next, len| {
+            let at = *next;
+            *next += len;
+            Some(at)
+        })
+        .collect()
+}
