@@ -32,7 +32,13 @@ pub(crate) fn run(
         }
         "compression" => {
             let progress = super::progress::on_stderr();
-            let mut result = radiosity::study::compression::run_compression(max_n, &progress)?;
+            // The study measures the CPU unless the GPU is asked for.
+            let backend = match device {
+                StudyDevice::Gpu(p) => radiosity::pipeline::Backend::Gpu(p),
+                _ => radiosity::pipeline::Backend::Cpu,
+            };
+            let mut result =
+                radiosity::study::compression::run_compression(max_n, backend, &progress)?;
             result.figures =
                 report::write_compression_figure(&result, std::path::Path::new(figures))?;
             emit(&result, json, || report::compression_table(&result, format))

@@ -7,7 +7,7 @@ use serde::Serialize;
 use crate::discretization::Method;
 use crate::error::Result;
 use crate::operator::{CompressionOptions, OperatorChoice};
-use crate::pipeline::{self, RunConfig};
+use crate::pipeline::{self, Backend, RunConfig};
 use crate::progress::ProgressSink;
 use crate::scene::BuiltinScene;
 use crate::solve::{SolverChoice, SolverOptions};
@@ -35,6 +35,8 @@ pub struct CompressionRow {
     pub dof: usize,
     /// `dense` or `compressed`.
     pub operator: &'static str,
+    /// `cpu` or `gpu`: where the operator's entries were evaluated.
+    pub backend: &'static str,
     /// Tolerance of the compressed operator.
     pub compression_tolerance: Option<f64>,
     /// E_n, the largest nodal error against u = x² + y².
@@ -83,8 +85,13 @@ pub struct CompressionStudy {
     pub figures: Vec<String>,
 }
 
-/// Runs the study up to `max_n` elements (default [`DEFAULT_MAX_N`]).
-pub fn run_compression(max_n: Option<usize>, progress: &ProgressSink) -> Result<CompressionStudy> {
+/// Runs the study up to `max_n` elements (default [`DEFAULT_MAX_N`]), every operator built on
+/// `backend` (the GPU: the compressed operator's entries by its pair kernel).
+pub fn run_compression(
+    max_n: Option<usize>,
+    backend: Backend,
+    progress: &ProgressSink,
+) -> Result<CompressionStudy> {
     let max_n = max_n.unwrap_or(DEFAULT_MAX_N);
     let mut rows = Vec::new();
     for method in [Method::Centroid, Method::linear(Method::PAPER_ALPHA)?] {
@@ -94,6 +101,7 @@ pub fn run_compression(max_n: Option<usize>, progress: &ProgressSink) -> Result<
             let config = |operator, tolerance| {
                 let mut c = RunConfig::paper(BuiltinScene::FivePiece, refine);
                 c.method = method;
+                c.backend = backend;
                 c.operator = operator;
                 c.compression = CompressionOptions { tolerance, ..Default::default() };
                 c.solver = SolverOptions::with(SolverChoice::Auto);
@@ -133,6 +141,7 @@ fn row_of(
         n: r.n,
         dof: r.dof,
         operator: r.operator,
+        backend: r.backend,
         compression_tolerance: tolerance,
         error: r.error.unwrap_or(f64::NAN),
         difference_from_dense: difference,
