@@ -413,7 +413,9 @@ fn the_compressed_operator_built_on_the_gpu_matches_the_one_built_on_the_cpu() {
     let cases = [
         ("five-piece", "centroid", "3", 1e-6, true),
         ("five-piece", "centroid", "3", 1e-12, true),
-        ("five-piece", "linear", "2", 1e-6, true),
+        // Before pivots were chosen among near-ties by index, the two differed here by 1.4e-7:
+        // entries equal by symmetry, rounded differently, chose different pivots.
+        ("five-piece", "linear", "4", 1e-6, true),
         ("baffled-box", "centroid", "3", 1e-6, true),
         ("examples/occluded-box.toml", "centroid", "2", 1e-6, false),
         (sliver.to_str().unwrap(), "linear", "2", 1e-6, false),

@@ -297,15 +297,20 @@ fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
 
-/// Index of the largest |x_i| among those not `used`, if any is non-zero.
+/// Entries within this relative distance of the largest count as tied for the pivot.
+const PIVOT_TIE: f64 = 1e-9;
+
+/// Index of the largest |x_i| among those not `used`, if any is non-zero; among entries tied
+/// with it (within [`PIVOT_TIE`]) the first. Symmetric meshes give many entries equal in exact
+/// arithmetic, which the CPU and the GPU round differently: the first of the near-largest is the
+/// same pivot for both, so their approximations agree to rounding, not just to the tolerance.
 fn argmax_abs(x: &[f64], used: &[bool]) -> Option<usize> {
-    let mut best: Option<(usize, f64)> = None;
-    for (i, (&v, &u)) in x.iter().zip(used).enumerate() {
-        if !u && v != 0.0 && best.is_none_or(|(_, b)| v.abs() > b) {
-            best = Some((i, v.abs()));
-        }
+    let largest = x.iter().zip(used).filter(|(_, u)| !**u).fold(0.0f64, |m, (v, _)| m.max(v.abs()));
+    if largest == 0.0 {
+        return None;
     }
-    best.map(|(i, _)| i)
+    let threshold = largest * (1.0 - PIVOT_TIE);
+    x.iter().zip(used).position(|(v, u)| !u && v.abs() >= threshold)
 }
 
 /// The first index at or after `from` (cyclically) not `used`.
