@@ -24,7 +24,7 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -32,7 +32,7 @@ use crate::assembly::{AssemblyOptions, FullPair, PairIntegrator};
 use crate::discretization::{Discretization, Method};
 use crate::error::Result;
 use crate::geometry::{self, SmallPolygon, bounding_box_3d};
-use crate::kernels::{Observer, lanes};
+use crate::kernels::lanes;
 use crate::mesh::{Element, Mesh};
 use crate::quadrature::TriangleRule;
 use crate::scene::Scene;
@@ -268,7 +268,7 @@ impl Context<'_> {
     ) -> f64 {
         let (ei, ej) = (&self.mesh.elements()[i], &self.mesh.elements()[j]);
         let (fa, fb) = (&self.scene.faces[ei.face], &self.scene.faces[ej.face]);
-        if ei.face == ej.face || fa.is_coplanar_with(fb) {
+        if self.planner.same_plane(ei.face, ej.face) {
             return 0.0;
         }
         let tol = 1e-12 * ei.diameter().max(ej.diameter());
@@ -371,20 +371,14 @@ impl Context<'_> {
         let (el, basis) = (&self.disc.elements[j], &self.disc.bases[j]);
         let normal = self.scene.faces[self.mesh.elements()[i].face].frame.normal;
         let mut sum = 0.0;
-        let mut waiting: Vec<(f64, Observer, [DVec2; 3])> = Vec::with_capacity(points.len());
+        let mut batch = lanes::Batch::<f64>::default();
         for &(p, w) in points {
             match self.integrator.full_pair(el, basis, p, normal) {
                 FullPair::Values(values) => sum += w * values[0],
-                FullPair::Lane(obs, tri) => waiting.push((w, obs, tri)),
+                FullPair::Lane(obs, tri) => batch.push(w, obs, tri, |w, v| sum += w * v),
             }
         }
-        for chunk in waiting.chunks(lanes::LANES) {
-            let at = |l: usize| &chunk[l.min(chunk.len() - 1)];
-            let observers = std::array::from_fn(|l| at(l).1);
-            let triangles = std::array::from_fn(|l| at(l).2);
-            let values = lanes::constant_weight(&observers, &triangles);
-            sum += chunk.iter().zip(values).map(|(c, v)| c.0 * v).sum::<f64>();
-        }
+        batch.flush(|w, v| sum += w * v);
         sum / PI
     }
 

@@ -312,7 +312,7 @@ pub(crate) fn assemble_row(
     let scale = node.rho / PI;
     let mut stats = PairStats::default();
     let mut hiders = RecentHiders::default();
-    let mut batch = LaneBatch::default();
+    let mut batch = lanes::Batch::<usize>::default();
     for face in 0..mesh.face_count() {
         let range = mesh.face_range(face);
         let view = planner.face_view_with(node.position, node.normal, node.face, face, &mut hiders);
@@ -333,7 +333,7 @@ pub(crate) fn assemble_row(
                 match integrator.full_pair(el, &disc.bases[j], node.position, node.normal) {
                     FullPair::Values(values) => values,
                     FullPair::Lane(obs, tri) => {
-                        batch.push(j, obs, tri, row, scale);
+                        batch.push(j, obs, tri, |j, v| row[j] = scale * v);
                         continue;
                     }
                 }
@@ -346,44 +346,8 @@ pub(crate) fn assemble_row(
             }
         }
     }
-    batch.flush(row, scale);
+    batch.flush(|j, v| row[j] = scale * v);
     stats
-}
-
-/// Centroid-method pairs of one row waiting to be evaluated together.
-#[derive(Default)]
-struct LaneBatch {
-    len: usize,
-    columns: [usize; lanes::LANES],
-    observers: [Observer; lanes::LANES],
-    triangles: [[DVec2; 3]; lanes::LANES],
-}
-
-impl LaneBatch {
-    /// Adds column `j`'s pair; a full batch is evaluated into `row` (times `scale`).
-    fn push(&mut self, j: usize, obs: Observer, tri: [DVec2; 3], row: &mut [f64], scale: f64) {
-        (self.columns[self.len], self.observers[self.len], self.triangles[self.len]) =
-            (j, obs, tri);
-        self.len += 1;
-        if self.len == lanes::LANES {
-            self.flush(row, scale);
-        }
-    }
-
-    /// Evaluates the waiting pairs (the empty lanes repeat the first).
-    fn flush(&mut self, row: &mut [f64], scale: f64) {
-        if self.len == 0 {
-            return;
-        }
-        for l in self.len..lanes::LANES {
-            (self.observers[l], self.triangles[l]) = (self.observers[0], self.triangles[0]);
-        }
-        let values = lanes::constant_weight(&self.observers, &self.triangles);
-        for (&j, v) in self.columns[..self.len].iter().zip(values) {
-            row[j] = scale * v;
-        }
-        self.len = 0;
-    }
 }
 
 #[cfg(test)]

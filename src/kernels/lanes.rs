@@ -25,6 +25,42 @@ pub fn constant_weight(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [
     constant_weight_portable(obs, tris)
 }
 
+/// Pairs waiting to be evaluated together, each with a tag `T` (where its value goes: a column,
+/// a weight); every full batch and the last partial one give `(tag, value)` to a sink.
+#[derive(Default)]
+pub struct Batch<T> {
+    len: usize,
+    tags: [T; LANES],
+    observers: [Observer; LANES],
+    triangles: [[DVec2; 3]; LANES],
+}
+
+impl<T: Copy> Batch<T> {
+    /// Adds a pair; when the batch is full it is evaluated into `sink`.
+    pub fn push(&mut self, tag: T, obs: Observer, tri: [DVec2; 3], sink: impl FnMut(T, f64)) {
+        (self.tags[self.len], self.observers[self.len], self.triangles[self.len]) = (tag, obs, tri);
+        self.len += 1;
+        if self.len == LANES {
+            self.flush(sink);
+        }
+    }
+
+    /// Evaluates the waiting pairs into `sink` (the empty lanes repeat the first).
+    pub fn flush(&mut self, mut sink: impl FnMut(T, f64)) {
+        if self.len == 0 {
+            return;
+        }
+        for l in self.len..LANES {
+            (self.observers[l], self.triangles[l]) = (self.observers[0], self.triangles[0]);
+        }
+        let values = constant_weight(&self.observers, &self.triangles);
+        for (&tag, v) in self.tags[..self.len].iter().zip(values) {
+            sink(tag, v);
+        }
+        self.len = 0;
+    }
+}
+
 /// [`constant_weight`] compiled for AVX2 and FMA (the same operations; no fused multiply-add is
 /// asked for, so the results are those of the portable form).
 #[cfg(target_arch = "x86_64")]

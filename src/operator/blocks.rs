@@ -37,7 +37,7 @@ impl<'a> FacePairs<'a> {
     }
 
     fn class(&self, a: usize, b: usize, nodes: &Cluster, elements: &Cluster) -> PairClass {
-        if self.scene.coplanar(a, b) {
+        if self.planner.same_plane(a, b) {
             return PairClass::Nothing;
         }
         let (fa, fb) = (&self.scene.faces[a].frame, &self.scene.faces[b].frame);
@@ -72,7 +72,7 @@ impl<'a> FacePairs<'a> {
         vertices: &[DVec3; 3],
     ) -> bool {
         let fa = &self.scene.faces[face].frame;
-        self.scene.coplanar(face, el.face)
+        self.planner.same_plane(face, el.face)
             || vertices.iter().all(|&v| fa.normal.dot(v - p) <= 0.0)
             || el.frame.height(p) <= 0.0
     }

@@ -167,8 +167,9 @@ impl PairPlanner {
         if self.same_plane(a, b) { Vec::new() } else { self.occluders_between(a, b) }
     }
 
-    /// Whether faces `a` and `b` are one face or lie in one plane.
-    fn same_plane(&self, a: usize, b: usize) -> bool {
+    /// Whether faces `a` and `b` are one face or lie in one plane ([`crate::scene::Face::is_coplanar_with`],
+    /// with the sizes measured once for the planner).
+    pub fn same_plane(&self, a: usize, b: usize) -> bool {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
         a == b || fa.face.is_coplanar_at_size(&fb.face, || fa.size.max(fb.size))
     }
@@ -204,7 +205,8 @@ impl PairPlanner {
         if found.peek().is_none() {
             return Shaft::Clear;
         }
-        if found.any(|o| self.hides_shaft(o, nodes, elements, tol)) {
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        if found.any(|o| self.hides_shaft(o, &from, &to, tol)) {
             Shaft::Hidden
         } else {
             Shaft::Partial
@@ -222,7 +224,8 @@ impl PairPlanner {
     ) -> (Vec<usize>, bool) {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
         let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
-        let hidden = found.iter().any(|&o| self.hides_shaft(o, nodes, elements, tol));
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        let hidden = found.iter().any(|&o| self.hides_shaft(o, &from, &to, tol));
         (found, hidden)
     }
 
@@ -248,15 +251,10 @@ impl PairPlanner {
         (volume, tol)
     }
 
-    fn hides_shaft(
-        &self,
-        occluder: usize,
-        nodes: (DVec3, DVec3),
-        elements: (DVec3, DVec3),
-        tol: f64,
-    ) -> bool {
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        self.occluders.pieces[occluder].crosses_every_segment(&from, &to, tol, tol)
+    /// Whether piece `occluder` crosses every segment between the boxes with corners `from` and
+    /// `to`.
+    fn hides_shaft(&self, occluder: usize, from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
+        self.occluders.pieces[occluder].crosses_every_segment(from, to, tol, tol)
     }
 
     /// The convex occluder pieces of the scene.
