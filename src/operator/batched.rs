@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
-use super::{Block, BlockData, Entries};
+use super::{Block, BlockData, Entries, NodeViews, by_node_cluster};
 use crate::error::Result;
 use crate::gpu::{PairEvaluator, PairTask};
 use crate::progress::Progress;
@@ -87,6 +87,8 @@ pub(super) fn build_blocks(
         crossings = running;
     }
 
+    // By node cluster, so that each node's views of the faces are found once per round.
+    exact.sort_unstable();
     let sizes: Vec<usize> = exact
         .iter()
         .map(|&(t, s, _)| {
@@ -96,16 +98,23 @@ pub(super) fn build_blocks(
         .collect();
     for range in rounds(&sizes) {
         let blocks = &exact[range];
-        let mut planned: Vec<(Vec<PairTask>, Vec<usize>, PairStats)> = blocks
-            .par_iter()
-            .map(|&(t, s, _)| {
-                let width = entries.block_size(t, s).1;
-                let (mut tasks, mut at) = (Vec::new(), Vec::new());
-                let stats = entries.visible_pairs(t, s, |r, k, i, j, visible| {
-                    tasks.push(PairTask { node: i, element: j, visible });
-                    at.push(r * width + k * entries.per);
-                });
-                (tasks, at, stats)
+        let mut planned: Vec<(Vec<PairTask>, Vec<usize>, PairStats)> = by_node_cluster(blocks)
+            .into_par_iter()
+            .flat_map_iter(|group| {
+                let mut views = NodeViews::default();
+                group
+                    .into_iter()
+                    .map(|(t, s, _)| {
+                        let width = entries.block_size(t, s).1;
+                        let (mut tasks, mut at) = (Vec::new(), Vec::new());
+                        let stats =
+                            entries.visible_pairs(t, s, &mut views, |r, k, i, j, visible| {
+                                tasks.push(PairTask { node: i, element: j, visible });
+                                at.push(r * width + k * entries.per);
+                            });
+                        (tasks, at, stats)
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         let offsets = offsets(planned.iter().map(|p| p.0.len()));

@@ -2,6 +2,7 @@
 //! far enough apart to be compressed, and which are leaves computed exactly.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::CompressionOptions;
 use super::cluster::{Cluster, ClusterTree};
@@ -157,24 +158,41 @@ impl Walk<'_> {
         // Smooth neighbours gain nothing from small leaves; where visibility varies they do.
         let leaf = if class == PairClass::Smooth { self.options.leaf_size } else { 0 };
         let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
-        match (split(tc), split(sc)) {
-            (None, None) => plan.near.push((t, s)),
-            (None, Some((s1, s2))) => {
-                self.visit(plan, t, s1);
-                self.visit(plan, t, s2);
+        let children: Vec<(usize, usize)> = match (split(tc), split(sc)) {
+            (None, None) => {
+                plan.near.push((t, s));
+                return;
             }
-            (Some((t1, t2)), None) => {
-                self.visit(plan, t1, s);
-                self.visit(plan, t2, s);
+            (None, Some((s1, s2))) => vec![(t, s1), (t, s2)],
+            (Some((t1, t2)), None) => vec![(t1, s), (t2, s)],
+            (Some((t1, t2)), Some((s1, s2))) => vec![(t1, s1), (t1, s2), (t2, s1), (t2, s2)],
+        };
+        // Large blocks' subtrees in parallel (each classification is a shaft test); the plans
+        // are joined in order, so the plan is the same as a sequential walk's.
+        if tc.len() * sc.len() >= PARALLEL_PAIRS {
+            let parts: Vec<BlockPlan> = children
+                .par_iter()
+                .map(|&(a, b)| {
+                    let mut part = BlockPlan::default();
+                    self.visit(&mut part, a, b);
+                    part
+                })
+                .collect();
+            for part in parts {
+                plan.near.extend(part.near);
+                plan.far.extend(part.far);
+                plan.empty += part.empty;
             }
-            (Some((t1, t2)), Some((s1, s2))) => {
-                for (a, b) in [(t1, s1), (t1, s2), (t2, s1), (t2, s2)] {
-                    self.visit(plan, a, b);
-                }
+        } else {
+            for (a, b) in children {
+                self.visit(plan, a, b);
             }
         }
     }
 }
+
+/// Blocks of at least this many pairs have their subtrees walked in parallel.
+const PARALLEL_PAIRS: usize = 1 << 16;
 
 /// The class of a block: nothing if every face pair gives nothing, smooth if every one is smooth
 /// or nothing, mixed otherwise (and whenever it spans too many face pairs to test).

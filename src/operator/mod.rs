@@ -34,7 +34,7 @@ use crate::gpu::PairEvaluator;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner, PairStats, Visibility};
+use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
 
 use aca::LowRank;
 use blocks::{BlockPlan, FacePairs};
@@ -236,16 +236,35 @@ impl CompressedOperator {
                 batched::build_blocks(&entries, &plan, &faces, options.tolerance, device, progress)?
             }
             None => {
-                let near = plan.near.par_iter().map(|&(t, s)| {
-                    let (block, stats) = entries.exact_block(t, s);
-                    progress.advance(1);
-                    (block, stats, false)
+                // Admissible blocks too small for a low rank to pay are exact from the start.
+                let (small, far): (Vec<_>, Vec<_>) =
+                    plan.far.iter().partition(|&&(t, s)| entries.useful_rank(t, s).is_none());
+                let exact: Vec<(usize, usize, bool)> = plan
+                    .near
+                    .iter()
+                    .map(|&(t, s)| (t, s, false))
+                    .chain(small.into_iter().map(|(t, s)| (t, s, true)))
+                    .collect();
+                // The exact blocks of one node cluster together: each node's views of the faces
+                // are found once for all of them.
+                let near = by_node_cluster(&exact).into_par_iter().flat_map_iter(|group| {
+                    let mut views = NodeViews::default();
+                    let built: Vec<_> = group
+                        .iter()
+                        .map(|&(t, s, incompressible)| {
+                            let (block, stats) = entries.exact_block(t, s, &mut views);
+                            (block, stats, incompressible)
+                        })
+                        .collect();
+                    progress.advance(built.len());
+                    built
                 });
-                let far = plan.far.par_iter().map(|&(t, s)| {
+                let far = far.into_par_iter().map(|(t, s)| {
                     let r = match entries.compressed_block(t, s, &faces, options.tolerance) {
                         Some(block) => (block, PairStats::default(), false),
                         None => {
-                            let (block, stats) = entries.exact_block(t, s);
+                            let (block, stats) =
+                                entries.exact_block(t, s, &mut NodeViews::default());
                             (block, stats, true)
                         }
                     };
@@ -369,6 +388,38 @@ impl CompressedOperator {
     }
 }
 
+/// The blocks `(t, s, ..)` of `blocks` grouped by node cluster (runs of one `t`, in order).
+fn by_node_cluster<T: Copy + Ord>(blocks: &[(usize, usize, T)]) -> Vec<Vec<(usize, usize, T)>> {
+    let mut sorted = blocks.to_vec();
+    sorted.sort_unstable();
+    sorted.chunk_by(|a, b| a.0 == b.0).map(<[_]>::to_vec).collect()
+}
+
+/// The views of faces found so far from each node of one node cluster, kept while its blocks
+/// are computed one after another.
+#[derive(Default)]
+struct NodeViews {
+    cluster: Option<usize>,
+    rows: Vec<RowViews>,
+}
+
+#[derive(Default)]
+struct RowViews {
+    views: Vec<(usize, FaceView)>,
+    hiders: RecentHiders,
+}
+
+impl NodeViews {
+    /// Ready for node cluster `t` of `m` nodes (cleared when it is another cluster).
+    fn prepare(&mut self, t: usize, m: usize) {
+        if self.cluster != Some(t) {
+            self.cluster = Some(t);
+            self.rows.clear();
+            self.rows.resize_with(m, RowViews::default);
+        }
+    }
+}
+
 /// Computes entries of K for blocks.
 struct Entries<'a> {
     mesh: &'a Mesh,
@@ -383,32 +434,40 @@ struct Entries<'a> {
 impl Entries<'_> {
     /// Walks the pairs of block (t, s) by the dense path's pair plan (views per node and face,
     /// exact visible parts), calling `each(r, k, i, j, visibility)` for every pair that is not
-    /// skipped: row r of the block (node i), element k of the block (element j).
+    /// skipped: row r of the block (node i), element k of the block (element j). `views` keeps
+    /// the nodes' views of faces between blocks of the same node cluster.
     fn visible_pairs(
         &self,
         t: usize,
         s: usize,
+        views: &mut NodeViews,
         mut each: impl FnMut(usize, usize, usize, usize, Visibility),
     ) -> PairStats {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let mut stats = PairStats::default();
         let element_ids = &self.elements.order[sc.start..sc.end];
+        views.prepare(t, tc.len());
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
             let node = &self.disc.nodes[i];
             if node.rho == 0.0 {
                 stats += PairStats::not_reflecting_row(sc.len());
                 continue;
             }
-            let mut views: Vec<(usize, FaceView)> = Vec::new();
+            let row = &mut views.rows[r];
             for (k, &j) in element_ids.iter().enumerate() {
                 let el = &self.disc.elements[j];
-                let view = match views.iter().position(|(f, _)| *f == el.face) {
-                    Some(p) => &views[p].1,
+                let view = match row.views.iter().position(|(f, _)| *f == el.face) {
+                    Some(p) => &row.views[p].1,
                     None => {
-                        let v =
-                            self.planner.face_view(node.position, node.normal, node.face, el.face);
-                        views.push((el.face, v));
-                        &views[views.len() - 1].1
+                        let v = self.planner.face_view_with(
+                            node.position,
+                            node.normal,
+                            node.face,
+                            el.face,
+                            &mut row.hiders,
+                        );
+                        row.views.push((el.face, v));
+                        &row.views[row.views.len() - 1].1
                     }
                 };
                 let vis = match view {
@@ -426,11 +485,11 @@ impl Entries<'_> {
     }
 
     /// Every entry of the block, by the dense path's pair plan and kernels.
-    fn exact_block(&self, t: usize, s: usize) -> (Block, PairStats) {
+    fn exact_block(&self, t: usize, s: usize, views: &mut NodeViews) -> (Block, PairStats) {
         let per = self.per;
         let (m, width) = self.block_size(t, s);
         let mut data = vec![0.0; m * width];
-        let stats = self.visible_pairs(t, s, |r, k, i, j, vis| {
+        let stats = self.visible_pairs(t, s, views, |r, k, i, j, vis| {
             let node = &self.disc.nodes[i];
             let el = &self.disc.elements[j];
             let values = self.integrator.integrate(
