@@ -34,9 +34,8 @@ impl LowRank {
             let row = &self.v[j * self.k..(j + 1) * self.k];
             t.iter_mut().zip(row).for_each(|(t, v)| *t += v * xj);
         }
-        for (i, yi) in y.iter_mut().enumerate() {
-            let row = &self.u[i * self.k..(i + 1) * self.k];
-            *yi += row.iter().zip(&t).map(|(u, t)| u * t).sum::<f64>();
+        for (yi, row) in y.iter_mut().zip(self.u.chunks_exact(self.k.max(1))) {
+            *yi += dot(row, &t);
         }
     }
 
@@ -289,8 +288,20 @@ impl Aca {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+/// `a · b` in four interleaved partial sums, which the compiler keeps in vector registers (a
+/// single running sum is a chain of dependent additions); the order of the additions is fixed,
+/// so the result is the same on every run.
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a4, b4) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
+    let tail: f64 = a4.remainder().iter().zip(b4.remainder()).map(|(x, y)| x * y).sum();
+    let mut s = [0.0; 4];
+    for (x, y) in a4.zip(b4) {
+        for l in 0..4 {
+            s[l] += x[l] * y[l];
+        }
+    }
+    (s[0] + s[2]) + (s[1] + s[3]) + tail
 }
 
 fn norm(a: &[f64]) -> f64 {
