@@ -224,6 +224,20 @@ pub enum Error {
         /// Memory allowed.
         available_gib: f64,
     },
+    /// A compressed operator that cannot fit in memory.
+    #[error(
+        "the compressed operator of {dof} unknowns needs at least {needed_gib:.1} GiB but only \
+         {available_gib:.1} GiB may be used; raise --compression-tolerance, use a coarser mesh \
+         (each refinement level multiplies the memory by about 5) or a machine with more memory"
+    )]
+    OperatorTooLarge {
+        /// Unknowns.
+        dof: usize,
+        /// Memory of the blocks built (or counted) when it was stopped: a lower bound.
+        needed_gib: f64,
+        /// Memory allowed.
+        available_gib: f64,
+    },
     /// The linear system is singular or too ill-conditioned to solve.
     #[error(
         "the system I - K is singular or nearly singular ({reason}; estimated condition number \

@@ -15,6 +15,11 @@ pub struct CollocationMatrix {
 /// Fraction of the available memory one large allocation may take.
 const MEMORY_SHARE: f64 = 0.8;
 
+/// Bytes one large structure may take: [`MEMORY_SHARE`] of the available memory, if known.
+pub fn memory_allowance() -> Option<f64> {
+    available_memory().map(|avail| MEMORY_SHARE * avail as f64)
+}
+
 /// Memory the system reports as available, in bytes (`MemAvailable` of /proc/meminfo), if known.
 pub fn available_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -27,8 +32,7 @@ pub fn available_memory() -> Option<u64> {
 /// available memory: checked before a large allocation, so that a size that cannot fit is
 /// refused with a message instead of ending in the out-of-memory killer.
 pub fn check_fits(bytes: f64, dof: usize) -> Result<()> {
-    if let Some(avail) = available_memory() {
-        let allowed = MEMORY_SHARE * avail as f64;
+    if let Some(allowed) = memory_allowance() {
         if bytes > allowed {
             return Err(Error::TooLarge {
                 dof,

@@ -7,7 +7,7 @@
 mod matrix;
 mod options;
 
-pub use matrix::{CollocationMatrix, available_memory, check_fits};
+pub use matrix::{CollocationMatrix, available_memory, check_fits, memory_allowance};
 pub use options::{AssemblyOptions, Quadrature};
 
 use std::f64::consts::PI;

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
-use super::{Block, BlockData, Entries, NodeViews, by_node_cluster};
+use super::{Block, BlockData, Entries, MemoryGuard, NodeViews, by_node_cluster};
 use crate::error::Result;
 use crate::gpu::{PairEvaluator, PairTask};
 use crate::progress::Progress;
@@ -45,6 +45,7 @@ pub(super) fn build_blocks(
     faces: &FacePairs,
     tolerance: f64,
     device: &PairEvaluator,
+    guard: &MemoryGuard,
     progress: &dyn Progress,
 ) -> Result<Vec<(Block, PairStats, bool)>> {
     let mut built = Vec::with_capacity(plan.near.len() + plan.far.len());
@@ -74,6 +75,7 @@ pub(super) fn build_blocks(
             }
             match x.aca.finish() {
                 Some(lr) => {
+                    guard.add(8 * lr.len() as u64);
                     built.push((
                         entries.block(x.t, x.s, BlockData::LowRank(lr)),
                         PairStats::default(),
@@ -85,6 +87,7 @@ pub(super) fn build_blocks(
             }
         }
         crossings = running;
+        guard.check(0)?;
     }
 
     // By node cluster, so that each node's views of the faces are found once per round.
@@ -136,7 +139,9 @@ pub(super) fn build_blocks(
             })
             .collect();
         progress.advance(done.len());
+        guard.add(done.iter().map(|d| d.0.bytes()).sum());
         built.extend(done);
+        guard.check(0)?;
     }
     Ok(built)
 }

@@ -23,11 +23,12 @@ mod blocks;
 pub mod cluster;
 
 use std::f64::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairIntegrator, check_fits};
+use crate::assembly::{AssemblyOptions, PairIntegrator, memory_allowance};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::gpu::PairEvaluator;
@@ -220,8 +221,9 @@ impl CompressedOperator {
         let elements = ClusterTree::new(&element_items, tree_leaf);
         let faces = FacePairs::new(scene, planner);
         let plan = BlockPlan::new(&nodes, &elements, &faces, options);
-        // The exact blocks alone must fit before any is computed.
-        check_fits(8.0 * plan.near_entries(&nodes, &elements, per) as f64, disc.dof())?;
+        // The exact blocks alone must fit before any is computed; then every block built counts.
+        let guard = MemoryGuard::new(disc.dof());
+        guard.check(8 * plan.near_entries(&nodes, &elements, per))?;
 
         let integrator = PairIntegrator::new(disc.method, assembly);
         let entries = Entries {
@@ -235,9 +237,15 @@ impl CompressedOperator {
         };
         progress.start("compression", plan.near.len() + plan.far.len());
         let built: Vec<(Block, PairStats, bool)> = match device {
-            Some(device) => {
-                batched::build_blocks(&entries, &plan, &faces, options.tolerance, device, progress)?
-            }
+            Some(device) => batched::build_blocks(
+                &entries,
+                &plan,
+                &faces,
+                options.tolerance,
+                device,
+                &guard,
+                progress,
+            )?,
             None => {
                 // Admissible blocks too small for a low rank to pay are exact from the start.
                 let (small, far): (Vec<_>, Vec<_>) =
@@ -254,15 +262,17 @@ impl CompressedOperator {
                     let mut views = NodeViews::default();
                     let built: Vec<_> = group
                         .iter()
+                        .filter(|_| !guard.is_over())
                         .map(|&(t, s, incompressible)| {
                             let (block, stats) = entries.exact_block(t, s, &mut views);
+                            guard.add(block.bytes());
                             (block, stats, incompressible)
                         })
                         .collect();
                     progress.advance(built.len());
                     built
                 });
-                let far = far.into_par_iter().map(|(t, s)| {
+                let far = far.into_par_iter().filter(|_| !guard.is_over()).map(|(t, s)| {
                     let r = match entries.compressed_block(t, s, &faces, options.tolerance) {
                         Some(block) => (block, PairStats::default(), false),
                         None => {
@@ -271,10 +281,13 @@ impl CompressedOperator {
                             (block, stats, true)
                         }
                     };
+                    guard.add(r.0.bytes());
                     progress.advance(1);
                     r
                 });
-                near.chain(far).collect()
+                let built = near.chain(far).collect();
+                guard.check(0)?;
+                built
             }
         };
         progress.finish();
@@ -388,6 +401,59 @@ impl CompressedOperator {
                 diff / b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE)
             })
             .fold(0.0, f64::max)
+    }
+}
+
+impl Block {
+    /// Bytes of its stored values.
+    fn bytes(&self) -> u64 {
+        8 * match &self.data {
+            BlockData::Dense(d) => d.len(),
+            BlockData::LowRank(lr) => lr.len(),
+        } as u64
+    }
+}
+
+/// The memory of the blocks built so far against what may be used ([`memory_allowance`] when
+/// the build starts): a build that outgrows it stops with [`Error::OperatorTooLarge`] instead
+/// of ending in the out-of-memory killer.
+struct MemoryGuard {
+    dof: usize,
+    allowance: Option<f64>,
+    stored: AtomicU64,
+}
+
+impl MemoryGuard {
+    fn new(dof: usize) -> Self {
+        Self { dof, allowance: memory_allowance(), stored: AtomicU64::new(0) }
+    }
+
+    /// Counts `bytes` stored.
+    fn add(&self, bytes: u64) {
+        self.stored.fetch_add(bytes, Ordering::Relaxed);
+    }
+
+    /// Whether what is stored exceeds the allowance.
+    fn is_over(&self) -> bool {
+        self.over_by(0)
+    }
+
+    fn over_by(&self, more: u64) -> bool {
+        let stored = self.stored.load(Ordering::Relaxed) + more;
+        self.allowance.is_some_and(|a| stored as f64 > a)
+    }
+
+    /// The error when what is stored, with `more` bytes, exceeds the allowance.
+    fn check(&self, more: u64) -> Result<()> {
+        if !self.over_by(more) {
+            return Ok(());
+        }
+        let gib = |b: f64| b / (1u64 << 30) as f64;
+        Err(Error::OperatorTooLarge {
+            dof: self.dof,
+            needed_gib: gib((self.stored.load(Ordering::Relaxed) + more) as f64),
+            available_gib: gib(self.allowance.unwrap_or(0.0)),
+        })
     }
 }
 

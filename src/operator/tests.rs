@@ -156,3 +156,19 @@ fn bad_tolerances_are_refused_with_the_limit() {
         assert!(e.contains("compression tolerance") && e.contains("(0, 1)"), "{e}");
     }
 }
+
+#[test]
+fn an_operator_that_outgrows_the_memory_allowance_is_refused_with_the_limit_named() {
+    let guard =
+        MemoryGuard { dof: 491_520, allowance: Some(3.0 * (1u64 << 30) as f64), stored: 0.into() };
+    assert!(guard.check(2 << 30).is_ok());
+    guard.add(2 << 30);
+    assert!(!guard.is_over());
+    guard.add(2 << 30);
+    assert!(guard.is_over());
+    let message = guard.check(0).unwrap_err().to_string();
+    for needle in ["491520 unknowns", "at least 4.0 GiB", "only 3.0 GiB", "--compression-tolerance"]
+    {
+        assert!(message.contains(needle), "'{needle}' not in: {message}");
+    }
+}

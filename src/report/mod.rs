@@ -246,6 +246,9 @@ pub fn compression_table(
         &fits,
         format,
     );
+    for note in &study.left_out {
+        s += &format!("\nleft out: {note}\n");
+    }
     for path in &study.figures {
         s += &format!("\nwrote {path}\n");
     }
