@@ -244,21 +244,18 @@ fn tiles_whose_visible_pieces_outgrow_a_binding_are_split() {
     assert!(d <= 1e-12, "{d:e}");
 }
 
+/// `radiosity bench` of `scene` at refine `refine`, one repetition, with `extra` options, as JSON.
+fn bench_json(scene: &str, method: &str, refine: &str, extra: &[&str]) -> serde_json::Value {
+    let mut args =
+        vec!["bench", "--scene", scene, "--method", method, "--refine", refine, "--repeats", "1"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--json", "-"]);
+    common::json(&args)
+}
+
 /// `radiosity bench` of `scene` at refine 1, one repetition, as JSON.
 fn bench_once(scene: &str, method: &str) -> serde_json::Value {
-    common::json(&[
-        "bench",
-        "--scene",
-        scene,
-        "--method",
-        method,
-        "--refine",
-        "1",
-        "--repeats",
-        "1",
-        "--json",
-        "-",
-    ])
+    bench_json(scene, method, "1", &[])
 }
 
 #[test]
@@ -331,13 +328,10 @@ fn a_scene_far_from_the_origin_assembles_on_the_gpu_within_the_usual_tolerance()
     }
 }
 
-/// `bench` times the matrix `solve` uses: on the GPU, the columns of thin elements (where the
-/// closed forms cancel) are recomputed on the CPU in both. Before, `bench` skipped that step and
-/// its GPU matrix differed from the CPU's by 5.4e-11 here (linear method).
-#[test]
-fn bench_assembles_what_solve_assembles_also_on_thin_elements() {
-    let Some(_) = gpu() else { return };
-    let dir = std::env::temp_dir().join(format!("radiosity-gpu-thin-{}", std::process::id()));
+/// A scene file (in a temporary folder named after `test`) of a lit floor under a shelf 0.01
+/// wide and 1 long: its elements are thin, where the closed forms cancel.
+fn sliver_scene(test: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("radiosity-gpu-{test}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("sliver.toml");
     std::fs::write(
@@ -349,6 +343,16 @@ fn bench_assembles_what_solve_assembles_also_on_thin_elements() {
          vertices = [[0, 0.5, 0.3], [0, 0.51, 0.3], [1, 0.51, 0.3], [1, 0.5, 0.3]]\n",
     )
     .unwrap();
+    scene
+}
+
+/// `bench` times the matrix `solve` uses: on the GPU, the columns of thin elements (where the
+/// closed forms cancel) are recomputed on the CPU in both. Before, `bench` skipped that step and
+/// its GPU matrix differed from the CPU's by 5.4e-11 here (linear method).
+#[test]
+fn bench_assembles_what_solve_assembles_also_on_thin_elements() {
+    let Some(_) = gpu() else { return };
+    let scene = sliver_scene("thin");
     let v = bench_once(scene.to_str().unwrap(), "linear");
     assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-13, "{v}");
     assert!(v["gpu"]["preparation_seconds"].as_f64().unwrap() > 0.0, "{v}");
@@ -369,25 +373,8 @@ fn gpu_check_runs_more_samples_than_one_dispatch_holds() {
 
 /// `bench --operator compressed --backends cpu,gpu` of `scene`, one repetition, as JSON.
 fn bench_compressed(scene: &str, method: &str, refine: &str, tolerance: &str) -> serde_json::Value {
-    common::json(&[
-        "bench",
-        "--scene",
-        scene,
-        "--method",
-        method,
-        "--refine",
-        refine,
-        "--operator",
-        "compressed",
-        "--compression-tolerance",
-        tolerance,
-        "--backends",
-        "cpu,gpu",
-        "--repeats",
-        "1",
-        "--json",
-        "-",
-    ])
+    let extra = ["--operator", "compressed", "--compression-tolerance", tolerance];
+    bench_json(scene, method, refine, &[&extra[..], &["--backends", "cpu,gpu"]].concat())
 }
 
 /// The compressed operator built by the GPU's pair kernel (exact blocks in batches, cross
@@ -398,18 +385,7 @@ fn bench_compressed(scene: &str, method: &str, refine: &str, tolerance: &str) ->
 #[test]
 fn the_compressed_operator_built_on_the_gpu_matches_the_one_built_on_the_cpu() {
     let Some(_) = gpu() else { return };
-    let dir = std::env::temp_dir().join(format!("radiosity-gpu-compressed-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let sliver = dir.join("sliver.toml");
-    std::fs::write(
-        &sliver,
-        "name = \"sliver-shelf\"\n[defaults]\nrho = 0.5\n\
-         [[faces]]\nname = \"floor\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n\
-         emission = 1.0\n\
-         [[faces]]\nname = \"shelf\"\n\
-         vertices = [[0, 0.5, 0.3], [0, 0.51, 0.3], [1, 0.51, 0.3], [1, 0.5, 0.3]]\n",
-    )
-    .unwrap();
+    let sliver = sliver_scene("compressed");
     let cases = [
         ("five-piece", "centroid", "3", 1e-6, true),
         ("five-piece", "centroid", "3", 1e-12, true),
