@@ -38,12 +38,14 @@ fn kernels(c: &mut Criterion) {
     group.bench_function("paper right triangles (4.10), constant weight", |b| {
         b.iter(|| paper_closed_form::constant_weight(black_box(&near), &tri))
     });
-    let observers = [near, Observer { position: DVec3::new(-0.2, 0.9, 0.1), ..near }, far, near];
+    let four = [near, Observer { position: DVec3::new(-0.2, 0.9, 0.1), ..near }, far, near];
+    let observers: [Observer; lanes::LANES] = std::array::from_fn(|l| four[l % 4]);
     let triangles = [tri; lanes::LANES];
-    group.bench_function("closed form, constant weight, 4 pairs scalar", |b| {
+    let pairs = lanes::LANES;
+    group.bench_function(format!("closed form, constant weight, {pairs} pairs scalar"), |b| {
         b.iter(|| black_box(&observers).map(|o| exact::constant_weight(&o, loops)))
     });
-    group.bench_function("closed form, constant weight, 4 pairs in lanes", |b| {
+    group.bench_function(format!("closed form, constant weight, {pairs} pairs in lanes"), |b| {
         b.iter(|| lanes::constant_weight(black_box(&observers), &triangles))
     });
     let rule = FarFieldRule::standard();

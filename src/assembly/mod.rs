@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::discretization::{Discretization, ElementFrame, Method, Node};
 use crate::error::Result;
-use crate::kernels::far_field::{self, FarFieldRule};
+use crate::kernels::far_field::FarFieldRule;
 use crate::kernels::graded::GradedRule;
 use crate::kernels::{Affine2, Observer, exact, lanes};
 use crate::mesh::Mesh;
@@ -82,31 +82,20 @@ impl PairIntegrator {
         if !self.lanes {
             return full();
         }
-        let Some((obs, local, _)) = self.scaled(el, p, normal) else {
+        let Some(obs) = self.observer(el, p, normal) else {
             return FullPair::Values([0.0; 3]);
         };
-        let thin = self.subdivision.is_some() && far_field::is_thin(&local);
-        let banded = self
-            .far_field
-            .as_ref()
-            .is_some_and(|rule| rule.band(&obs, far_field::radius(&local)).is_some());
-        if thin || banded { full() } else { FullPair::Lane(obs, local) }
+        let thin = self.subdivision.is_some() && el.thin;
+        let banded =
+            self.far_field.as_ref().is_some_and(|rule| rule.band(&obs, el.scaled_radius).is_some());
+        if thin || banded { full() } else { FullPair::Lane(obs, el.scaled) }
     }
 
-    /// The observer and the element in units of the element's size, or `None` when the node is
-    /// not above the element's plane.
-    fn scaled(
-        &self,
-        el: &ElementFrame,
-        p: glam::DVec3,
-        normal: glam::DVec3,
-    ) -> Option<(Observer, [DVec2; 3], f64)> {
-        // The integrals are invariant under scaling (G dS is dimensionless), so the pair is
-        // integrated in units of the element's size, a power of two (exact): no square or fourth
-        // power of a length can under- or overflow, whatever the scene's unit.
-        let unit = crate::geometry::power_of_two_unit(far_field::radius(&el.local));
+    /// The node seen from the element's frame in the element's units ([`ElementFrame::unit`]),
+    /// or `None` when the node is not above the element's plane.
+    fn observer(&self, el: &ElementFrame, p: glam::DVec3, normal: glam::DVec3) -> Option<Observer> {
         let obs = Observer {
-            position: el.frame.to_local(p) * unit,
+            position: el.frame.to_local(p) * el.unit,
             normal: el.frame.dir_to_local(normal),
         };
         // The pair plan decided the node is above the face's plane in the face's frame; in the
@@ -116,7 +105,7 @@ impl PairIntegrator {
         if obs.position.z.is_nan() || obs.position.z <= 0.0 {
             return None;
         }
-        Some((obs, el.local.map(|v| v * unit), unit))
+        Some(obs)
     }
 
     /// `∫ G φ_l` over the visible part of element `el` for each of its basis functions, seen from a
@@ -132,9 +121,10 @@ impl PairIntegrator {
         if let Visibility::Skip(_) = visibility {
             return [0.0; 3];
         }
-        let Some((obs, local, unit)) = self.scaled(el, p, normal) else {
+        let Some(obs) = self.observer(el, p, normal) else {
             return [0.0; 3];
         };
+        let unit = el.unit;
         let basis = basis.map(|b| Affine2 { c0: b.c0, cx: b.cx / unit, cy: b.cy / unit });
         match visibility {
             Visibility::Partial(pieces) => {
@@ -143,30 +133,30 @@ impl PairIntegrator {
                     .map(|piece| piece.iter().map(|&q| (q - el.centroid_in_face) * unit).collect())
                     .collect();
                 let loops: Vec<&[DVec2]> = shifted.iter().map(Vec::as_slice).collect();
-                self.integrate_loops(&obs, &local, &loops, &basis)
+                self.integrate_loops(&obs, el, &loops, &basis)
             }
-            _ => self.integrate_loops(&obs, &local, &[&local[..]], &basis),
+            _ => self.integrate_loops(&obs, el, &[&el.scaled[..]], &basis),
         }
     }
 
-    /// `∫ G φ_l` over `loops`: the visible convex pieces of an element with vertices `local`,
-    /// counter-clockwise, in its local coordinates.
+    /// `∫ G φ_l` over `loops`: the visible convex pieces of element `el`, counter-clockwise, in
+    /// its local coordinates and units ([`ElementFrame::scaled`]).
     fn integrate_loops(
         &self,
         obs: &Observer,
-        local: &[DVec2; 3],
+        el: &ElementFrame,
         loops: &[&[DVec2]],
         basis: &[Affine2; 3],
     ) -> [f64; 3] {
         if let Some(rule) = &self.graded {
-            return rule.integrate(obs, local, loops, basis);
+            return rule.integrate(obs, &el.scaled, loops, basis);
         }
-        if let Some(rule) = self.subdivision.as_ref().filter(|_| far_field::is_thin(local)) {
+        if let Some(rule) = self.subdivision.as_ref().filter(|_| el.thin) {
             let near = |piece: &[DVec2; 3]| self.closed_forms(obs, &[&piece[..]], basis);
             return integrate_fan(loops, |tri| rule.integrate_subdivided(obs, tri, basis, near));
         }
         if let Some(band) =
-            self.far_field.as_ref().and_then(|rule| rule.band(obs, far_field::radius(local)))
+            self.far_field.as_ref().and_then(|rule| rule.band(obs, el.scaled_radius))
         {
             return integrate_fan(loops, |tri| obs.integrate_by_rule(&band.rule, tri, basis));
         }
@@ -242,8 +232,7 @@ pub fn recompute_thin_columns(
     planner: &PairPlanner,
     options: &AssemblyOptions,
 ) {
-    let thin: Vec<usize> =
-        (0..disc.elements.len()).filter(|&j| far_field::is_thin(&disc.elements[j].local)).collect();
+    let thin: Vec<usize> = (0..disc.elements.len()).filter(|&j| disc.elements[j].thin).collect();
     if thin.is_empty() || !options.far_field {
         return;
     }

@@ -12,7 +12,7 @@ use glam::{DVec2, DVec3};
 
 use crate::error::{Error, Result};
 use crate::geometry::PlaneFrame;
-use crate::kernels::Affine2;
+use crate::kernels::{Affine2, far_field};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 
@@ -100,6 +100,16 @@ pub struct ElementFrame {
     pub centroid_in_face: DVec2,
     /// Vertices in the local frame's 2-D coordinates (counter-clockwise).
     pub local: [DVec2; 3],
+    /// The element's unit of length: a power of two near its radius, so that scaling by it is
+    /// exact. The kernels integrate in these units, where no square or fourth power of a length
+    /// under- or overflows, whatever the scene's unit (G dS is invariant under scaling).
+    pub unit: f64,
+    /// `local` times `unit`.
+    pub scaled: [DVec2; 3],
+    /// Radius of `scaled` about the centroid ([`far_field::radius`]).
+    pub scaled_radius: f64,
+    /// Whether the closed forms cancel on it ([`far_field::is_thin`]).
+    pub thin: bool,
 }
 
 impl ElementFrame {
@@ -136,11 +146,17 @@ impl Discretization {
             let centroid = e.centroid();
             let frame = face.frame.with_origin(centroid);
             let local = e.vertices.map(|v| frame.to_plane(v));
+            let unit = crate::geometry::power_of_two_unit(far_field::radius(&local));
+            let scaled = local.map(|v| v * unit);
             elements.push(ElementFrame {
                 frame,
                 face: e.face,
                 centroid_in_face: face.frame.to_plane(centroid),
                 local,
+                unit,
+                scaled,
+                scaled_radius: far_field::radius(&scaled),
+                thin: far_field::is_thin(&local),
             });
             let node = |position| Node {
                 position,

@@ -11,7 +11,6 @@ use super::layout::{self, Params, VIEW_STRIDE};
 use crate::assembly::{AssemblyOptions, PairIntegrator};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
-use crate::kernels::far_field;
 use crate::scene::Scene;
 use crate::visibility::Visibility;
 
@@ -38,7 +37,7 @@ pub struct PairEvaluator<'a> {
     assembler: &'a GpuAssembler<'a>,
     scene: &'a Scene,
     disc: &'a Discretization,
-    /// Thin elements ([`far_field::is_thin`]): their closed forms cancel, so their pairs are
+    /// Thin elements ([`crate::discretization::ElementFrame::thin`]): their closed forms cancel, so their pairs are
     /// recomputed on the CPU, as the dense GPU path does.
     thin: Vec<bool>,
     integrator: PairIntegrator,
@@ -77,11 +76,7 @@ impl<'a> PairEvaluator<'a> {
             .max_storage_buffer_binding_size
             .min(ctx.limits.max_buffer_size)
             .min(BATCH_BYTES);
-        let thin = disc
-            .elements
-            .iter()
-            .map(|el| options.far_field && far_field::is_thin(&el.local))
-            .collect();
+        let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
         Ok(Self {
             assembler,
             scene,
