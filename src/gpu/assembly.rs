@@ -218,7 +218,7 @@ fn far_field_rule(precision: Precision, method: Method, enabled: bool) -> Option
 
 /// The uniform tables (TABLE_SIZE entries of 4 reals): IMT nodes (x, w), then one header per
 /// far-field band ((ratio + 1)², first entry, count) and the bands' points (u, v, w).
-pub(super) fn tables(
+fn tables(
     options: &AssemblyOptions,
     method: Method,
     precision: Precision,
@@ -260,6 +260,18 @@ pub(super) fn tables(
         entries.into_iter().flatten().collect(),
         RuleCounts { imt: imt.nodes().len(), rule_offset, bands },
     ))
+}
+
+/// What [`GpuAssembler::upload`] puts on the device.
+pub(super) struct Uploaded {
+    /// Scene lengths times `unit` are what the device sees.
+    pub(super) unit: f64,
+    /// The packed elements ([`layout::pack_elements`]).
+    pub(super) elements: wgpu::Buffer,
+    /// The IMT and far-field tables.
+    pub(super) tables: wgpu::Buffer,
+    /// Where the tables' parts start.
+    pub(super) counts: RuleCounts,
 }
 
 struct InFlight {
@@ -318,6 +330,31 @@ impl<'a> GpuAssembler<'a> {
         *self.timings.lock().expect("timings lock")
     }
 
+    /// The elements of `disc` and the rule tables on the device, lengths in units of the
+    /// scene's size (a power of two, exact), so that no square or fourth power of a length
+    /// under- or overflows, in f32 least of all.
+    pub(super) fn upload(
+        &self,
+        scene: &Scene,
+        disc: &Discretization,
+        options: &AssemblyOptions,
+    ) -> Result<Uploaded> {
+        let (ctx, p) = (self.ctx, self.precision);
+        let largest_face = scene.faces.iter().map(|f| f.size()).fold(0.0, f64::max);
+        let unit = crate::geometry::power_of_two_unit(largest_face);
+        let elements =
+            compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc, unit), p));
+        let (table_values, counts) = tables(options, self.method, p)?;
+        let tables = compute::uniform(ctx, &layout::real_bytes(&table_values, p));
+        Ok(Uploaded { unit, elements, tables, counts })
+    }
+
+    /// Bytes one storage binding may hold on the device.
+    pub(super) fn max_binding(&self) -> u64 {
+        let limits = &self.ctx.limits;
+        limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+    }
+
     /// Assembles K like [`crate::assembly::assemble`]. `progress` receives rows finished.
     pub fn assemble(
         &self,
@@ -362,20 +399,8 @@ impl<'a> GpuAssembler<'a> {
         let dof = disc.dof();
         let mut matrix = CollocationMatrix::zeros(dof)?;
         let p = self.precision;
-        // Lengths go to the device in units of the scene's size (a power of two, exact), so that
-        // no square or fourth power of a length under- or overflows, in f32 least of all.
-        let largest_face = scene.faces.iter().map(|f| f.size()).fold(0.0, f64::max);
-        let unit = crate::geometry::power_of_two_unit(largest_face);
-        let elements =
-            compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc, unit), p));
-        let (tables, counts) = tables(options, self.method, self.precision)?;
-        let tables = compute::uniform(ctx, &layout::real_bytes(&tables, p));
-
-        let max_binding = ctx
-            .limits
-            .max_storage_buffer_binding_size
-            .min(ctx.limits.max_buffer_size)
-            .min(limits.binding_bytes);
+        let Uploaded { unit, elements, tables, counts } = self.upload(scene, disc, options)?;
+        let max_binding = self.max_binding().min(limits.binding_bytes);
         // Per row of a tile: its output and its views of every face (a scene of 10 000 faces has
         // 5 MB of views per row in f64, more than its output row).
         let row_bytes = (dof * p.bytes()) as u64;

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::assembly::{GpuAssembler, RuleCounts, tables};
+use super::assembly::{GpuAssembler, RuleCounts, Uploaded};
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
 use crate::assembly::{AssemblyOptions, PairIntegrator};
@@ -63,19 +63,8 @@ impl<'a> PairEvaluator<'a> {
                 disc.method.name()
             )));
         }
-        let (ctx, p) = (assembler.ctx, assembler.precision);
-        // Lengths in units of the scene's size, as in the dense path.
-        let largest_face = scene.faces.iter().map(|f| f.size()).fold(0.0, f64::max);
-        let unit = crate::geometry::power_of_two_unit(largest_face);
-        let elements =
-            compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc, unit), p));
-        let (table_values, counts) = tables(options, assembler.method, p)?;
-        let tables = compute::uniform(ctx, &layout::real_bytes(&table_values, p));
-        let budget = ctx
-            .limits
-            .max_storage_buffer_binding_size
-            .min(ctx.limits.max_buffer_size)
-            .min(BATCH_BYTES);
+        let Uploaded { unit, elements, tables, counts } = assembler.upload(scene, disc, options)?;
+        let budget = assembler.max_binding().min(BATCH_BYTES);
         let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
         Ok(Self {
             assembler,
