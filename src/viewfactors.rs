@@ -247,13 +247,14 @@ impl OuterRules {
     }
 }
 
-/// How the point-to-element integral of a pair is found at each outer point.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Sight {
-    /// The whole element is seen from every point of the outer one.
+/// How the point-to-element integral of a pair is found at each outer point of a piece.
+#[derive(Clone, Copy)]
+enum Sight<'a> {
+    /// The whole element is seen from every point of the piece.
     Whole,
-    /// Per point: the node's view of the face, clipped and shadowed exactly.
-    PerPoint,
+    /// Per point: the node's view of the face, clipped and shadowed exactly by these occluder
+    /// pieces (those that can come between the piece and the element).
+    PerPoint(&'a [usize]),
 }
 
 impl Context<'_> {
@@ -288,11 +289,6 @@ impl Context<'_> {
             Vec::new()
         };
         let in_front = |h: [f64; 3]| h.iter().all(|&h| h >= -tol);
-        let sight = if occluders.is_empty() && in_front(hj) && in_front(hi) {
-            Sight::Whole
-        } else {
-            Sight::PerPoint
-        };
         // The outer element cut where the integrand is not smooth: behind the other element's
         // plane it sees nothing, and across the event lines of the occluders the visible part
         // of the other element changes its shape.
@@ -304,45 +300,39 @@ impl Context<'_> {
         for (normal, point) in event_planes(&ei.vertices, &ej.vertices, &occluders, self.planner) {
             pieces = pieces.iter().flat_map(|p| split(p, normal, point)).collect();
         }
-        // Where the integrand stops being analytic, besides the other element: a corner of the
-        // visible part of T_j that is the shadow of an occluder vertex runs off to infinity where
-        // the viewer is level with that vertex (over T_j's plane), and one where a shadow edge
-        // cuts an edge of T_j where the two become parallel. Each happens on a plane, so on a
-        // line of T_i's plane; a piece that such a line crosses does not have that corner (it
-        // would cross an event plane first).
-        let ni = fa.frame.normal;
-        let mut poles: Vec<(DVec3, DVec3, f64)> = Vec::new();
-        let mut pole = |normal: DVec3, point: DVec3| {
-            if let Some(m) = normal.try_normalize() {
-                // Distances in T_i's plane: heights over the pole's plane over this sine.
-                let sin = (m - ni * m.dot(ni)).length();
-                if sin > 1e-9 {
-                    poles.push((m, point, sin));
-                }
-            }
-        };
-        let nj = fb.frame.normal;
-        for &o in &occluders {
-            let polygon = &self.planner.occluders()[o].polygon;
-            let m = polygon.len();
-            for k in 0..m {
-                pole(nj, polygon[k]);
-                let edge = polygon[(k + 1) % m] - polygon[k];
-                for l in 0..3 {
-                    pole(edge.cross(ej.vertices[(l + 1) % 3] - ej.vertices[l]), polygon[k]);
-                }
-            }
-        }
-        let g = |p| self.point_to_element(i, j, p, sight);
-        let whole = |points: &[(DVec3, f64)]| self.whole_sum(i, j, points);
-        let part = Part {
-            target: box_j,
-            poles,
-            g: &g,
-            whole: (sight == Sight::Whole).then_some(&whole as &WeightedSum),
-        };
         let mut sum = 0.0;
         for piece in &pieces {
+            // Each piece has its own occluders, among the pair's: a piece in the light of all of
+            // them sees T_j whole (no per-point visibility), one behind an occluder that crosses
+            // every segment to T_j sees nothing, and the others shadow T_j by their own
+            // occluders only, without any search.
+            let (blocking, hidden) = if occluders.is_empty() {
+                (Vec::new(), false)
+            } else {
+                self.planner.polygon_shaft(ei.face, ej.face, piece, &ej.vertices, &occluders)
+            };
+            if hidden {
+                continue;
+            }
+            let sight = if blocking.is_empty() && in_front(hj) {
+                Sight::Whole
+            } else {
+                Sight::PerPoint(&blocking)
+            };
+            let g = |p| self.point_to_element(i, j, p, sight);
+            let whole = |points: &[(DVec3, f64)]| self.whole_sum(i, j, points);
+            let part = Part {
+                target: box_j,
+                poles: poles(
+                    fa.frame.normal,
+                    fb.frame.normal,
+                    &ej.vertices,
+                    &blocking,
+                    self.planner,
+                ),
+                g: &g,
+                whole: matches!(sight, Sight::Whole).then_some(&whole as &WeightedSum),
+            };
             for k in 1..piece.len() - 1 {
                 let t = [piece[0], piece[k], piece[k + 1]];
                 sum += self.outer(t, &part, rules, tally, 0);
@@ -352,15 +342,17 @@ impl Context<'_> {
     }
 
     /// `(1/π) ∫ G V` over element `j` seen from the point `p` of element `i`.
-    fn point_to_element(&self, i: usize, j: usize, p: DVec3, sight: Sight) -> f64 {
+    fn point_to_element(&self, i: usize, j: usize, p: DVec3, sight: Sight<'_>) -> f64 {
         let (ei, el) = (&self.mesh.elements()[i], &self.disc.elements[j]);
         let normal = self.scene.faces[ei.face].frame.normal;
         let vis = match sight {
             Sight::Whole => Visibility::Full,
-            Sight::PerPoint => match self.planner.face_view(p, normal, ei.face, el.face) {
-                FaceView::Skip(reason) => Visibility::Skip(reason),
-                view => self.planner.visible(&view, &el.in_face()),
-            },
+            Sight::PerPoint(among) => {
+                match self.planner.face_view_among(p, normal, ei.face, el.face, among) {
+                    FaceView::Skip(reason) => Visibility::Skip(reason),
+                    view => self.planner.visible(&view, &el.in_face()),
+                }
+            }
         };
         self.integrator.integrate(el, &self.disc.bases[j], p, normal, &vis)[0] / PI
     }
@@ -434,6 +426,44 @@ impl Context<'_> {
             }
         }
     }
+}
+
+/// Where the integrand over T_i (unit normal `ni`) stops being analytic, besides T_j (unit
+/// normal `nj`, vertices `target`): a corner of the visible part of T_j that is the shadow of an
+/// occluder vertex runs off to infinity where the viewer is level with that vertex (over T_j's
+/// plane), and one where a shadow edge cuts an edge of T_j where the two become parallel. Each
+/// happens on a plane, so on a line of T_i's plane; a piece that such a line crosses does not
+/// have that corner (it would cross an event plane first). Returns each plane's unit normal, a
+/// point and the sine of its angle with T_i's plane.
+fn poles(
+    ni: DVec3,
+    nj: DVec3,
+    target: &[DVec3; 3],
+    occluders: &[usize],
+    planner: &PairPlanner,
+) -> Vec<(DVec3, DVec3, f64)> {
+    let mut poles: Vec<(DVec3, DVec3, f64)> = Vec::new();
+    let mut pole = |normal: DVec3, point: DVec3| {
+        if let Some(m) = normal.try_normalize() {
+            // Distances in T_i's plane: heights over the pole's plane over this sine.
+            let sin = (m - ni * m.dot(ni)).length();
+            if sin > 1e-9 {
+                poles.push((m, point, sin));
+            }
+        }
+    };
+    for &o in occluders {
+        let polygon = &planner.occluders()[o].polygon;
+        let m = polygon.len();
+        for k in 0..m {
+            pole(nj, polygon[k]);
+            let edge = polygon[(k + 1) % m] - polygon[k];
+            for l in 0..3 {
+                pole(edge.cross(target[(l + 1) % 3] - target[l]), polygon[k]);
+            }
+        }
+    }
+    poles
 }
 
 /// One pair's outer integrand and where it stops being analytic.

@@ -30,8 +30,8 @@ pub use stats::PairStats;
 use glam::{DVec2, DVec3};
 
 use crate::geometry::{
-    HalfPlane, SmallPolygon, bounding_box, clip_convex, clip_polygon_3d, signed_area,
-    subtract_convex,
+    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
+    signed_area, subtract_convex,
 };
 use crate::scene::Scene;
 
@@ -229,6 +229,35 @@ impl PairPlanner {
         (found, hidden)
     }
 
+    /// Those of `candidates` (occluder pieces, none of faces `a` and `b`) that may meet a
+    /// segment from the convex polygon `from` on face `a` to the convex polygon `to` on face
+    /// `b`, and whether one of them crosses every such segment (exactly: the crossings of the
+    /// corner segments span those of all). A piece is left out when a plane separates it from
+    /// the segments: one of [`PairPlanner::shaft`]'s, or its own plane with both polygons on
+    /// one side of it.
+    pub fn polygon_shaft(
+        &self,
+        a: usize,
+        b: usize,
+        from: &[DVec3],
+        to: &[DVec3],
+        candidates: &[usize],
+    ) -> (Vec<usize>, bool) {
+        let (volume, tol) = self.shaft_volume(a, b, bounding_box_3d(from), bounding_box_3d(to));
+        let mut found = Vec::new();
+        for &o in candidates {
+            let piece = &self.occluders.pieces[o];
+            if !volume.may_hold(&piece.polygon) || piece.plane_separates(from, to, tol) {
+                continue;
+            }
+            if piece.crosses_every_segment(from, to, tol, tol) {
+                return (vec![o], true);
+            }
+            found.push(o);
+        }
+        (found, false)
+    }
+
     /// The shaft between two boxes on faces `a` and `b`, and the tolerance of its planes.
     fn shaft_volume(
         &self,
@@ -278,8 +307,6 @@ impl PairPlanner {
         face: usize,
         hiders: &mut RecentHiders,
     ) -> FaceView {
-        let f = &self.faces[face];
-        let own = &self.faces[own_face];
         let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
         let coplanar = match pair {
             Some((coplanar, _)) => *coplanar,
@@ -288,34 +315,12 @@ impl PairPlanner {
         if coplanar {
             return FaceView::Skip(SkipReason::SamePlane);
         }
-        // On or behind the face's plane, up to the rounding of the height itself: G vanishes
-        // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
-        // limit, e.g. 1/2 beside a common edge, so no larger tolerance is right.)
-        let z = f.face.frame.height(p);
-        if z <= HEIGHT_ROUNDING * (p - f.face.frame.origin).length() {
-            return FaceView::Skip(SkipReason::FacingAway);
-        }
-        // The node's tangent plane n·(Q - P) >= 0 restricted to the face's plane.
-        let hp = HalfPlane {
-            normal: DVec2::new(normal.dot(f.face.frame.e1), normal.dot(f.face.frame.e2)),
-            offset: normal.dot(f.face.frame.origin - p),
+        let Window { z, clip, polygon: window, corners } = match self.window(p, normal, face) {
+            Ok(window) => window,
+            Err(view) => return view,
         };
-        let values: Vec<f64> = f.polygon.iter().map(|&q| hp.eval(q)).collect();
-        let eps = PLANE_TOLERANCE * f.size;
-        if values.iter().all(|&v| v <= eps) {
-            return FaceView::Skip(SkipReason::FacingAway);
-        }
-        let clip = values.iter().any(|&v| v < -eps).then_some(hp);
-        let window = match &clip {
-            Some(hp) => match clip_convex(&f.hull, hp) {
-                Some(w) => w,
-                None => return FaceView::Skip(SkipReason::FacingAway),
-            },
-            None => f.hull.clone(),
-        };
-        // Segments from p to the visible window lie in the pyramid with apex p over it, in front
-        // of both faces.
-        let corners: Vec<DVec3> = window.iter().map(|&w| f.face.frame.to_global(w)).collect();
+        let f = &self.faces[face];
+        let own = &self.faces[own_face];
         if self.occluders.acceleration == Acceleration::BoxScan {
             let sides = pyramid_sides(p, &corners);
             // The core solver's plan: every occluder in the box of the two faces and in front of
@@ -398,6 +403,92 @@ impl PairPlanner {
             if let Some(s) = shadow(p, z, f, &window, &sides, &pieces[o].polygon) {
                 if covers(&s, &window) {
                     hiders.remember(o);
+                    return FaceView::Skip(SkipReason::Hidden);
+                }
+                shadows.push(s);
+            }
+        }
+        FaceView::Visible { clip, shadows }
+    }
+
+    /// The part of face `face` in front of the point `p` with unit normal `normal`: its height
+    /// over the face's plane, the half-plane left by the point's tangent plane, and the visible
+    /// window (the face's hull, clipped), in face coordinates and in space; or the view when
+    /// nothing of the face is in front.
+    fn window(&self, p: DVec3, normal: DVec3, face: usize) -> Result<Window, FaceView> {
+        let f = &self.faces[face];
+        // On or behind the face's plane, up to the rounding of the height itself: G vanishes
+        // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
+        // limit, e.g. 1/2 beside a common edge, so no larger tolerance is right.)
+        let z = f.face.frame.height(p);
+        if z <= HEIGHT_ROUNDING * (p - f.face.frame.origin).length() {
+            return Err(FaceView::Skip(SkipReason::FacingAway));
+        }
+        // The node's tangent plane n·(Q - P) >= 0 restricted to the face's plane.
+        let hp = HalfPlane {
+            normal: DVec2::new(normal.dot(f.face.frame.e1), normal.dot(f.face.frame.e2)),
+            offset: normal.dot(f.face.frame.origin - p),
+        };
+        let eps = PLANE_TOLERANCE * f.size;
+        let (mut front, mut behind) = (false, false);
+        for &q in &f.polygon {
+            let v = hp.eval(q);
+            front |= v > eps;
+            behind |= v < -eps;
+        }
+        if !front {
+            return Err(FaceView::Skip(SkipReason::FacingAway));
+        }
+        let clip = behind.then_some(hp);
+        let polygon = match &clip {
+            Some(hp) => match clip_convex(&f.hull, hp) {
+                Some(w) => w,
+                None => return Err(FaceView::Skip(SkipReason::FacingAway)),
+            },
+            None => f.hull.clone(),
+        };
+        // Segments from p to the visible window lie in the pyramid with apex p over it, in front
+        // of both faces.
+        let corners = polygon.iter().map(|&w| f.face.frame.to_global(w)).collect();
+        Ok(Window { z, clip, polygon, corners })
+    }
+
+    /// As [`PairPlanner::face_view`], when the occluders that can come between `p` and the part
+    /// of the face that matters are known: only `candidates` cast shadows (a superset of those
+    /// meeting a segment from `p` to that part, e.g. [`PairPlanner::polygon_shaft`]'s). The
+    /// view then agrees with [`PairPlanner::face_view`] on that part, without any search.
+    pub fn face_view_among(
+        &self,
+        p: DVec3,
+        normal: DVec3,
+        own_face: usize,
+        face: usize,
+        candidates: &[usize],
+    ) -> FaceView {
+        if self.same_plane(own_face, face) {
+            return FaceView::Skip(SkipReason::SamePlane);
+        }
+        let Window { z, clip, polygon: window, corners } = match self.window(p, normal, face) {
+            Ok(window) => window,
+            Err(view) => return view,
+        };
+        if candidates.is_empty() {
+            return FaceView::Visible { clip, shadows: Vec::new() };
+        }
+        let f = &self.faces[face];
+        let tol = 1e-12 * self.faces[own_face].size.max(f.size);
+        let sides = pyramid_sides(p, &corners);
+        let pieces = &self.occluders.pieces;
+        let mut shadows = Vec::new();
+        for &o in candidates {
+            if !pieces[o].may_shadow(p, &corners) {
+                continue;
+            }
+            if pieces[o].crosses_every_segment(&[p], &corners, tol, -tol) {
+                return FaceView::Skip(SkipReason::Hidden);
+            }
+            if let Some(s) = shadow(p, z, f, &window, &sides, &pieces[o].polygon) {
+                if covers(&s, &window) {
                     return FaceView::Skip(SkipReason::Hidden);
                 }
                 shadows.push(s);
@@ -493,6 +584,18 @@ impl RecentHiders {
         self.list.insert(0, occluder);
         self.list.truncate(RECENT_HIDERS);
     }
+}
+
+/// What a point has in front of it of a face ([`PairPlanner::face_view`]).
+struct Window {
+    /// The point's height over the face's plane.
+    z: f64,
+    /// The half-plane in front of the point's tangent plane, when the face straddles it.
+    clip: Option<HalfPlane>,
+    /// The face's hull, clipped (face coordinates).
+    polygon: Vec<DVec2>,
+    /// The same in space.
+    corners: Vec<DVec3>,
 }
 
 /// What an occluder does to the segments between two boxes ([`PairPlanner::shaft`]).

@@ -235,6 +235,23 @@ impl Occluder {
         })
     }
 
+    /// Whether every point of `from` and `to` is on one side of this piece's plane or within
+    /// `tol` of it: a segment between them then meets the plane at most at an end, or lies in
+    /// it, and the piece blocks none of them.
+    pub(super) fn plane_separates(&self, from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
+        if self.normal == DVec3::ZERO {
+            return false;
+        }
+        let origin = self.polygon[0];
+        let heights = from.iter().chain(to).map(|&p| self.normal.dot(p - origin));
+        let (mut above, mut below) = (false, false);
+        for h in heights {
+            above |= h > tol;
+            below |= h < -tol;
+        }
+        !(above && below)
+    }
+
     /// Whether this piece crosses every segment from a point of the convex hull of `from` to one
     /// of `to`: the two sets lie strictly (beyond `tol`) on opposite sides of its plane, and every
     /// segment between their corners crosses the plane inside the polygon (the crossings of all

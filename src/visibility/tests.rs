@@ -155,3 +155,73 @@ fn shadow_of_the_square_from_a_corner_of_s4_is_exact() {
     let visible: f64 = planner.visible_part_of_face(&view, 0).iter().map(|p| signed_area(p)).sum();
     assert!((visible - (25.0 - 3.75 * 3.25)).abs() < 1e-12);
 }
+
+#[test]
+fn views_among_a_polygons_shaft_occluders_equal_the_searched_views_there() {
+    // The occluded box: a floating cube and two plates between the walls. For element pairs
+    // with occluders between them, the shaft of a sub-triangle of T_i and T_j keeps some of
+    // the pair's occluders; from points of that sub-triangle, the view among those alone must
+    // leave the same visible part of T_j as the full search, and a shaft found hidden must
+    // leave nothing.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
+    let scene = crate::scene::load(&path).unwrap();
+    let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
+    let planner = PairPlanner::new(&scene);
+    let mut rng = StdRng::seed_from_u64(5);
+    let area = |pieces: &[Vec<DVec2>]| pieces.iter().map(|p| signed_area(p)).sum::<f64>();
+    let (mut compared, mut hidden_shafts, mut fewer) = (0, 0, 0);
+    for ei in mesh.elements() {
+        for ej in mesh.elements() {
+            let (a, b) = (ei.face, ej.face);
+            let all = planner.candidates(a, b);
+            if all.is_empty() {
+                continue;
+            }
+            // A random sub-triangle of T_i.
+            let point = |rng: &mut StdRng| {
+                let (u, v): (f64, f64) = (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                ei.vertices[0]
+                    + (ei.vertices[1] - ei.vertices[0]) * u
+                    + (ei.vertices[2] - ei.vertices[0]) * v
+            };
+            let corner = ei.vertices[rng.random_range(0..3)];
+            let scale = rng.random_range(0.05..0.5);
+            let sub: Vec<DVec3> =
+                (0..3).map(|_| corner + (point(&mut rng) - corner) * scale).collect();
+            let (among, hidden) = planner.polygon_shaft(a, b, &sub, &ej.vertices, &all);
+            fewer += usize::from(among.len() < all.len());
+            hidden_shafts += usize::from(hidden);
+            let normal = scene.faces[a].frame.normal;
+            let target: Vec<DVec2> =
+                ej.vertices.iter().map(|&v| scene.faces[b].frame.to_plane(v)).collect();
+            let visible = |view: &FaceView| match planner.visible(view, &target) {
+                Visibility::Skip(_) => Vec::new(),
+                Visibility::Full => vec![target.clone()],
+                Visibility::Partial(pieces) => pieces,
+            };
+            for _ in 0..4 {
+                // Interior points of the sub-triangle.
+                let w: [f64; 3] = std::array::from_fn(|_| rng.random_range(0.05..1.0));
+                let p = (sub[0] * w[0] + sub[1] * w[1] + sub[2] * w[2]) / (w[0] + w[1] + w[2]);
+                let searched = area(&visible(&planner.face_view(p, normal, a, b)));
+                if hidden {
+                    assert!(searched.abs() <= 1e-12, "hidden shaft, yet {searched} seen");
+                    continue;
+                }
+                let got = area(&visible(&planner.face_view_among(p, normal, a, b, &among)));
+                assert!(
+                    (got - searched).abs() <= 1e-12 * signed_area(&target),
+                    "{} -> {}: {got} vs {searched}",
+                    scene.faces[a].name,
+                    scene.faces[b].name
+                );
+                compared += 1;
+            }
+        }
+    }
+    assert!(
+        compared > 1000 && hidden_shafts > 0 && fewer > 100,
+        "{compared} {hidden_shafts} {fewer}"
+    );
+}
