@@ -99,14 +99,35 @@ fn cleaned(mut poly: Vec<DVec2>, eps: f64) -> Option<Vec<DVec2>> {
 /// is left.
 pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
     let scale = scale_of(poly);
+    let d = line_values(poly, hp, scale);
+    keep_side(poly, &d, scale)
+}
+
+/// The parts of a convex polygon outside and inside a half-plane, as [`clip_convex`] gives them
+/// (the values at the vertices computed once: those of the flipped half-plane are their
+/// negatives, to the bit).
+fn split_convex(poly: &[DVec2], hp: &HalfPlane) -> (Option<Vec<DVec2>>, Option<Vec<DVec2>>) {
+    let scale = scale_of(poly);
+    let d = line_values(poly, hp, scale);
+    let flipped: SmallVec<[f64; INLINE_VERTICES]> = d.iter().map(|&v| -v).collect();
+    (keep_side(poly, &flipped, scale), keep_side(poly, &d, scale))
+}
+
+/// The half-plane's values at the vertices of a polygon of size `scale`, those within the
+/// tolerance of the line snapped to 0.
+fn line_values(poly: &[DVec2], hp: &HalfPlane, scale: f64) -> SmallVec<[f64; INLINE_VERTICES]> {
     let eps = ON_LINE * scale * hp.normal.length();
-    let d: Vec<f64> = poly
-        .iter()
+    poly.iter()
         .map(|&p| {
             let v = hp.eval(p);
             if v.abs() <= eps { 0.0 } else { v }
         })
-        .collect();
+        .collect()
+}
+
+/// The part of a convex polygon of size `scale` where the values `d` at its vertices are
+/// non-negative, if it has area.
+fn keep_side(poly: &[DVec2], d: &[f64], scale: f64) -> Option<Vec<DVec2>> {
     if d.iter().all(|&v| v >= 0.0) {
         return cleaned(poly.to_vec(), ON_LINE * scale);
     }
@@ -114,7 +135,7 @@ pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
         return None;
     }
     let mut out = SmallPolygon::new();
-    keep_nonnegative_side(poly, &d, &mut out);
+    keep_nonnegative_side(poly, d, &mut out);
     cleaned(out.into_vec(), ON_LINE * scale)
 }
 
@@ -176,10 +197,9 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
     let n = hole.len();
     for k in 0..n {
         let inside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
-        if let Some(outside_part) = clip_convex(&rest, &inside.flipped()) {
-            out.push(outside_part);
-        }
-        match clip_convex(&rest, &inside) {
+        let (outside_part, inside_part) = split_convex(&rest, &inside);
+        out.extend(outside_part);
+        match inside_part {
             Some(r) => rest = r,
             None => return out,
         }

@@ -3,9 +3,9 @@
 //! arrays and every step is a loop over the lanes without branches, so the compiler turns each
 //! into vector instructions (AVX2 and FMA when the CPU has them, chosen at run time). The one
 //! transcendental function, the arctangent of each edge's term, is our own branch-free one (the
-//! reduction and polynomial of `shaders/math_f64.wgsl`, 1-2 ulp); everything else is the same
-//! IEEE arithmetic as the scalar form, so the two agree to a few ulps (tests below and in
-//! `assembly`). The scalar form stays the reference.
+//! reduction and polynomial of `shaders/math_f64.wgsl`, 1-2 ulp, its reduction folded into one
+//! division); the rest is the same IEEE arithmetic as the scalar form, so the two agree to a few
+//! ulps (tests below and in `assembly`). The scalar form stays the reference.
 
 use glam::DVec2;
 
@@ -92,6 +92,8 @@ fn constant_weight_portable(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES])
         let (dx, dy) = (lanes(|l| qx[l] - px[l]), lanes(|l| qy[l] - py[l]));
         let len = lanes(|l| (dx[l] * dx[l] + dy[l] * dy[l]).sqrt());
         // Unit tangent e and outward normal ν = (e_y, -e_x); a zero-length edge adds nothing.
+        // (Divided as the scalar form does: h below is ill-conditioned for a node near the
+        // plane just above the edge's line, and a reciprocal there moves K by 1e-14.)
         let (ex, ey) = (lanes(|l| dx[l] / len[l]), lanes(|l| dy[l] / len[l]));
         let h = lanes(|l| 0.5 * ((px[l] + qx[l]) * ey[l] + (py[l] + qy[l]) * -ex[l]));
         let ta = lanes(|l| px[l] * ex[l] + py[l] * ey[l]);
@@ -118,16 +120,28 @@ fn constant_weight_portable(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES])
 fn atan2_positive_y(y: Lanes, x: Lanes) -> Lanes {
     const PI_HI: f64 = std::f64::consts::PI;
     const PI_LO: f64 = 1.2246467991473532e-16;
-    let r = atan_positive(lanes(|l| y[l] / x[l].abs()));
+    let r = atan_of_ratio(y, lanes(|l| x[l].abs()));
     lanes(|l| if x[l] < 0.0 { (PI_HI - r[l]) + PI_LO } else { r[l] })
 }
 
-/// `atan(a)` for `a >= 0` (infinity included): reduced to `|t| <= 7/16` by
-/// `t = (a - c)/(1 + c a)`, c in {0, 1/2, 1, 3/2, inf} (breakpoints 7/16, 11/16, 19/16, 39/16),
-/// written with small integer coefficients so that every lane runs one division; then
+/// `atan(a)` for `a >= 0` (infinity included), as [`atan_of_ratio`] of `a` and 1 (of 1 and 0
+/// for infinity).
+#[cfg(test)]
+fn atan_positive(a: Lanes) -> Lanes {
+    let infinite = |l: usize| a[l] == f64::INFINITY;
+    atan_of_ratio(
+        lanes(|l| if infinite(l) { 1.0 } else { a[l] }),
+        lanes(|l| if infinite(l) { 0.0 } else { 1.0 }),
+    )
+}
+
+/// `atan(y/x)` for finite `y >= 0`, `x >= 0`, not both 0 (`x = 0` gives π/2): reduced to
+/// `|t| <= 7/16` by `t = (a - c)/(1 + c a)`, `a = y/x`, c in {0, 1/2, 1, 3/2, inf} (breakpoints
+/// 7/16, 11/16, 19/16, 39/16), written as `t = (n1 y - n0 x)/(d0 x + d1 y)` with small integer
+/// coefficients so that every lane runs one division and no infinity arises; then
 /// `atan(t) = t + t u P(u)`, `u = t²`, P a degree-11 near-minimax fit on [0, (7/16)²].
 #[inline(always)]
-fn atan_positive(a: Lanes) -> Lanes {
+fn atan_of_ratio(y: Lanes, x: Lanes) -> Lanes {
     // (n1, n0, d0, d1, atan(c) high, atan(c) low) per interval.
     const REDUCTIONS: [[f64; 6]; 5] = [
         [1.0, 0.0, 1.0, 0.0, 0.0, 0.0],
@@ -152,18 +166,16 @@ fn atan_positive(a: Lanes) -> Lanes {
         0.1999999999999941,
         -0.3333333333333333,
     ];
-    // Infinity as the largest argument that matters: beyond 1e300, atan is π/2 to rounding
-    // (t = -1/a below), and 0·a stays 0.
-    let a = lanes(|l| a[l].min(1e300));
+    // y/x >= b, as y >= b x (no division; x = 0 falls in the last interval).
     let mut c = [REDUCTIONS[0]; LANES];
     for (k, &b) in BREAKS.iter().enumerate() {
         for l in 0..LANES {
-            if a[l] >= b {
+            if y[l] >= b * x[l] {
                 c[l] = REDUCTIONS[k + 1];
             }
         }
     }
-    let t = lanes(|l| (c[l][0] * a[l] - c[l][1]) / (c[l][2] + c[l][3] * a[l]));
+    let t = lanes(|l| (c[l][0] * y[l] - c[l][1] * x[l]) / (c[l][2] * x[l] + c[l][3] * y[l]));
     let u = lanes(|l| t[l] * t[l]);
     let mut p = [P[0]; LANES];
     for &coefficient in &P[1..] {
