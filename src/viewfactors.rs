@@ -393,7 +393,7 @@ impl Context<'_> {
         }
         let size = (b - a).length().max((c - b).length()).max((a - c).length());
         let distance = part.distance(&t);
-        if distance <= 1e-9 * size || depth >= MAX_SPLITS {
+        if distance <= TOUCHING * size || depth >= MAX_SPLITS {
             let mut outer = Outer {
                 rule: &rules.tanh_sinh,
                 options: self.options,
@@ -488,16 +488,25 @@ impl Part<'_> {
     /// integrand is not analytic.
     fn distance(&self, t: &[DVec3; 3]) -> f64 {
         let to_target = box_distance(bounding_box_3d(t), self.target);
+        let size = (t[1] - t[0]).length().max((t[2] - t[1]).length()).max((t[0] - t[2]).length());
         self.poles
             .iter()
             .filter_map(|&(m, point, sin)| {
+                // A line through a corner of the triangle, up to rounding, passes through the
+                // corner of the piece where event lines meet (in an axis-aligned scene they
+                // often meet there): it crosses the piece, not its side.
+                let margin = TOUCHING * size * sin;
                 let h = t.map(|v| m.dot(v - point));
-                let one_side = h.iter().all(|&x| x > 0.0) || h.iter().all(|&x| x < 0.0);
+                let one_side = h.iter().all(|&x| x > margin) || h.iter().all(|&x| x < -margin);
                 one_side.then(|| h.iter().fold(f64::INFINITY, |d, x| d.min(x.abs())) / sin)
             })
             .fold(to_target, f64::min)
     }
 }
+
+/// Distance, relative to an outer triangle's size, under which it touches what makes the
+/// integrand non-analytic (tanh-sinh then takes it whole).
+const TOUCHING: f64 = 1e-9;
 
 /// Most rounds of splitting an outer triangle before tanh-sinh takes it whole.
 const MAX_SPLITS: u32 = 6;

@@ -389,23 +389,16 @@ impl PairPlanner {
             }
             None => self.occluders.inside(own_face, face, &volume),
         };
+        let pyramid =
+            Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         for o in found {
-            // Most candidates found by boxes miss the pyramid, and a separating plane shows it;
-            // the crossing test is cheaper than the shadow, which also catches an occluder whose
-            // outline meets the window's.
-            if !pieces[o].may_shadow(p, &corners) {
-                continue;
-            }
-            if hides(o) {
-                hiders.remember(o);
-                return FaceView::Skip(SkipReason::Hidden);
-            }
-            if let Some(s) = shadow(p, z, f, &window, &sides, &pieces[o].polygon) {
-                if covers(&s, &window) {
+            match pyramid.cast(&pieces[o], || hides(o)) {
+                Cast::Nothing => {}
+                Cast::Shadow(s) => shadows.push(s),
+                Cast::Hides => {
                     hiders.remember(o);
                     return FaceView::Skip(SkipReason::Hidden);
                 }
-                shadows.push(s);
             }
         }
         FaceView::Visible { clip, shadows }
@@ -478,20 +471,15 @@ impl PairPlanner {
         let f = &self.faces[face];
         let tol = 1e-12 * self.faces[own_face].size.max(f.size);
         let sides = pyramid_sides(p, &corners);
-        let pieces = &self.occluders.pieces;
+        let pyramid =
+            Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         let mut shadows = Vec::new();
         for &o in candidates {
-            if !pieces[o].may_shadow(p, &corners) {
-                continue;
-            }
-            if pieces[o].crosses_every_segment(&[p], &corners, tol, -tol) {
-                return FaceView::Skip(SkipReason::Hidden);
-            }
-            if let Some(s) = shadow(p, z, f, &window, &sides, &pieces[o].polygon) {
-                if covers(&s, &window) {
-                    return FaceView::Skip(SkipReason::Hidden);
-                }
-                shadows.push(s);
+            let piece = &self.occluders.pieces[o];
+            match pyramid.cast(piece, || piece.crosses_every_segment(&[p], &corners, tol, -tol)) {
+                Cast::Nothing => {}
+                Cast::Shadow(s) => shadows.push(s),
+                Cast::Hides => return FaceView::Skip(SkipReason::Hidden),
             }
         }
         FaceView::Visible { clip, shadows }
@@ -596,6 +584,49 @@ struct Window {
     polygon: Vec<DVec2>,
     /// The same in space.
     corners: Vec<DVec3>,
+}
+
+/// The segments from a point to the window of a face it sees ([`PairPlanner::face_view`]).
+struct Pyramid<'a> {
+    apex: DVec3,
+    /// The apex's height over the face's plane.
+    z: f64,
+    face: &'a PlannerFace,
+    /// The window in face coordinates and in space, and the inward normals of the sides.
+    window: &'a [DVec2],
+    corners: &'a [DVec3],
+    sides: &'a [DVec3],
+}
+
+/// What an occluder piece does to a [`Pyramid`].
+enum Cast {
+    /// Nothing of positive area.
+    Nothing,
+    /// Hides the whole window.
+    Hides,
+    /// This convex shadow on the window (face coordinates, counter-clockwise).
+    Shadow(Vec<DVec2>),
+}
+
+impl Pyramid<'_> {
+    /// What `piece` does to the window; `crosses_all` says whether it crosses every segment
+    /// (asked only of a piece that reaches into the pyramid).
+    fn cast(&self, piece: &Occluder, crosses_all: impl FnOnce() -> bool) -> Cast {
+        // Most candidates found by boxes miss the pyramid, and a separating plane shows it;
+        // the crossing test is cheaper than the shadow, which also catches an occluder whose
+        // outline meets the window's.
+        if !piece.may_shadow(self.apex, self.corners) {
+            return Cast::Nothing;
+        }
+        if crosses_all() {
+            return Cast::Hides;
+        }
+        match shadow(self.apex, self.z, self.face, self.window, self.sides, &piece.polygon) {
+            Some(s) if covers(&s, self.window) => Cast::Hides,
+            Some(s) => Cast::Shadow(s),
+            None => Cast::Nothing,
+        }
+    }
 }
 
 /// What an occluder does to the segments between two boxes ([`PairPlanner::shaft`]).
