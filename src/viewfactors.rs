@@ -12,6 +12,10 @@
 //!   occluder's plane, and the vertex–edge event planes between T_j and the occluders and between
 //!   occluders, the EV and VE events of `mesh/shadow_lines.rs`), and where it crosses T_j's
 //!   plane, so that the integrand is smooth on every piece;
+//! - each piece keeps only the pair's occluders in its own shaft to T_j
+//!   ([`PairPlanner::polygon_shaft`]): none, and it sees T_j whole; one across that shaft, and it
+//!   sees nothing; otherwise each point's view is shadowed by those alone
+//!   ([`PairPlanner::face_view_among`], no search);
 //! - each piece's triangles are integrated by collapsed Gauss of an order fitted to their
 //!   separation from T_j and the occluders (the Bernstein-ellipse bound), split where too close,
 //!   and by the nested tensor tanh-sinh rule where they touch (d log d behaviour beside a common
