@@ -396,7 +396,7 @@ impl Context<'_> {
             return 0.0;
         }
         let size = (b - a).length().max((c - b).length()).max((a - c).length());
-        let distance = part.distance(&t);
+        let distance = part.distance(&t, size);
         if distance <= TOUCHING * size || depth >= MAX_SPLITS {
             let mut outer = Outer {
                 rule: &rules.tanh_sinh,
@@ -488,11 +488,10 @@ struct Part<'a> {
 type WeightedSum<'a> = dyn Fn(&[(DVec3, f64)]) -> f64 + 'a;
 
 impl Part<'_> {
-    /// A lower bound of the distance from the outer triangle `t` to the points where the
-    /// integrand is not analytic.
-    fn distance(&self, t: &[DVec3; 3]) -> f64 {
+    /// A lower bound of the distance from the outer triangle `t` (longest side `size`) to the
+    /// points where the integrand is not analytic.
+    fn distance(&self, t: &[DVec3; 3], size: f64) -> f64 {
         let to_target = box_distance(bounding_box_3d(t), self.target);
-        let size = (t[1] - t[0]).length().max((t[2] - t[1]).length()).max((t[0] - t[2]).length());
         self.poles
             .iter()
             .filter_map(|&(m, point, sin)| {

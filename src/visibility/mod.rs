@@ -447,9 +447,10 @@ impl PairPlanner {
     }
 
     /// As [`PairPlanner::face_view`], when the occluders that can come between `p` and the part
-    /// of the face that matters are known: only `candidates` cast shadows (a superset of those
-    /// meeting a segment from `p` to that part, e.g. [`PairPlanner::polygon_shaft`]'s). The
-    /// view then agrees with [`PairPlanner::face_view`] on that part, without any search.
+    /// of the face that matters are known: only `candidates` cast shadows (pieces of neither
+    /// face, a superset of those meeting a segment from `p` to that part, e.g.
+    /// [`PairPlanner::polygon_shaft`]'s). The view then agrees with [`PairPlanner::face_view`] on
+    /// that part, without any search.
     pub fn face_view_among(
         &self,
         p: DVec3,
