@@ -1,12 +1,16 @@
 //! The collocation integrals on the CPU, one (node, element) pair at a time: the production closed
 //! form (constant and affine weights), Lambert's contour formula, the paper's right-triangle
-//! formula, and the far-field rule; and the constant weight four pairs at a time in vector lanes
-//! against four scalar calls. `cargo bench --bench kernels`.
+//! formula, and the far-field rule; and the vectorised kernels against their scalar references:
+//! the constant weight eight pairs at a time, the far-field rule's moments four points at a time,
+//! and an edge's log moment (the IMT sum of the affine weights) eight nodes at a time.
+//! `cargo bench --bench kernels`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DVec2, DVec3};
 use radiosity::kernels::far_field::FarFieldRule;
-use radiosity::kernels::{Affine2, Observer, exact, lambert, lanes, paper_closed_form};
+use radiosity::kernels::{
+    Affine2, Observer, by_rule, edge_log_moment, exact, lambert, lanes, paper_closed_form,
+};
 use radiosity::quadrature::ImtRule;
 use std::hint::black_box;
 
@@ -48,7 +52,22 @@ fn kernels(c: &mut Criterion) {
     group.bench_function(format!("closed form, constant weight, {pairs} pairs in lanes"), |b| {
         b.iter(|| lanes::constant_weight(black_box(&observers), &triangles))
     });
+    let (p, q) = (tri[0] - near.position.truncate(), tri[1] - near.position.truncate());
+    let z = near.position.z;
+    group.bench_function("log moment of an edge, scalar", |b| {
+        b.iter(|| edge_log_moment(black_box(p), q, z, &imt, false))
+    });
+    group.bench_function("log moment of an edge, in lanes", |b| {
+        b.iter(|| edge_log_moment(black_box(p), q, z, &imt, true))
+    });
     let rule = FarFieldRule::standard();
+    let nearest_band = &rule.bands[0].rule;
+    group.bench_function("far-field moments, 11 x 11 points, scalar", |b| {
+        b.iter(|| nearest_band.moments(&tri, |q| black_box(&far).kernel(q)))
+    });
+    group.bench_function("far-field moments, 11 x 11 points, in lanes", |b| {
+        b.iter(|| by_rule::kernel_moments(black_box(&far), nearest_band, &tri))
+    });
     group.bench_function("far-field rule, three affine weights", |b| {
         b.iter(|| {
             rule.integrate_subdivided(black_box(&far), &tri, &weights, |t| {

@@ -412,9 +412,9 @@ impl Context<'_> {
         match rules.gauss_order(size, distance) {
             Some(q) => {
                 let rule = &rules.gauss[q];
-                tally.evaluations += rule.points.len() as u64;
+                tally.evaluations += rule.points().len() as u64;
                 let points =
-                    rule.points.iter().map(|&[u, v, w]| (a + (b - a) * u + (c - a) * v, w));
+                    rule.points().iter().map(|&[u, v, w]| (a + (b - a) * u + (c - a) * v, w));
                 let sum = match part.whole {
                     Some(whole) => whole(&points.collect::<Vec<_>>()),
                     None => points.map(|(p, w)| w * g(p)).sum(),

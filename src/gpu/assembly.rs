@@ -235,13 +235,13 @@ fn tables(
             entries.push([
                 (band.ratio + 1.0).powi(2),
                 first as f64,
-                band.rule.points.len() as f64,
+                band.rule.points().len() as f64,
                 0.0,
             ]);
-            first += band.rule.points.len();
+            first += band.rule.points().len();
         }
         for band in &rule.bands {
-            entries.extend(band.rule.points.iter().map(|&[u, v, w]| [u, v, w, 0.0]));
+            entries.extend(band.rule.points().iter().map(|&[u, v, w]| [u, v, w, 0.0]));
         }
     }
     if entries.len() > layout::TABLE_SIZE {

@@ -10,6 +10,7 @@
 use glam::DVec2;
 
 use super::Observer;
+use super::lane_math::atan2_positive_y;
 
 /// Pairs evaluated together: two AVX2 registers per step, whose independent chains overlap
 /// (`bench --scene five-piece --refine 4` setup 0.124 s against 0.131 s with four; compiled for
@@ -115,75 +116,6 @@ fn constant_weight_portable(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES])
     })
 }
 
-/// `atan2(y, x)` for `y > 0` (a result in (0, π)): `atan(y/|x|)`, reflected for `x < 0`.
-#[inline(always)]
-fn atan2_positive_y(y: Lanes, x: Lanes) -> Lanes {
-    const PI_HI: f64 = std::f64::consts::PI;
-    const PI_LO: f64 = 1.2246467991473532e-16;
-    let r = atan_of_ratio(y, lanes(|l| x[l].abs()));
-    lanes(|l| if x[l] < 0.0 { (PI_HI - r[l]) + PI_LO } else { r[l] })
-}
-
-/// `atan(a)` for `a >= 0` (infinity included), as [`atan_of_ratio`] of `a` and 1 (of 1 and 0
-/// for infinity).
-#[cfg(test)]
-fn atan_positive(a: Lanes) -> Lanes {
-    let infinite = |l: usize| a[l] == f64::INFINITY;
-    atan_of_ratio(
-        lanes(|l| if infinite(l) { 1.0 } else { a[l] }),
-        lanes(|l| if infinite(l) { 0.0 } else { 1.0 }),
-    )
-}
-
-/// `atan(y/x)` for finite `y >= 0`, `x >= 0`, not both 0 (`x = 0` gives π/2): reduced to
-/// `|t| <= 7/16` by `t = (a - c)/(1 + c a)`, `a = y/x`, c in {0, 1/2, 1, 3/2, inf} (breakpoints
-/// 7/16, 11/16, 19/16, 39/16), written as `t = (n1 y - n0 x)/(d0 x + d1 y)` with small integer
-/// coefficients so that every lane runs one division and no infinity arises; then
-/// `atan(t) = t + t u P(u)`, `u = t²`, P a degree-11 near-minimax fit on [0, (7/16)²].
-#[inline(always)]
-fn atan_of_ratio(y: Lanes, x: Lanes) -> Lanes {
-    // (n1, n0, d0, d1, atan(c) high, atan(c) low) per interval.
-    const REDUCTIONS: [[f64; 6]; 5] = [
-        [1.0, 0.0, 1.0, 0.0, 0.0, 0.0],
-        [2.0, 1.0, 2.0, 1.0, 0.4636476090008061, 2.2698777452961687e-17],
-        [1.0, 1.0, 1.0, 1.0, std::f64::consts::FRAC_PI_4, 3.061616997868383e-17],
-        [2.0, 3.0, 2.0, 3.0, 0.982793723247329, 1.3903311031230998e-17],
-        [0.0, 1.0, 0.0, 1.0, std::f64::consts::FRAC_PI_2, 6.123233995736766e-17],
-    ];
-    const BREAKS: [f64; 4] = [0.4375, 0.6875, 1.1875, 2.4375];
-    // P's coefficients from the highest degree down.
-    const P: [f64; 12] = [
-        0.014773184616983806,
-        -0.033128134256069586,
-        0.04492259293193656,
-        -0.05216679739313656,
-        0.05876946456755061,
-        -0.06666241923359964,
-        0.07692285554889286,
-        -0.09090908355602592,
-        0.11111111096645038,
-        -0.14285714285566806,
-        0.1999999999999941,
-        -0.3333333333333333,
-    ];
-    // y/x >= b, as y >= b x (no division; x = 0 falls in the last interval).
-    let mut c = [REDUCTIONS[0]; LANES];
-    for (k, &b) in BREAKS.iter().enumerate() {
-        for l in 0..LANES {
-            if y[l] >= b * x[l] {
-                c[l] = REDUCTIONS[k + 1];
-            }
-        }
-    }
-    let t = lanes(|l| (c[l][0] * y[l] - c[l][1] * x[l]) / (c[l][2] * x[l] + c[l][3] * y[l]));
-    let u = lanes(|l| t[l] * t[l]);
-    let mut p = [P[0]; LANES];
-    for &coefficient in &P[1..] {
-        p = lanes(|l| coefficient + u[l] * p[l]);
-    }
-    lanes(|l| c[l][4] + (t[l] + (t[l] * u[l] * p[l] + c[l][5])))
-}
-
 #[cfg(test)]
 mod tests {
     use glam::DVec3;
@@ -191,34 +123,6 @@ mod tests {
 
     use super::*;
     use crate::kernels::exact;
-
-    #[test]
-    fn arctangent_is_within_two_ulps_of_the_library() {
-        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
-        let mut worst = 0.0f64;
-        for k in 0..200_000 {
-            // Log-uniform over 1e-12 .. 1e12, and the breakpoints' neighbourhoods.
-            let a: f64 = if k % 2 == 0 {
-                10f64.powf(rng.random_range(-12.0..12.0))
-            } else {
-                [0.4375, 0.6875, 1.1875, 2.4375][k % 4] * (1.0 + rng.random_range(-1e-3..1e-3))
-            };
-            let want = a.atan();
-            let got = atan_positive([a; LANES])[0];
-            let ulp = f64::EPSILON * want.abs();
-            worst = worst.max((got - want).abs() / ulp);
-        }
-        assert!(worst <= 2.0, "{worst} ulp");
-        assert_eq!(atan_positive([f64::INFINITY; LANES])[0], std::f64::consts::FRAC_PI_2);
-        let (ys, xs) = ([1.0f64, 1e-300, 3.0, 1.0], [-1.0f64, -1.0, 0.0, -1e-300]);
-        let y: [f64; LANES] = std::array::from_fn(|l| ys[l % 4]);
-        let x: [f64; LANES] = std::array::from_fn(|l| xs[l % 4]);
-        let got = atan2_positive_y(y, x);
-        for l in 0..LANES {
-            let want = y[l].atan2(x[l]);
-            assert!((got[l] - want).abs() <= 2.0 * f64::EPSILON * want, "{} vs {want}", got[l]);
-        }
-    }
 
     #[test]
     fn lanes_agree_with_the_scalar_closed_form() {

@@ -23,16 +23,18 @@
 //! - [`paper_closed_form`]: the paper's own formulas over right triangles σ_ab, (4.5), (4.10), (4.11).
 //! - [`reference`]: adaptive quadrature of G φ itself, for tests.
 
+pub mod by_rule;
 pub mod exact;
 pub mod far_field;
 pub mod graded;
 pub mod lambert;
+mod lane_math;
 pub mod lanes;
 mod moments;
 pub mod paper_closed_form;
 pub mod reference;
 
-pub use moments::{LOG_PANEL_WIDTH, Moments, ThirdOrderMoments};
+pub use moments::{LOG_PANEL_WIDTH, Moments, ThirdOrderMoments, edge_log_moment};
 
 use glam::{DVec2, DVec3};
 
@@ -65,7 +67,7 @@ impl Observer {
         tri: &[DVec2; 3],
         weights: &[Affine2; L],
     ) -> [f64; L] {
-        let [g0, gx, gy] = rule.moments(tri, |q| self.kernel(q));
+        let [g0, gx, gy] = by_rule::kernel_moments(self, rule, tri);
         weights.map(|phi| phi.c0 * g0 + phi.cx * gx + phi.cy * gy)
     }
 }

@@ -6,12 +6,18 @@
 
 use super::GaussLegendre;
 
+/// Nodes per group in [`ImtRule::integrate_lanes`].
+pub const IMT_LANES: usize = 8;
+
 /// The N-point IMT rule on [0, 1]: nodes `φ(k/N)` and weights `φ'(k/N)/N`, k = 1 .. N-1 (the end
 /// points have weight zero).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImtRule {
     nodes: Vec<f64>,
     weights: Vec<f64>,
+    /// The nodes and weights in groups of [`IMT_LANES`], the last padded with the middle node at
+    /// weight zero.
+    lanes: Vec<([f64; IMT_LANES], [f64; IMT_LANES])>,
 }
 
 fn imt_density(s: f64) -> f64 {
@@ -50,7 +56,15 @@ impl ImtRule {
             nodes.push(x);
             weights.push(imt_density(k as f64 * h) / q * h);
         }
-        Self { nodes, weights }
+        let lanes = nodes
+            .chunks(IMT_LANES)
+            .zip(weights.chunks(IMT_LANES))
+            .map(|(x, w)| {
+                let x = std::array::from_fn(|l| x.get(l).copied().unwrap_or(0.5));
+                (x, std::array::from_fn(|l| w.get(l).copied().unwrap_or(0.0)))
+            })
+            .collect();
+        Self { nodes, weights, lanes }
     }
 
     /// Nodes in (0, 1), increasing.
@@ -72,6 +86,12 @@ impl ImtRule {
     pub fn integrate(&self, a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
         let len = b - a;
         len * self.nodes.iter().zip(&self.weights).map(|(&x, &w)| w * f(a + len * x)).sum::<f64>()
+    }
+
+    /// The nodes and weights in groups of [`IMT_LANES`], for vectorised integrands; the last
+    /// group is padded with the middle node at weight zero.
+    pub fn lanes(&self) -> &[([f64; IMT_LANES], [f64; IMT_LANES])] {
+        &self.lanes
     }
 }
 
@@ -102,5 +122,11 @@ mod tests {
         // A smooth integrand: e^x.
         let e = rule.integrate(0.0, 2.0, f64::exp);
         assert!((e - (2f64.exp() - 1.0)).abs() < 1e-14, "{e}");
+        let lanes: f64 = rule
+            .lanes()
+            .iter()
+            .flat_map(|(x, w)| x.iter().zip(w).map(|(x, w)| 2.0 * w * (2.0 * x).exp()))
+            .sum();
+        assert!((lanes - e).abs() < 4.0 * f64::EPSILON * e, "{lanes} vs {e}");
     }
 }

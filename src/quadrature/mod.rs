@@ -9,5 +9,5 @@ mod triangle;
 
 pub use adaptive::{Tolerance, integrate_adaptive, integrate_triangle};
 pub use gauss_legendre::GaussLegendre;
-pub use imt::ImtRule;
-pub use triangle::TriangleRule;
+pub use imt::{IMT_LANES, ImtRule};
+pub use triangle::{LANES as RULE_LANES, PointLanes, TriangleRule};

@@ -6,14 +6,27 @@ use glam::DVec2;
 
 use super::GaussLegendre;
 
-/// Points evaluated together in [`TriangleRule::moments`].
-const LANES: usize = 4;
+/// Points per lane group ([`PointLanes`]) and independent sums in [`TriangleRule::moments`].
+pub const LANES: usize = 4;
 
-/// A rule on σ: points `(u, v, w)`, the weights summing to |σ| = 1/2.
+/// A rule on σ: points `(u, v, w)`, the weights summing to |σ| = 1/2, also grouped in lanes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TriangleRule {
-    /// Points `(u, v, w)`.
-    pub points: Vec<[f64; 3]>,
+    points: Vec<[f64; 3]>,
+    lanes: Vec<PointLanes>,
+}
+
+/// [`LANES`] consecutive points of a rule as structure of arrays, for vectorised evaluation; the
+/// last group is padded with the rule's first point at weight zero. Point `k` is in lane
+/// `k % LANES`, as in the sums of [`TriangleRule::moments`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLanes {
+    /// First coordinates.
+    pub u: [f64; LANES],
+    /// Second coordinates.
+    pub v: [f64; LANES],
+    /// Weights.
+    pub w: [f64; LANES],
 }
 
 impl TriangleRule {
@@ -28,7 +41,7 @@ impl TriangleRule {
             let b = 1.0 - 2.0 * a;
             points.extend([[a, a, w], [b, a, w], [a, b, w]]);
         }
-        Self { points }
+        Self::from_points(points)
     }
 
     /// The `order × order` collapsed Gauss–Legendre rule of (4.4): `s = (1 - y) x`, `t = y x`,
@@ -44,7 +57,7 @@ impl TriangleRule {
                 points.push([(1.0 - y) * x, y * x, 0.25 * wx * wy * x]);
             }
         }
-        Self { points }
+        Self::from_points(points)
     }
 
     /// This rule applied on each of the 4^`level` congruent triangles that `level` rounds of
@@ -70,32 +83,42 @@ impl TriangleRule {
                 })
             })
             .collect();
-        Self { points }
+        Self::from_points(points)
     }
 
-    /// `[∫ f, ∫ f X, ∫ f Y]` over the triangle `tri` (any orientation) of the plane.
-    pub fn moments(&self, tri: &[DVec2; 3], f: impl FnMut(DVec2) -> f64) -> [f64; 3] {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: AVX was detected at run time just above.
-            return unsafe { self.moments_avx(tri, f) };
-        }
-        self.moments_portable(tri, f)
+    /// The rule of `points` (at least one), grouped in lanes.
+    fn from_points(points: Vec<[f64; 3]>) -> Self {
+        let lanes = points
+            .chunks(LANES)
+            .map(|chunk| {
+                let at =
+                    |l: usize| chunk.get(l).copied().unwrap_or([points[0][0], points[0][1], 0.0]);
+                PointLanes {
+                    u: std::array::from_fn(|l| at(l)[0]),
+                    v: std::array::from_fn(|l| at(l)[1]),
+                    w: std::array::from_fn(|l| at(l)[2]),
+                }
+            })
+            .collect();
+        Self { points, lanes }
     }
 
-    /// [`Self::moments`] compiled for AVX: the same operations in the same order (so the same
-    /// results), in VEX encoding, which measured 10-15% faster on the linear n = 640 assembly.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn moments_avx(&self, tri: &[DVec2; 3], f: impl FnMut(DVec2) -> f64) -> [f64; 3] {
-        self.moments_portable(tri, f)
+    /// Points `(u, v, w)`.
+    pub fn points(&self) -> &[[f64; 3]] {
+        &self.points
     }
 
-    #[inline(always)]
-    fn moments_portable(&self, tri: &[DVec2; 3], mut f: impl FnMut(DVec2) -> f64) -> [f64; 3] {
+    /// The points in groups of [`LANES`].
+    pub fn lanes(&self) -> &[PointLanes] {
+        &self.lanes
+    }
+
+    /// `[∫ f, ∫ f X, ∫ f Y]` over the triangle `tri` (any orientation) of the plane, in
+    /// [`LANES`] independent sums. The scalar reference of the vectorised kernel rule
+    /// (`kernels::by_rule`), which does the same operations in the same order.
+    pub fn moments(&self, tri: &[DVec2; 3], mut f: impl FnMut(DVec2) -> f64) -> [f64; 3] {
         let [a, b, c] = *tri;
         let jacobian = (b - a).perp_dot(c - a).abs();
-        // Four independent sums, so that four points are evaluated at once.
         let mut sums = [[0.0f64; LANES]; 3];
         let chunks = self.points.chunks_exact(LANES);
         let rest = chunks.remainder();
@@ -134,7 +157,8 @@ mod tests {
         (0..=degree)
             .map(|p| {
                 let q = degree - p;
-                let got: f64 = rule.points.iter().map(|&[u, v, w]| w * u.powi(p) * v.powi(q)).sum();
+                let got: f64 =
+                    rule.points().iter().map(|&[u, v, w]| w * u.powi(p) * v.powi(q)).sum();
                 (got - exact_monomial(p, q)).abs() / exact_monomial(p, q)
             })
             .fold(0.0, f64::max)
@@ -143,7 +167,7 @@ mod tests {
     #[test]
     fn stroud_rule_has_degree_five_exactly() {
         let rule = TriangleRule::stroud_t2_5_1();
-        assert_eq!(rule.points.len(), 7);
+        assert_eq!(rule.points().len(), 7);
         for degree in 0..=5 {
             assert!(worst_error_at_degree(&rule, degree) < 1e-14, "degree {degree}");
         }
@@ -155,8 +179,8 @@ mod tests {
         let base = TriangleRule::stroud_t2_5_1();
         for level in 1..=3 {
             let rule = base.composite(level);
-            assert_eq!(rule.points.len(), 7 * 4usize.pow(level));
-            assert!(rule.points.iter().all(|&[u, v, _]| u >= 0.0 && v >= 0.0 && u + v <= 1.0));
+            assert_eq!(rule.points().len(), 7 * 4usize.pow(level));
+            assert!(rule.points().iter().all(|&[u, v, _]| u >= 0.0 && v >= 0.0 && u + v <= 1.0));
             for degree in 0..=5 {
                 assert!(worst_error_at_degree(&rule, degree) < 1e-13, "level {level}, {degree}");
             }
@@ -168,7 +192,7 @@ mod tests {
         let exact = (e.powi(3) * (1.0 - 1.0 / e) - (e * e - 1.0) / 2.0) / 3.0;
         let err = |level| {
             let r = base.composite(level);
-            (r.points.iter().map(|&[u, v, w]| w * f(u, v)).sum::<f64>() - exact).abs()
+            (r.points().iter().map(|&[u, v, w]| w * f(u, v)).sum::<f64>() - exact).abs()
         };
         let ratio = err(2) / err(3);
         assert!((50.0..80.0).contains(&ratio), "error ratio per level {ratio}");
