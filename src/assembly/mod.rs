@@ -71,6 +71,7 @@ impl PairIntegrator {
     /// As [`PairIntegrator::integrate`] for a fully visible element, except that where the
     /// centroid method's closed form applies, the observer and triangle are handed back to be
     /// evaluated in lanes ([`crate::kernels::lanes`]).
+    #[inline(always)]
     pub(crate) fn full_pair(
         &self,
         el: &ElementFrame,
@@ -93,6 +94,7 @@ impl PairIntegrator {
 
     /// The node seen from the element's frame in the element's units ([`ElementFrame::unit`]),
     /// or `None` when the node is not above the element's plane.
+    #[inline(always)]
     fn observer(&self, el: &ElementFrame, p: glam::DVec3, normal: glam::DVec3) -> Option<Observer> {
         let obs = Observer {
             position: el.frame.to_local(p) * el.unit,

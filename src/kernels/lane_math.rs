@@ -186,7 +186,7 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         // Log-uniform over 1e-12 .. 1e12, and the breakpoints' neighbourhoods.
         let args = (0..200_000).map(|k: usize| {
-            if k % 2 == 0 {
+            if k.is_multiple_of(2) {
                 10f64.powf(rng.random_range(-12.0..12.0))
             } else {
                 [0.4375, 0.6875, 1.1875, 2.4375][k % 4] * (1.0 + rng.random_range(-1e-3..1e-3))

@@ -20,12 +20,62 @@ pub const LANES: usize = 8;
 /// `∫_T G(P, Q) dS_Q` for each lane's observer and triangle (counter-clockwise, the observer's
 /// local coordinates, height `z > 0`).
 pub fn constant_weight(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [f64; LANES] {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: AVX2 and FMA were detected at run time just above.
-        return unsafe { constant_weight_avx2(obs, tris) };
+    let mut pairs = PairLanes::default();
+    for l in 0..LANES {
+        pairs.set(l, &obs[l], &tris[l]);
     }
-    constant_weight_portable(obs, tris)
+    pairs.constant_weight()
+}
+
+/// [`LANES`] (node, triangle) pairs as structure of arrays: what the kernel reads, written one
+/// scalar at a time as the pairs come (a pair's observer, just computed, is read back field by
+/// field, which the store buffer forwards; a 16-byte read of two 8-byte writes it cannot, and
+/// that stall was 10% of the centroid assembly).
+#[derive(Clone, Copy, Debug, Default)]
+struct PairLanes {
+    /// The observers' positions (x, y, z) and normals (i, j, k).
+    position: [Lanes; 3],
+    normal: [Lanes; 3],
+    /// The triangles' vertices: `vertex[c][k]` is coordinate c of vertex k.
+    vertex: [[Lanes; 3]; 2],
+}
+
+impl PairLanes {
+    #[inline(always)]
+    fn set(&mut self, l: usize, obs: &Observer, tri: &[DVec2; 3]) {
+        for c in 0..3 {
+            self.position[c][l] = obs.position[c];
+            self.normal[c][l] = obs.normal[c];
+        }
+        for (k, v) in tri.iter().enumerate() {
+            (self.vertex[0][k][l], self.vertex[1][k][l]) = (v.x, v.y);
+        }
+    }
+
+    /// Copies lane 0 into lanes `from..`.
+    fn repeat_first(&mut self, from: usize) {
+        let rows = self
+            .position
+            .iter_mut()
+            .chain(&mut self.normal)
+            .chain(self.vertex.iter_mut().flatten());
+        for row in rows {
+            for l in from..LANES {
+                row[l] = row[0];
+            }
+        }
+    }
+
+    /// `∫_T G(P, Q) dS_Q` for each lane.
+    fn constant_weight(&self) -> Lanes {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: AVX2 and FMA were detected at run time just above.
+            return unsafe { constant_weight_avx2(self) };
+        }
+        constant_weight_portable(self)
+    }
 }
 
 /// Pairs waiting to be evaluated together, each with a tag `T` (where its value goes: a column,
@@ -34,14 +84,15 @@ pub fn constant_weight(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [
 pub struct Batch<T> {
     len: usize,
     tags: [T; LANES],
-    observers: [Observer; LANES],
-    triangles: [[DVec2; 3]; LANES],
+    pairs: PairLanes,
 }
 
 impl<T: Copy> Batch<T> {
     /// Adds a pair; when the batch is full it is evaluated into `sink`.
+    #[inline(always)]
     pub fn push(&mut self, tag: T, obs: Observer, tri: [DVec2; 3], sink: impl FnMut(T, f64)) {
-        (self.tags[self.len], self.observers[self.len], self.triangles[self.len]) = (tag, obs, tri);
+        self.tags[self.len] = tag;
+        self.pairs.set(self.len, &obs, &tri);
         self.len += 1;
         if self.len == LANES {
             self.flush(sink);
@@ -53,10 +104,8 @@ impl<T: Copy> Batch<T> {
         if self.len == 0 {
             return;
         }
-        for l in self.len..LANES {
-            (self.observers[l], self.triangles[l]) = (self.observers[0], self.triangles[0]);
-        }
-        let values = constant_weight(&self.observers, &self.triangles);
+        self.pairs.repeat_first(self.len);
+        let values = self.pairs.constant_weight();
         for (&tag, v) in self.tags[..self.len].iter().zip(values) {
             sink(tag, v);
         }
@@ -64,12 +113,12 @@ impl<T: Copy> Batch<T> {
     }
 }
 
-/// [`constant_weight`] compiled for AVX2 and FMA (the same operations; no fused multiply-add is
-/// asked for, so the results are those of the portable form).
+/// [`PairLanes::constant_weight`] compiled for AVX2 and FMA (the same operations; no fused
+/// multiply-add is asked for, so the results are those of the portable form).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn constant_weight_avx2(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [f64; LANES] {
-    constant_weight_portable(obs, tris)
+fn constant_weight_avx2(pairs: &PairLanes) -> Lanes {
+    constant_weight_portable(pairs)
 }
 
 type Lanes = [f64; LANES];
@@ -80,16 +129,17 @@ fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
 }
 
 #[inline(always)]
-fn constant_weight_portable(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> Lanes {
-    let z = lanes(|l| obs[l].position.z);
+fn constant_weight_portable(pairs: &PairLanes) -> Lanes {
+    let [x, y, z] = pairs.position;
+    let [vx, vy] = pairs.vertex;
     let z2 = lanes(|l| z[l] * z[l]);
     let (mut m00, mut m10, mut m01) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
     for k in 0..3 {
         // Edge k from p to q, relative to the projection O of the observer.
-        let px = lanes(|l| tris[l][k].x - obs[l].position.x);
-        let py = lanes(|l| tris[l][k].y - obs[l].position.y);
-        let qx = lanes(|l| tris[l][(k + 1) % 3].x - obs[l].position.x);
-        let qy = lanes(|l| tris[l][(k + 1) % 3].y - obs[l].position.y);
+        let px = lanes(|l| vx[k][l] - x[l]);
+        let py = lanes(|l| vy[k][l] - y[l]);
+        let qx = lanes(|l| vx[(k + 1) % 3][l] - x[l]);
+        let qy = lanes(|l| vy[(k + 1) % 3][l] - y[l]);
         let (dx, dy) = (lanes(|l| qx[l] - px[l]), lanes(|l| qy[l] - py[l]));
         let len = lanes(|l| (dx[l] * dx[l] + dy[l] * dy[l]).sqrt());
         // Unit tangent e and outward normal ν = (e_y, -e_x); a zero-length edge adds nothing.
@@ -110,10 +160,8 @@ fn constant_weight_portable(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES])
             m01[l] -= 0.5 * z[l] * -ex[l] * a;
         }
     }
-    lanes(|l| {
-        let n = obs[l].normal;
-        -n.z * m00[l] + n.x * m10[l] + n.y * m01[l]
-    })
+    let [nx, ny, nz] = pairs.normal;
+    lanes(|l| -nz[l] * m00[l] + nx[l] * m10[l] + ny[l] * m01[l])
 }
 
 #[cfg(test)]
