@@ -4,8 +4,11 @@
 //! into vector instructions (AVX2 and FMA when the CPU has them, chosen at run time). The one
 //! transcendental function, the arctangent of each edge's term, is our own branch-free one (the
 //! reduction and polynomial of `shaders/math_f64.wgsl`, 1-2 ulp, its reduction folded into one
-//! division); the rest is the same IEEE arithmetic as the scalar form, so the two agree to a few
-//! ulps (tests below and in `assembly`). The scalar form stays the reference.
+//! division). The edge terms are the scalar form's with the edge's length left in (one square
+//! root and two divisions per edge instead of two and four), so the two agree to what rounding
+//! moves either by: a few ulps of π, more for a node just above an edge's line close to the
+//! plane, where K itself is ill-conditioned (tests below and in `assembly`). The scalar form stays
+//! the reference.
 
 use glam::DVec2;
 
@@ -141,23 +144,22 @@ fn constant_weight_portable(pairs: &PairLanes) -> Lanes {
         let qx = lanes(|l| vx[(k + 1) % 3][l] - x[l]);
         let qy = lanes(|l| vy[(k + 1) % 3][l] - y[l]);
         let (dx, dy) = (lanes(|l| qx[l] - px[l]), lanes(|l| qy[l] - py[l]));
-        let len = lanes(|l| (dx[l] * dx[l] + dy[l] * dy[l]).sqrt());
-        // Unit tangent e and outward normal ν = (e_y, -e_x); a zero-length edge adds nothing.
-        // (Divided as the scalar form does: h below is ill-conditioned for a node near the
-        // plane just above the edge's line, and a reciprocal there moves K by 1e-14.)
-        let (ex, ey) = (lanes(|l| dx[l] / len[l]), lanes(|l| dy[l] / len[l]));
-        let h = lanes(|l| 0.5 * ((px[l] + qx[l]) * ey[l] + (py[l] + qy[l]) * -ex[l]));
-        let ta = lanes(|l| px[l] * ex[l] + py[l] * ey[l]);
-        let tb = lanes(|l| qx[l] * ex[l] + qy[l] * ey[l]);
-        let s2 = lanes(|l| h[l] * h[l] + z2[l]);
-        let s = lanes(|l| s2[l].sqrt());
-        // atan(tb/S) - atan(ta/S) as one atan2 of (S len, S² + ta tb): S len > 0.
-        let angle = atan2_positive_y(lanes(|l| s[l] * len[l]), lanes(|l| s2[l] + ta[l] * tb[l]));
+        // The scalar form's terms with the edge's length L left in: H = h L, T_a = t_a L,
+        // T_b = t_b L, R = S L = (H² + z² L²)^(1/2). Its arctangent is that of (S L, S² + t_a t_b),
+        // both scaled by L², and A_e = angle / S: one square root and two divisions per edge
+        // instead of two and four. A zero-length edge adds nothing.
+        let l2 = lanes(|l| dx[l] * dx[l] + dy[l] * dy[l]);
+        let hl = lanes(|l| 0.5 * ((px[l] + qx[l]) * dy[l] - (py[l] + qy[l]) * dx[l]));
+        let ta = lanes(|l| px[l] * dx[l] + py[l] * dy[l]);
+        let tb = lanes(|l| qx[l] * dx[l] + qy[l] * dy[l]);
+        let r2 = lanes(|l| hl[l] * hl[l] + z2[l] * l2[l]);
+        let r = lanes(|l| r2[l].sqrt());
+        let angle = atan2_positive_y(lanes(|l| r[l] * l2[l]), lanes(|l| r2[l] + ta[l] * tb[l]));
         for l in 0..LANES {
-            let a = if len[l] > 0.0 { angle[l] / s[l] } else { 0.0 };
-            m00[l] += 0.5 * h[l] * a;
-            m10[l] -= 0.5 * z[l] * ey[l] * a;
-            m01[l] -= 0.5 * z[l] * -ex[l] * a;
+            let a = if l2[l] > 0.0 { angle[l] / r[l] } else { 0.0 };
+            m00[l] += 0.5 * hl[l] * a;
+            m10[l] -= 0.5 * z[l] * dy[l] * a;
+            m01[l] += 0.5 * z[l] * dx[l] * a;
         }
     }
     let [nx, ny, nz] = pairs.normal;
@@ -171,6 +173,25 @@ mod tests {
 
     use super::*;
     use crate::kernels::exact;
+
+    /// What rounding alone may move the closed form by: the edge terms are angles of order 1
+    /// whatever the value (which cancels to O(z) near the plane), so a few ulps of π; and the
+    /// distance h of an edge's line from the node's foot, whatever the formula, carries an error
+    /// of an ulp of the vertices' distances |p| + |q|, which moves that edge's term h A by about
+    /// as much over S = (h² + z²)^(1/2) (large for a node just above the line, close to the plane,
+    /// where K changes by O(1) as the node crosses the line).
+    fn rounding_scale(obs: &Observer, tri: &[DVec2; 3]) -> f64 {
+        let foot = obs.position.truncate();
+        let conditioning: f64 = (0..3)
+            .map(|k| {
+                let (p, q) = (tri[k] - foot, tri[(k + 1) % 3] - foot);
+                let e = (q - p).normalize_or_zero();
+                let h = p.perp_dot(e);
+                (p.length() + q.length()) / h.hypot(obs.position.z)
+            })
+            .sum();
+        f64::EPSILON * (1.0 + conditioning)
+    }
 
     #[test]
     fn lanes_agree_with_the_scalar_closed_form() {
@@ -202,11 +223,10 @@ mod tests {
             let got = constant_weight(&obs, &tris);
             for l in 0..LANES {
                 let want = exact::constant_weight(&obs[l], [&tris[l][..]]);
-                // The edge terms are angles of order 1 whatever the value (which cancels to
-                // O(z) near the plane): the rounding is absolute, a few ulps of π.
-                worst = worst.max((got[l] - want).abs());
+                worst = worst.max((got[l] - want).abs() / rounding_scale(&obs[l], &tris[l]));
             }
         }
-        assert!(worst < 4e-15, "{worst:e}");
+        // Measured: 0.29 at most.
+        assert!(worst < 1.0, "{worst} times the rounding scale");
     }
 }
