@@ -1,6 +1,7 @@
 //! Branch-free f64 elementary functions over lanes `[f64; N]`, for the vectorised kernels: each
 //! step is a loop over the lanes without branches, so that the caller, compiled for AVX2, runs it
-//! in vector registers (the library's `atan2`, `exp` and `ln_1p` are scalar calls).
+//! in vector registers (the library's `atan2`, `exp` and `ln_1p` are scalar calls). With `FUSED`
+//! (for callers compiled for FMA) the polynomials' Horner steps are fused multiply-adds.
 //!
 //! The algorithms are those of `shaders/math_f64.wgsl` (own code): atan by the reduction points of
 //! fdlibm's s_atan.c and a fitted polynomial; exp by `x = k ln 2 + r` and a degree-13 Taylor
@@ -13,6 +14,13 @@
 const LN2_HI: f64 = 0.6931471805598903;
 const LN2_LO: f64 = 5.497923018708371e-14;
 
+/// `a b + c`, fused (one rounding) when `FUSED`: callers compiled for FMA ask for it, the
+/// portable ones not, for whom the fused form would be a library call.
+#[inline(always)]
+fn mul_add<const FUSED: bool>(a: f64, b: f64, c: f64) -> f64 {
+    if FUSED { a.mul_add(b, c) } else { a * b + c }
+}
+
 #[inline(always)]
 fn lanes<const N: usize>(f: impl Fn(usize) -> f64) -> [f64; N] {
     std::array::from_fn(f)
@@ -20,10 +28,10 @@ fn lanes<const N: usize>(f: impl Fn(usize) -> f64) -> [f64; N] {
 
 /// `atan2(y, x)` for `y > 0` (a result in (0, π)): `atan(y/|x|)`, reflected for `x < 0`.
 #[inline(always)]
-pub fn atan2_positive_y<const N: usize>(y: [f64; N], x: [f64; N]) -> [f64; N] {
+pub fn atan2_positive_y<const N: usize, const FUSED: bool>(y: [f64; N], x: [f64; N]) -> [f64; N] {
     const PI_HI: f64 = std::f64::consts::PI;
     const PI_LO: f64 = 1.2246467991473532e-16;
-    let r = atan_of_ratio(y, lanes(|l| x[l].abs()));
+    let r = atan_of_ratio::<N, FUSED>(y, lanes(|l| x[l].abs()));
     lanes::<N>(|l| if x[l] < 0.0 { (PI_HI - r[l]) + PI_LO } else { r[l] })
 }
 
@@ -33,7 +41,7 @@ pub fn atan2_positive_y<const N: usize>(y: [f64; N], x: [f64; N]) -> [f64; N] {
 /// coefficients so that every lane runs one division and no infinity arises; then
 /// `atan(t) = t + t u P(u)`, `u = t²`, P a degree-11 near-minimax fit on [0, (7/16)²].
 #[inline(always)]
-pub fn atan_of_ratio<const N: usize>(y: [f64; N], x: [f64; N]) -> [f64; N] {
+pub fn atan_of_ratio<const N: usize, const FUSED: bool>(y: [f64; N], x: [f64; N]) -> [f64; N] {
     // (n1, n0, d0, d1, atan(c) high, atan(c) low) per interval.
     const REDUCTIONS: [[f64; 6]; 5] = [
         [1.0, 0.0, 1.0, 0.0, 0.0, 0.0],
@@ -71,7 +79,7 @@ pub fn atan_of_ratio<const N: usize>(y: [f64; N], x: [f64; N]) -> [f64; N] {
     let u = lanes::<N>(|l| t[l] * t[l]);
     let mut p = [P[0]; N];
     for &coefficient in &P[1..] {
-        p = lanes::<N>(|l| coefficient + u[l] * p[l]);
+        p = lanes::<N>(|l| mul_add::<FUSED>(p[l], u[l], coefficient));
     }
     lanes::<N>(|l| c[l][4] + (t[l] + (t[l] * u[l] * p[l] + c[l][5])))
 }
@@ -85,7 +93,7 @@ pub const EXP_LIMIT: f64 = 700.0;
 /// bits of `k`; `k` comes from rounding by the magic constant 1.5 · 2^52 (whose last place is 1).
 /// The second value costs no division: integer lane operations only, which AVX2 has.
 #[inline(always)]
-pub fn exp_and_reciprocal<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
+pub fn exp_and_reciprocal<const N: usize, const FUSED: bool>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     const INV_LN2: f64 = std::f64::consts::LOG2_E;
     const ROUNDER: f64 = 6755399441055744.0;
     // 1/(2j)!, j = 6 down to 1, and 0: C(u) = u (1/2 + u (1/24 + ...)), u = r².
@@ -114,26 +122,28 @@ pub fn exp_and_reciprocal<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let u = lanes::<N>(|l| r[l] * r[l]);
     let mut even = [EVEN[0]; N];
     for &coefficient in &EVEN[1..] {
-        even = lanes::<N>(|l| even[l].mul_add(u[l], coefficient));
+        even = lanes::<N>(|l| mul_add::<FUSED>(even[l], u[l], coefficient));
     }
     let mut odd = [ODD[0]; N];
     for &coefficient in &ODD[1..] {
-        odd = lanes::<N>(|l| odd[l].mul_add(u[l], coefficient));
+        odd = lanes::<N>(|l| mul_add::<FUSED>(odd[l], u[l], coefficient));
     }
     // k and -k as integers: the bits of `shifted` less those of the rounder.
     let k_bits: [u64; N] =
         std::array::from_fn(|l| shifted[l].to_bits().wrapping_sub(ROUNDER.to_bits()));
     let power = |k: u64| f64::from_bits(k.wrapping_add(1023) << 52);
     (
-        lanes::<N>(|l| (1.0 + r[l].mul_add(odd[l], even[l])) * power(k_bits[l])),
-        lanes::<N>(|l| (1.0 + (-r[l]).mul_add(odd[l], even[l])) * power(k_bits[l].wrapping_neg())),
+        lanes::<N>(|l| (1.0 + mul_add::<FUSED>(r[l], odd[l], even[l])) * power(k_bits[l])),
+        lanes::<N>(|l| {
+            (1.0 + mul_add::<FUSED>(-r[l], odd[l], even[l])) * power(k_bits[l].wrapping_neg())
+        }),
     )
 }
 
 /// `ln(1 + y)` for `y` in [0, 1]. Above `√2 - 1`, `1 + y = 2 (1 + (y - 1)/2)` with `(y - 1)/2`
 /// exact, so every lane reduces to `log(1 + f)` with `f` in [√2/2 - 1, √2 - 1].
 #[inline(always)]
-pub fn ln_1p_unit<const N: usize>(y: [f64; N]) -> [f64; N] {
+pub fn ln_1p_unit<const N: usize, const FUSED: bool>(y: [f64; N]) -> [f64; N] {
     const SQRT2_MINUS_1: f64 = 0.41421356237309515;
     // R(z) = z (LG[6] + z (LG[5] + ... + z LG[0])), z = s²: the minimax fit of
     // 2 atanh(s)/s - 2 on |s| <= 3 - 2√2 from fdlibm's e_log.c (error below 2^-58.45).
@@ -152,7 +162,7 @@ pub fn ln_1p_unit<const N: usize>(y: [f64; N]) -> [f64; N] {
     let z = lanes::<N>(|l| s[l] * s[l]);
     let mut p = [LG[0]; N];
     for &coefficient in &LG[1..] {
-        p = lanes::<N>(|l| p[l].mul_add(z[l], coefficient));
+        p = lanes::<N>(|l| mul_add::<FUSED>(p[l], z[l], coefficient));
     }
     lanes::<N>(|l| {
         let (base, extra) = if upper(l) { (LN2_HI, LN2_LO) } else { (0.0, 0.0) };
@@ -192,14 +202,19 @@ mod tests {
                 [0.4375, 0.6875, 1.1875, 2.4375][k % 4] * (1.0 + rng.random_range(-1e-3..1e-3))
             }
         });
-        let worst = worst_ulps(args, |a| atan_of_ratio(a, [1.0; 4]), f64::atan);
-        assert!(worst <= 2.0, "{worst} ulp");
-        assert_eq!(atan_of_ratio([1.0], [0.0])[0], std::f64::consts::FRAC_PI_2);
+        let args: Vec<f64> = args.collect();
+        let plain =
+            worst_ulps(args.iter().copied(), |a| atan_of_ratio::<4, false>(a, [1.0; 4]), f64::atan);
+        let fused =
+            worst_ulps(args.into_iter(), |a| atan_of_ratio::<4, true>(a, [1.0; 4]), f64::atan);
+        assert!(plain <= 2.0 && fused <= 2.0, "{plain} ulp, fused {fused} ulp");
+        assert_eq!(atan_of_ratio::<1, false>([1.0], [0.0])[0], std::f64::consts::FRAC_PI_2);
         let (y, x) = ([1.0f64, 1e-300, 3.0, 1.0], [-1.0f64, -1.0, 0.0, -1e-300]);
-        let got = atan2_positive_y(y, x);
-        for l in 0..4 {
-            let want = y[l].atan2(x[l]);
-            assert!((got[l] - want).abs() <= 2.0 * f64::EPSILON * want, "{} vs {want}", got[l]);
+        for got in [atan2_positive_y::<4, false>(y, x), atan2_positive_y::<4, true>(y, x)] {
+            for l in 0..4 {
+                let want = y[l].atan2(x[l]);
+                assert!((got[l] - want).abs() <= 2.0 * f64::EPSILON * want, "{} vs {want}", got[l]);
+            }
         }
     }
 
@@ -213,11 +228,16 @@ mod tests {
             _ => (k % 41) as f64 * 0.5 * std::f64::consts::LN_2 + rng.random_range(-1e-9..1e-9),
         });
         let args: Vec<f64> = args.collect();
-        let worst = worst_ulps(args.iter().copied(), |x| exp_and_reciprocal(x).0, f64::exp);
-        assert!(worst <= 2.0, "{worst} ulp");
-        let worst = worst_ulps(args.into_iter(), |x| exp_and_reciprocal(x).1, |x| (-x).exp());
-        assert!(worst <= 2.0, "{worst} ulp (reciprocal)");
-        assert_eq!(exp_and_reciprocal([0.0]), ([1.0], [1.0]));
+        type Pair = ([f64; 4], [f64; 4]);
+        let worst = |f: fn([f64; 4]) -> Pair| {
+            let e = worst_ulps(args.iter().copied(), |x| f(x).0, f64::exp);
+            let inverse = worst_ulps(args.iter().copied(), |x| f(x).1, |x| (-x).exp());
+            e.max(inverse)
+        };
+        let (plain, fused) =
+            (worst(exp_and_reciprocal::<4, false>), worst(exp_and_reciprocal::<4, true>));
+        assert!(plain <= 2.0 && fused <= 2.0, "{plain} ulp, fused {fused} ulp");
+        assert_eq!(exp_and_reciprocal::<1, false>([0.0]), ([1.0], [1.0]));
     }
 
     #[test]
@@ -229,8 +249,10 @@ mod tests {
             // Both sides of the switch at √2 - 1.
             _ => 0.41421356237309515 * (1.0 + rng.random_range(-1e-6..1e-6)),
         });
-        let worst = worst_ulps(args, ln_1p_unit, f64::ln_1p);
-        assert!(worst <= 2.0, "{worst} ulp");
-        assert_eq!(ln_1p_unit([0.0, 1.0]), [0.0, std::f64::consts::LN_2]);
+        let args: Vec<f64> = args.collect();
+        let plain = worst_ulps(args.iter().copied(), ln_1p_unit::<4, false>, f64::ln_1p);
+        let fused = worst_ulps(args.into_iter(), ln_1p_unit::<4, true>, f64::ln_1p);
+        assert!(plain <= 2.0 && fused <= 2.0, "{plain} ulp, fused {fused} ulp");
+        assert_eq!(ln_1p_unit::<2, true>([0.0, 1.0]), [0.0, std::f64::consts::LN_2]);
     }
 }
