@@ -31,7 +31,7 @@ use glam::{DVec2, DVec3};
 
 use crate::geometry::{
     HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
-    signed_area, subtract_convex,
+    convex_contains, signed_area, subtract_convex,
 };
 use crate::scene::Scene;
 
@@ -516,6 +516,12 @@ impl PairPlanner {
                 let (plo, phi) = bounding_box(&piece);
                 if phi.x <= slo.x || shi.x <= plo.x || phi.y <= slo.y || shi.y <= plo.y {
                     next.push(piece);
+                    continue;
+                }
+                // A piece inside the shadow (every vertex, boundary included) is gone without
+                // cutting it along each of the shadow's edges.
+                if piece.iter().all(|&v| convex_contains(s, v)) {
+                    changed = true;
                     continue;
                 }
                 let parts = subtract_convex(&piece, s);
