@@ -16,7 +16,10 @@
 //! squares and fourth powers of lengths then stay inside f64's normal range.
 //!
 //! - [`exact`]: the production kernel: closed forms in edge form for the constant weight, closed
-//!   forms plus one IMT quadrature per edge for affine weights (eqs. 4.5–4.9, 4.13).
+//!   forms plus one IMT quadrature per edge for affine weights (eqs. 4.5–4.9, 4.13); the IMT sum
+//!   runs eight nodes at a time in vector lanes.
+//! - [`lanes`]: the constant weight's closed form for eight (node, element) pairs at a time.
+//! - [`by_rule`]: fixed triangle rules applied to G, four points at a time.
 //! - [`far_field`]: a collapsed Gauss rule for elements far from the node (linear method).
 //! - [`graded`]: the paper's 7-point and Gauss methods (sec. 4.2), distance-graded fixed rules.
 //! - [`lambert`]: Lambert's contour formula, an independent closed form for the constant weight.
