@@ -119,8 +119,8 @@ pub(crate) fn half_log_ratio(s2: f64, ta: f64, tb: f64, len: f64) -> f64 {
 pub const LOG_PANEL_WIDTH: f64 = 8.0;
 
 /// `z L_e` for the edge from `p` to `q` (coordinates relative to the node's foot) seen from the
-/// height `z`: its share of `z N_00`, in vector lanes ([`log_integral`], what the kernels use) or
-/// by the scalar reference ([`log_integral_scalar`]); zero for a zero-length edge. For benches.
+/// height `z`: its share of `z N_00`, in vector lanes (what the kernels use) or by the scalar
+/// reference; zero for a zero-length edge. For benches.
 pub fn edge_log_moment(p: DVec2, q: DVec2, z: f64, imt: &ImtRule, in_lanes: bool) -> f64 {
     match EdgeTerms::new(p, q, z * z, true) {
         Some(edge) if in_lanes => log_integral(&edge, z, imt),

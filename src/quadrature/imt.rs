@@ -6,7 +6,7 @@
 
 use super::GaussLegendre;
 
-/// Nodes per group in [`ImtRule::integrate_lanes`].
+/// Nodes per group in [`ImtRule::lanes`].
 pub const IMT_LANES: usize = 8;
 
 /// The N-point IMT rule on [0, 1]: nodes `φ(k/N)` and weights `φ'(k/N)/N`, k = 1 .. N-1 (the end
