@@ -118,6 +118,31 @@ pub(crate) fn half_log_ratio(s2: f64, ta: f64, tb: f64, len: f64) -> f64 {
 /// case, are integrated as before.
 pub const LOG_PANEL_WIDTH: f64 = 8.0;
 
+/// What both forms of the log moment take from an edge: `S`, `h²`, the span `[w_a, w_b]` of
+/// `w = asinh(t/S)` and its panels of at most [`LOG_PANEL_WIDTH`].
+struct LogSpan {
+    s: f64,
+    h2: f64,
+    wa: f64,
+    wb: f64,
+    panels: usize,
+    width: f64,
+}
+
+impl LogSpan {
+    /// `None` for an edge whose line passes through the node's foot (h = 0: no share).
+    fn new(edge: &EdgeTerms) -> Option<Self> {
+        if edge.h == 0.0 {
+            return None;
+        }
+        let s = edge.s2.sqrt();
+        let (wa, wb) = ((edge.ta / s).asinh(), (edge.tb / s).asinh());
+        let panels = ((wb - wa) / LOG_PANEL_WIDTH) as usize + 1;
+        let width = (wb - wa) / panels as f64;
+        Some(Self { s, h2: edge.h * edge.h, wa, wb, panels, width })
+    }
+}
+
 /// `z L_e` for the edge from `p` to `q` (coordinates relative to the node's foot) seen from the
 /// height `z`: its share of `z N_00`, in vector lanes (what the kernels use) or by the scalar
 /// reference; zero for a zero-length edge. For benches.
@@ -161,21 +186,15 @@ fn lanes(f: impl Fn(usize) -> f64) -> ImtLanes {
 /// The integrand and panels of [`log_integral_scalar`], every step a loop over the lanes.
 #[inline(always)]
 fn log_integral_lanes<const FUSED: bool>(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
-    if edge.h == 0.0 {
+    let Some(LogSpan { s, h2, wa, wb, panels, width }) = LogSpan::new(edge) else {
         return 0.0;
-    }
-    let s = edge.s2.sqrt();
-    let z2 = z * z;
-    let h2 = edge.h * edge.h;
-    let (wa, wb) = ((edge.ta / s).asinh(), (edge.tb / s).asinh());
+    };
     // Spans beyond the lanes' exponential, and heights so small that 1/z² overflows.
     if wa.abs().max(wb.abs()) > lane_math::EXP_LIMIT || z < 1e-150 {
         return log_integral_scalar(edge, z, imt);
     }
-    let inv_z2 = 1.0 / z2;
+    let inv_z2 = 1.0 / (z * z);
     let log_s_over_z = (s / z).ln();
-    let panels = ((wb - wa) / LOG_PANEL_WIDTH) as usize + 1;
-    let width = (wb - wa) / panels as f64;
     // Loops, not iterators or closures: those become functions of their own, compiled without
     // the caller's AVX2.
     let mut integral = 0.0;
@@ -216,13 +235,10 @@ fn log_integral_lanes<const FUSED: bool>(edge: &EdgeTerms, z: f64, imt: &ImtRule
 /// `z L_e`: this edge's share of `z N_00`, by the IMT rule in `w` with `t = S sinh w`, on panels of
 /// at most [`LOG_PANEL_WIDTH`]. The scalar reference of [`log_integral`].
 pub(crate) fn log_integral_scalar(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f64 {
-    if edge.h == 0.0 {
+    let Some(LogSpan { s, h2, wa, panels, width, .. }) = LogSpan::new(edge) else {
         return 0.0;
-    }
-    let s = edge.s2.sqrt();
+    };
     let z2 = z * z;
-    let h2 = edge.h * edge.h;
-    let (wa, wb) = ((edge.ta / s).asinh(), (edge.tb / s).asinh());
     // Integrand in w: [ln(1 + q)/q] r / z² with q = (h² + t²)/z² and r = (S² + t²)^(1/2) = dt/dw.
     // One exponential gives t = S sinh w and r = S cosh w. Since 1 + q = r²/z², for q >= 1
     // ln(1 + q) = 2 ln(r/z) = 2 [ln(S/z) + |w| - ln 2 + ln(1 + m²)], m = e^-|w| <= 1: one log per
@@ -243,8 +259,6 @@ pub(crate) fn log_integral_scalar(edge: &EdgeTerms, z: f64, imt: &ImtRule) -> f6
         };
         ratio * r
     };
-    let panels = ((wb - wa) / LOG_PANEL_WIDTH) as usize + 1;
-    let width = (wb - wa) / panels as f64;
     let integral: f64 = (0..panels)
         .map(|k| {
             let a = wa + width * k as f64;
