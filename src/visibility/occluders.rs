@@ -95,6 +95,9 @@ impl OccluderIndex {
 /// that is at most `margin` at all its points.
 #[derive(Clone, Debug, Default)]
 pub(super) struct ViewVolume {
+    /// The box of [`ViewVolume::push_box`], tested first and by comparisons alone (its planes
+    /// are the axes'): most boxes of the index fail there.
+    bounds: Option<(DVec3, DVec3, f64)>,
     planes: Vec<(DVec3, f64, f64)>,
 }
 
@@ -119,24 +122,39 @@ impl ViewVolume {
 
     /// Adds the six faces of the box `[lo, hi]`, shrunk by `shrink` (a piece touching the box
     /// from outside blocks no segment inside it).
+    /// (One box per volume.)
     pub(super) fn push_box(&mut self, lo: DVec3, hi: DVec3, shrink: f64) {
-        for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
-            self.push(axis, -axis.dot(lo), shrink);
-            self.push(-axis, axis.dot(hi), shrink);
-        }
+        debug_assert!(self.bounds.is_none(), "one box per view volume");
+        self.bounds = Some((lo, hi, shrink));
     }
 
     /// Whether the polygon may reach inside.
     pub(super) fn may_hold(&self, polygon: &[DVec3]) -> bool {
-        self.planes.iter().all(|&(n, d, margin)| polygon.iter().any(|&v| n.dot(v) + d > margin))
+        let (lo, hi) = crate::geometry::bounding_box_3d(polygon);
+        self.box_reaches(lo, hi)
+            && self
+                .planes
+                .iter()
+                .all(|&(n, d, margin)| polygon.iter().any(|&v| n.dot(v) + d > margin))
+    }
+
+    /// Whether `[lo, hi]` reaches into the box of [`ViewVolume::push_box`] by more than its
+    /// shrink on every side: the test of that box's six planes, `x - lo_x > shrink` and
+    /// `hi_x - x > shrink` at the farthest point, to the same bits.
+    fn box_reaches(&self, lo: DVec3, hi: DVec3) -> bool {
+        self.bounds.is_none_or(|(blo, bhi, shrink)| {
+            (hi - blo).cmpgt(DVec3::splat(shrink)).all()
+                && (bhi - lo).cmpgt(DVec3::splat(shrink)).all()
+        })
     }
 
     /// Whether the box `[lo, hi]` may reach inside (its corner farthest along each normal).
     fn may_hold_box(&self, lo: DVec3, hi: DVec3) -> bool {
-        self.planes.iter().all(|&(n, d, margin)| {
-            let far = DVec3::select(n.cmpge(DVec3::ZERO), hi, lo);
-            n.dot(far) + d > margin
-        })
+        self.box_reaches(lo, hi)
+            && self.planes.iter().all(|&(n, d, margin)| {
+                let far = DVec3::select(n.cmpge(DVec3::ZERO), hi, lo);
+                n.dot(far) + d > margin
+            })
     }
 }
 
