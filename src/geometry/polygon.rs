@@ -139,14 +139,15 @@ fn keep_side(poly: &[DVec2], d: &[f64], scale: f64) -> Option<Vec<DVec2>> {
     cleaned(out.into_vec(), ON_LINE * scale)
 }
 
-/// Whether a point lies in a counter-clockwise convex polygon, boundary included up to a relative
-/// tolerance.
-pub fn convex_contains(poly: &[DVec2], x: DVec2) -> bool {
+/// Whether every point of `points` lies in a counter-clockwise convex polygon, boundary included
+/// up to a relative tolerance (of the polygon's size, measured once).
+pub fn convex_contains(poly: &[DVec2], points: &[DVec2]) -> bool {
     let eps = ON_LINE * scale_of(poly);
     let n = poly.len();
     (0..n).all(|k| {
         let (p, q) = (poly[k], poly[(k + 1) % n]);
-        (q - p).perp_dot(x - p) >= -eps * (q - p).length()
+        let margin = -eps * (q - p).length();
+        points.iter().all(|&x| (q - p).perp_dot(x - p) >= margin)
     })
 }
 
@@ -335,9 +336,10 @@ mod tests {
     #[test]
     fn containment_includes_the_boundary() {
         let sq = square(0.0, 1.0);
-        assert!(convex_contains(&sq, DVec2::new(1.0, 0.5)));
-        assert!(convex_contains(&sq, DVec2::new(0.5, 0.5)));
-        assert!(!convex_contains(&sq, DVec2::new(1.0 + 1e-9, 0.5)));
+        assert!(convex_contains(&sq, &[DVec2::new(1.0, 0.5)]));
+        assert!(convex_contains(&sq, &[DVec2::new(0.5, 0.5)]));
+        assert!(!convex_contains(&sq, &[DVec2::new(1.0 + 1e-9, 0.5)]));
+        assert!(!convex_contains(&sq, &[DVec2::new(0.5, 0.5), DVec2::new(1.0 + 1e-9, 0.5)]));
     }
 
     #[test]

@@ -247,7 +247,7 @@ impl PairPlanner {
         let mut found = Vec::new();
         for &o in candidates {
             let piece = &self.occluders.pieces[o];
-            if !volume.may_hold(&piece.polygon) || piece.plane_separates(from, to, tol) {
+            if !volume.may_hold(piece) || piece.plane_separates(from, to, tol) {
                 continue;
             }
             if piece.crosses_every_segment(from, to, tol, tol) {
@@ -385,7 +385,7 @@ impl PairPlanner {
         // in the pyramid; the same filter then finds the same ones as the tree.
         let found: Box<dyn Iterator<Item = usize>> = match pair {
             Some((_, list)) => {
-                Box::new(list.iter().copied().filter(|&k| volume.may_hold(&pieces[k].polygon)))
+                Box::new(list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])))
             }
             None => self.occluders.inside(own_face, face, &volume),
         };
@@ -520,7 +520,7 @@ impl PairPlanner {
                 }
                 // A piece inside the shadow (every vertex, boundary included) is gone without
                 // cutting it along each of the shadow's edges.
-                if piece.iter().all(|&v| convex_contains(s, v)) {
+                if convex_contains(s, &piece) {
                     changed = true;
                     continue;
                 }

@@ -78,7 +78,7 @@ impl OccluderIndex {
     ) -> Box<dyn Iterator<Item = usize> + 'a> {
         let keep = move |&k: &usize| {
             let o = &self.pieces[k];
-            !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(&o.polygon)
+            !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(o)
         };
         match &self.tree {
             Some(tree) => {
@@ -121,21 +121,19 @@ impl ViewVolume {
     }
 
     /// Adds the six faces of the box `[lo, hi]`, shrunk by `shrink` (a piece touching the box
-    /// from outside blocks no segment inside it).
-    /// (One box per volume.)
+    /// from outside blocks no segment inside it); one box per volume.
     pub(super) fn push_box(&mut self, lo: DVec3, hi: DVec3, shrink: f64) {
         debug_assert!(self.bounds.is_none(), "one box per view volume");
         self.bounds = Some((lo, hi, shrink));
     }
 
-    /// Whether the polygon may reach inside.
-    pub(super) fn may_hold(&self, polygon: &[DVec3]) -> bool {
-        let (lo, hi) = crate::geometry::bounding_box_3d(polygon);
-        self.box_reaches(lo, hi)
+    /// Whether the occluder may reach inside (its box first, kept since it was built).
+    pub(super) fn may_hold(&self, occluder: &Occluder) -> bool {
+        self.box_reaches(occluder.lo, occluder.hi)
             && self
                 .planes
                 .iter()
-                .all(|&(n, d, margin)| polygon.iter().any(|&v| n.dot(v) + d > margin))
+                .all(|&(n, d, margin)| occluder.polygon.iter().any(|&v| n.dot(v) + d > margin))
     }
 
     /// Whether `[lo, hi]` reaches into the box of [`ViewVolume::push_box`] by more than its
