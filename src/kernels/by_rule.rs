@@ -7,7 +7,7 @@
 //! operations of [`TriangleRule::moments`] with [`Observer::kernel`] in the same order, to the
 //! last bit. That scalar form stays the reference.
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 
 use super::Observer;
 use crate::quadrature::{PointLanes, RULE_LANES as LANES, TriangleRule};
@@ -22,6 +22,40 @@ pub fn kernel_moments(obs: &Observer, rule: &TriangleRule, tri: &[DVec2; 3]) -> 
     kernel_moments_portable(obs, rule.lanes(), tri)
 }
 
+/// What both forms take from the observer and the triangle `a, b, c`: the map
+/// `Q = a + (b - a) u + (c - a) v` and its Jacobian, and the height component `0 - z` of `Q - P`
+/// (Q in the plane), which enters as its square and its product with the normal's height
+/// component, the same for every point.
+struct Setup {
+    a: DVec2,
+    ab: DVec2,
+    ac: DVec2,
+    p: DVec3,
+    n: DVec3,
+    dz2: f64,
+    dznz: f64,
+    jacobian: f64,
+}
+
+impl Setup {
+    #[inline(always)]
+    fn new(obs: &Observer, tri: &[DVec2; 3]) -> Self {
+        let [a, b, c] = *tri;
+        let (p, n) = (obs.position, obs.normal);
+        let dz = 0.0 - p.z;
+        Self {
+            a,
+            ab: b - a,
+            ac: c - a,
+            p,
+            n,
+            dz2: dz * dz,
+            dznz: dz * n.z,
+            jacobian: (b - a).perp_dot(c - a).abs(),
+        }
+    }
+}
+
 /// [`kernel_moments`] in AVX2 registers, one group of [`LANES`] points per register, with fused
 /// multiply-adds: written out with intrinsics because the compiler kept the portable form in
 /// two-lane registers.
@@ -29,17 +63,13 @@ pub fn kernel_moments(obs: &Observer, rule: &TriangleRule, tri: &[DVec2; 3]) -> 
 #[target_feature(enable = "avx2,fma")]
 fn kernel_moments_avx2(obs: &Observer, rule: &[PointLanes], tri: &[DVec2; 3]) -> [f64; 3] {
     use std::arch::x86_64::*;
-    let [a, b, c] = *tri;
-    let jacobian = (b - a).perp_dot(c - a).abs();
-    let (ab, ac) = (b - a, c - a);
-    let (p, n) = (obs.position, obs.normal);
-    let dz = 0.0 - p.z;
+    let Setup { a, ab, ac, p, n, dz2, dznz, jacobian } = Setup::new(obs, tri);
     let splat = _mm256_set1_pd;
     let load = |x: &[f64; LANES]| _mm256_set_pd(x[3], x[2], x[1], x[0]);
     let (ax, ay, abx, aby, acx, acy) =
         (splat(a.x), splat(a.y), splat(ab.x), splat(ab.y), splat(ac.x), splat(ac.y));
     let (px, py, pz, nx, ny) = (splat(p.x), splat(p.y), splat(p.z), splat(n.x), splat(n.y));
-    let (dz2, dznz) = (splat(dz * dz), splat(dz * n.z));
+    let (dz2, dznz) = (splat(dz2), splat(dznz));
     let (mut s0, mut s1, mut s2) = (splat(0.0), splat(0.0), splat(0.0));
     for group in rule {
         let (u, v, w) = (load(&group.u), load(&group.v), load(&group.w));
@@ -69,14 +99,7 @@ fn lanes(f: impl Fn(usize) -> f64) -> [f64; LANES] {
 
 #[inline(always)]
 fn kernel_moments_portable(obs: &Observer, rule: &[PointLanes], tri: &[DVec2; 3]) -> [f64; 3] {
-    let [a, b, c] = *tri;
-    let jacobian = (b - a).perp_dot(c - a).abs();
-    let (ab, ac) = (b - a, c - a);
-    let (p, n) = (obs.position, obs.normal);
-    // The height component of Q - P (Q in the plane) enters as its square and its product with
-    // the normal's height component, the same for every point.
-    let dz = 0.0 - p.z;
-    let (dz2, dznz) = (dz * dz, dz * n.z);
+    let Setup { a, ab, ac, p, n, dz2, dznz, jacobian } = Setup::new(obs, tri);
     let mut sums = [[0.0f64; LANES]; 3];
     for group in rule {
         let (u, v) = (&group.u, &group.v);

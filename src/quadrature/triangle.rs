@@ -115,7 +115,7 @@ impl TriangleRule {
 
     /// `[∫ f, ∫ f X, ∫ f Y]` over the triangle `tri` (any orientation) of the plane, in
     /// [`LANES`] independent sums. The scalar reference of the vectorised kernel rule
-    /// (`kernels::by_rule`), which does the same operations in the same order.
+    /// (`kernels::by_rule`), whose portable form does the same operations in the same order.
     pub fn moments(&self, tri: &[DVec2; 3], mut f: impl FnMut(DVec2) -> f64) -> [f64; 3] {
         let [a, b, c] = *tri;
         let jacobian = (b - a).perp_dot(c - a).abs();
