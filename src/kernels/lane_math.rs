@@ -41,7 +41,7 @@ pub fn atan2_positive_y<const N: usize, const FUSED: bool>(y: [f64; N], x: [f64;
 /// coefficients so that every lane runs one division and no infinity arises; then
 /// `atan(t) = t + t u P(u)`, `u = t²`, P a degree-11 near-minimax fit on [0, (7/16)²].
 #[inline(always)]
-pub fn atan_of_ratio<const N: usize, const FUSED: bool>(y: [f64; N], x: [f64; N]) -> [f64; N] {
+fn atan_of_ratio<const N: usize, const FUSED: bool>(y: [f64; N], x: [f64; N]) -> [f64; N] {
     // (n1, n0, d0, d1, atan(c) high, atan(c) low) per interval.
     const REDUCTIONS: [[f64; 6]; 5] = [
         [1.0, 0.0, 1.0, 0.0, 0.0, 0.0],
