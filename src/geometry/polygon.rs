@@ -230,6 +230,14 @@ where
     }
 }
 
+/// Whether [`clip_polygon_3d`] would keep `poly` whole, as decided for any polygon no larger than
+/// `scale` (the bounding box's diagonal): every vertex inside by more than the tolerance of that
+/// size. A piece cut from a larger one is no larger, so one size serves all its clips.
+pub fn wholly_inside_3d(poly: &[DVec3], normal: DVec3, offset: f64, scale: f64) -> bool {
+    let eps = ON_LINE * scale * normal.length();
+    poly.iter().all(|&p| normal.dot(p) + offset > eps)
+}
+
 /// Clips a planar 3-D polygon (convex or not) to the closed half-space `{ x : normal·x + offset >= 0 }`,
 /// into `out` (cleared first; no allocation for small polygons: clipping runs for every candidate
 /// occluder of every view). For a convex polygon the result is convex; returns whether anything

@@ -31,7 +31,7 @@ use glam::{DVec2, DVec3};
 
 use crate::geometry::{
     HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
-    convex_contains, signed_area, subtract_convex,
+    convex_contains, signed_area, subtract_convex, wholly_inside_3d,
 };
 use crate::scene::Scene;
 
@@ -328,9 +328,7 @@ impl PairPlanner {
             let shadows = self
                 .candidates(own_face, face)
                 .iter()
-                .filter_map(|&o| {
-                    shadow(p, z, f, &window, &sides, &self.occluders.pieces[o].polygon)
-                })
+                .filter_map(|&o| shadow(p, z, f, &window, &sides, &self.occluders.pieces[o]))
                 .collect();
             return FaceView::Visible { clip, shadows };
         }
@@ -628,7 +626,7 @@ impl Pyramid<'_> {
         if crosses_all() {
             return Cast::Hides;
         }
-        match shadow(self.apex, self.z, self.face, self.window, self.sides, &piece.polygon) {
+        match shadow(self.apex, self.z, self.face, self.window, self.sides, piece) {
             Some(s) if covers(&s, self.window) => Cast::Hides,
             Some(s) => Cast::Shadow(s),
             None => Cast::Nothing,
@@ -705,21 +703,27 @@ fn shadow(
     f: &PlannerFace,
     window: &[DVec2],
     sides: &[DVec3],
-    occluder: &[DVec3],
+    occluder: &Occluder,
 ) -> Option<Vec<DVec2>> {
     let normal = f.face.frame.normal;
     let (mut poly, mut next) = (SmallPolygon::new(), SmallPolygon::new());
-    // In front of the face's plane.
-    if !clip_polygon_3d(occluder, normal, -normal.dot(f.face.frame.origin), &mut poly) {
-        return None;
-    }
-    // Inside the pyramid.
-    for &side in sides {
-        if !clip_polygon_3d(&poly, side, -side.dot(p), &mut next) {
+    let mut cut = false;
+    // In front of the face's plane, inside the pyramid. Most planes leave the piece whole, and
+    // the piece's own size bounds every tolerance of the clips: those are passed over.
+    let planes = std::iter::once((normal, -normal.dot(f.face.frame.origin)))
+        .chain(sides.iter().map(|&s| (s, -s.dot(p))));
+    for (n, offset) in planes {
+        let current: &[DVec3] = if cut { &poly } else { &occluder.polygon };
+        if wholly_inside_3d(current, n, offset, occluder.diameter) {
+            continue;
+        }
+        if !clip_polygon_3d(current, n, offset, &mut next) {
             return None;
         }
         std::mem::swap(&mut poly, &mut next);
+        cut = true;
     }
+    let poly: &[DVec3] = if cut { &poly } else { &occluder.polygon };
     // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
     let mut projected: Vec<DVec2> = poly
         .iter()

@@ -19,6 +19,8 @@ pub struct Occluder {
     pub polygon: Vec<DVec3>,
     lo: DVec3,
     hi: DVec3,
+    /// The diagonal of its bounding box.
+    pub(super) diameter: f64,
     /// Unit normal of its plane (the orientation of `polygon`).
     normal: DVec3,
     /// Per edge (from vertex k to k + 1), the unit normal in the plane pointing into the polygon.
@@ -226,7 +228,15 @@ impl Occluder {
         let edge_normals = (0..m)
             .map(|k| normal.cross(polygon[(k + 1) % m] - polygon[k]).normalize_or_zero())
             .collect();
-        Self { faces: vec![face], polygon, lo, hi, normal, edge_normals }
+        Self {
+            faces: vec![face],
+            polygon,
+            lo,
+            hi,
+            diameter: (hi - lo).length(),
+            normal,
+            edge_normals,
+        }
     }
 
     /// Whether this piece may cast a shadow of positive area seen from `p` on the convex window
