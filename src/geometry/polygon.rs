@@ -103,14 +103,12 @@ pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
     keep_side(poly, &d, scale)
 }
 
-/// The parts of a convex polygon outside and inside a half-plane, as [`clip_convex`] gives them
-/// (the values at the vertices computed once: those of the flipped half-plane are their
-/// negatives, to the bit).
-fn split_convex(poly: &[DVec2], hp: &HalfPlane) -> (Option<Vec<DVec2>>, Option<Vec<DVec2>>) {
-    let scale = scale_of(poly);
-    let d = line_values(poly, hp, scale);
+/// The parts of a convex polygon of size `scale` outside and inside a half-plane whose values at
+/// its vertices are `d` ([`line_values`]), as [`clip_convex`] gives them (those of the flipped
+/// half-plane are their negatives, to the bit).
+fn split_convex(poly: &[DVec2], d: &[f64], scale: f64) -> (Option<Vec<DVec2>>, Option<Vec<DVec2>>) {
     let flipped: SmallVec<[f64; INLINE_VERTICES]> = d.iter().map(|&v| -v).collect();
-    (keep_side(poly, &flipped, scale), keep_side(poly, &d, scale))
+    (keep_side(poly, &flipped, scale), keep_side(poly, d, scale))
 }
 
 /// The half-plane's values at the vertices of a polygon of size `scale`, those within the
@@ -194,16 +192,25 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
         return vec![piece.to_vec()];
     }
     let mut rest = piece.to_vec();
+    // Whether `rest` is as `keep_side` leaves it (once it has been through it): a line that
+    // leaves all of it inside then changes nothing, and most of a hole's lines do.
+    let mut kept = false;
     let mut out = Vec::new();
     let n = hole.len();
     for k in 0..n {
         let inside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
-        let (outside_part, inside_part) = split_convex(&rest, &inside);
+        let scale = scale_of(&rest);
+        let d = line_values(&rest, &inside, scale);
+        if kept && d.iter().all(|&v| v >= 0.0) {
+            continue;
+        }
+        let (outside_part, inside_part) = split_convex(&rest, &d, scale);
         out.extend(outside_part);
         match inside_part {
             Some(r) => rest = r,
             None => return out,
         }
+        kept = true;
     }
     out
 }
