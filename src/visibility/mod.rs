@@ -378,7 +378,7 @@ impl PairPlanner {
         }
         // One shadow that covers the whole window hides the face (most faces of a large scene,
         // seen from most nodes): the search stops there.
-        let mut shadows = Vec::new();
+        let mut shadows = ShadowSet::default();
         // The pair's list holds every occluder in the box of the two faces, a superset of those
         // in the pyramid; the same filter then finds the same ones as the tree.
         let found: Box<dyn Iterator<Item = usize>> = match pair {
@@ -390,16 +390,12 @@ impl PairPlanner {
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         for o in found {
-            match pyramid.cast(&pieces[o], || hides(o)) {
-                Cast::Nothing => {}
-                Cast::Shadow(s) => shadows.push(s),
-                Cast::Hides => {
-                    hiders.remember(o);
-                    return FaceView::Skip(SkipReason::Hidden);
-                }
+            if pyramid.cast(&pieces[o], || hides(o), &mut shadows) {
+                hiders.remember(o);
+                return FaceView::Skip(SkipReason::Hidden);
             }
         }
-        FaceView::Visible { clip, shadows }
+        FaceView::Visible { clip, shadows: shadows.into_shadows() }
     }
 
     /// The part of face `face` in front of the point `p` with unit normal `normal`: its height
@@ -472,16 +468,15 @@ impl PairPlanner {
         let sides = pyramid_sides(p, &corners);
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
-        let mut shadows = Vec::new();
+        let mut shadows = ShadowSet::default();
         for &o in candidates {
             let piece = &self.occluders.pieces[o];
-            match pyramid.cast(piece, || piece.crosses_every_segment(&[p], &corners, tol, -tol)) {
-                Cast::Nothing => {}
-                Cast::Shadow(s) => shadows.push(s),
-                Cast::Hides => return FaceView::Skip(SkipReason::Hidden),
+            let crosses_all = || piece.crosses_every_segment(&[p], &corners, tol, -tol);
+            if pyramid.cast(piece, crosses_all, &mut shadows) {
+                return FaceView::Skip(SkipReason::Hidden);
             }
         }
-        FaceView::Visible { clip, shadows }
+        FaceView::Visible { clip, shadows: shadows.into_shadows() }
     }
 
     /// The visible part of a convex counter-clockwise polygon `poly` (face coordinates) under `view`.
@@ -604,34 +599,100 @@ struct Pyramid<'a> {
     sides: &'a [DVec3],
 }
 
-/// What an occluder piece does to a [`Pyramid`].
-enum Cast {
-    /// Nothing of positive area.
-    Nothing,
-    /// Hides the whole window.
-    Hides,
-    /// This convex shadow on the window (face coordinates, counter-clockwise).
-    Shadow(Vec<DVec2>),
-}
-
 impl Pyramid<'_> {
-    /// What `piece` does to the window; `crosses_all` says whether it crosses every segment
-    /// (asked only of a piece that reaches into the pyramid).
-    fn cast(&self, piece: &Occluder, crosses_all: impl FnOnce() -> bool) -> Cast {
+    /// Adds the shadow of `piece` on the window to `shadows`, unless a shadow there already
+    /// holds it; returns whether the piece hides the whole window. `crosses_all` says whether it
+    /// crosses every segment (asked only of a piece that reaches into the pyramid).
+    fn cast(
+        &self,
+        piece: &Occluder,
+        crosses_all: impl FnOnce() -> bool,
+        shadows: &mut ShadowSet,
+    ) -> bool {
         // Most candidates found by boxes miss the pyramid, and a separating plane shows it;
         // the crossing test is cheaper than the shadow, which also catches an occluder whose
         // outline meets the window's.
         if !piece.may_shadow(self.apex, self.corners) {
-            return Cast::Nothing;
+            return false;
+        }
+        let outline = self.projection(piece);
+        if outline.as_deref().is_some_and(|o| shadows.holds(o)) {
+            return false;
         }
         if crosses_all() {
-            return Cast::Hides;
+            return true;
         }
         match shadow(self.apex, self.z, self.face, self.window, self.sides, piece) {
-            Some(s) if covers(&s, self.window) => Cast::Hides,
-            Some(s) => Cast::Shadow(s),
-            None => Cast::Nothing,
+            Some(s) if covers(&s, self.window) => true,
+            Some(s) => {
+                shadows.add(outline, s);
+                false
+            }
+            None => false,
         }
+    }
+
+    /// The central projection of the whole of `piece` onto the face's plane (counter-clockwise,
+    /// face coordinates), when every vertex lies between that plane and the apex, no more than
+    /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than four
+    /// times as far out as the piece); its part in the window is the piece's shadow.
+    fn projection(&self, piece: &Occluder) -> Option<SmallPolygon<DVec2>> {
+        let frame = &self.face.face.frame;
+        let mut projected = SmallPolygon::new();
+        for &x in &piece.polygon {
+            let h = frame.height(x);
+            if !(0.0..=PROJECTION_REACH * self.z).contains(&h) {
+                return None;
+            }
+            let t = self.z / (self.z - h);
+            projected.push(frame.to_plane(self.apex + (x - self.apex) * t));
+        }
+        let area = signed_area(&projected);
+        let scale = polygon_scale(&projected);
+        if area.abs() <= 1e-14 * scale * scale || !area.is_finite() {
+            return None;
+        }
+        if area < 0.0 {
+            projected.reverse();
+        }
+        Some(projected)
+    }
+}
+
+/// How far up from the face's plane towards the apex (as a fraction of the apex's height) an
+/// occluder's vertices may lie for [`Pyramid::projection`].
+const PROJECTION_REACH: f64 = 0.9;
+
+/// The shadows of one view, each kept only while no other holds it: subtracting a shadow that
+/// lies in another changes no visible part (in a city, most shadows on a face are those of a
+/// building's far side, inside those of its near side).
+#[derive(Default)]
+struct ShadowSet {
+    /// Each shadow with an outline that holds it: the whole projection of its occluder when
+    /// known (whose part in the window is the shadow), else the shadow itself.
+    casts: Vec<(SmallPolygon<DVec2>, Vec<DVec2>)>,
+}
+
+impl ShadowSet {
+    /// Whether one of the outlines holds the convex `polygon` (boundary included, up to the
+    /// rounding tolerance of [`convex_contains`]).
+    fn holds(&self, polygon: &[DVec2]) -> bool {
+        self.casts.iter().any(|(outline, _)| convex_contains(outline, polygon))
+    }
+
+    /// Adds `shadow` (with its occluder's whole projection, if known) unless an outline holds
+    /// it, and drops the shadows that its own outline holds.
+    fn add(&mut self, projection: Option<SmallPolygon<DVec2>>, shadow: Vec<DVec2>) {
+        if self.holds(&shadow) {
+            return;
+        }
+        let outline = projection.unwrap_or_else(|| shadow.iter().copied().collect());
+        self.casts.retain(|(_, s)| !convex_contains(&outline, s));
+        self.casts.push((outline, shadow));
+    }
+
+    fn into_shadows(self) -> Vec<Vec<DVec2>> {
+        self.casts.into_iter().map(|(_, s)| s).collect()
     }
 }
 

@@ -225,3 +225,47 @@ fn views_among_a_polygons_shaft_occluders_equal_the_searched_views_there() {
         "{compared} {hidden_shafts} {fewer}"
     );
 }
+
+#[test]
+fn a_shadow_set_keeps_no_shadow_that_another_holds() {
+    let square = |lo: f64, hi: f64| -> Vec<DVec2> {
+        vec![DVec2::new(lo, lo), DVec2::new(hi, lo), DVec2::new(hi, hi), DVec2::new(lo, hi)]
+    };
+    let mut set = ShadowSet::default();
+    set.add(None, square(0.0, 1.0));
+    set.add(None, square(0.25, 0.75)); // inside the first
+    set.add(None, square(0.5, 1.5)); // overlaps it only
+    assert_eq!(set.casts.len(), 2);
+    // A shadow whose occluder's whole projection holds both earlier ones replaces them, though
+    // the shadow itself (cut by its window) holds neither.
+    let outline: SmallPolygon<DVec2> = square(-1.0, 2.0).into_iter().collect();
+    set.add(Some(outline), square(-1.0, 0.1));
+    assert_eq!(set.into_shadows(), vec![square(-1.0, 0.1)]);
+}
+
+/// In a city, most shadows on a face lie inside another's (a building's far side behind its near
+/// side): the views keep far fewer shadows than the core solver's plan, which lists every one,
+/// and leave the same visible area ([`super::bench_plan`] compares the areas).
+#[test]
+fn views_keep_only_the_shadows_that_no_other_holds() {
+    let scene = crate::scene::city(6, 6).unwrap();
+    let (tree, every) =
+        (PairPlanner::new(&scene), PairPlanner::with_acceleration(&scene, Acceleration::BoxScan));
+    let (mut kept, mut listed) = (0, 0);
+    for (a, f) in scene.faces.iter().enumerate().step_by(7) {
+        let centre = f.vertices.iter().sum::<DVec3>() / f.vertices.len() as f64;
+        for b in 0..scene.faces.len() {
+            let count =
+                |planner: &PairPlanner| match planner.face_view(centre, f.frame.normal, a, b) {
+                    FaceView::Visible { shadows, .. } => shadows.len(),
+                    FaceView::Skip(_) => 0,
+                };
+            let (k, l) = (count(&tree), count(&every));
+            if k > 0 {
+                kept += k;
+                listed += l;
+            }
+        }
+    }
+    assert!(listed > 500 && 2 * kept < listed, "kept {kept} of {listed}");
+}
