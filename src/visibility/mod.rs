@@ -622,7 +622,13 @@ impl Pyramid<'_> {
         if crosses_all() {
             return true;
         }
-        match shadow(self.apex, self.z, self.face, self.window, self.sides, piece) {
+        // The shadow is the projection's part in the window, where the projection is known: a
+        // clip in the plane instead of the piece's clips in space.
+        let shadow = match &outline {
+            Some(outline) => in_window(outline, self.window),
+            None => shadow(self.apex, self.z, self.face, self.window, self.sides, piece),
+        };
+        match shadow {
             Some(s) if covers(&s, self.window) => true,
             Some(s) => {
                 shadows.add(outline, s);
@@ -803,6 +809,22 @@ fn shadow(
         projected.reverse();
     }
     Some(projected)
+}
+
+/// The part of the convex counter-clockwise `polygon` in the convex `window` (face
+/// coordinates), if it has area as [`shadow`] decides it.
+fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
+    let m = window.len();
+    let mut part = polygon.to_vec();
+    for k in 0..m {
+        let edge = HalfPlane::left_of(window[k], window[(k + 1) % m]);
+        if part.iter().any(|&x| edge.eval(x) < 0.0) {
+            part = clip_convex(&part, &edge)?;
+        }
+    }
+    let area = signed_area(&part);
+    let scale = polygon_scale(window);
+    (area > 1e-14 * scale * scale).then_some(part)
 }
 
 /// Whether the convex counter-clockwise `shadow` contains every point of `window`, up to rounding
