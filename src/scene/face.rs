@@ -74,7 +74,7 @@ pub const MIN_RELATIVE_AREA: f64 = 1e-10;
 pub const MIN_FACE_SIZE: f64 = 1e-50;
 
 /// Faces whose planes are this close (relative to their size) and ...
-const COPLANAR_DISTANCE: f64 = 1e-9;
+pub const COPLANAR_DISTANCE: f64 = 1e-9;
 /// ... this parallel (radians) count as one plane.
 const COPLANAR_ANGLE: f64 = 1e-6;
 
