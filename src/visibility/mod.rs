@@ -9,7 +9,9 @@
 //!
 //! Shadows are convex (occluders are split into convex pieces), and the visible part of an element
 //! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
-//! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates).
+//! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates). A view keeps
+//! no shadow that another of its shadows holds (a building's far side behind its near side), which
+//! changes no visible part.
 //! Candidate occluders of a view are those that may reach into the pyramid with apex at the node
 //! over the face's visible window, in front of both faces. Scenes of more than 512 faces find
 //! them in an R*-tree over the occluders' bounding boxes; smaller ones filter a table of the
@@ -27,7 +29,10 @@ use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
 pub use stats::PairStats;
 
+use std::borrow::Cow;
+
 use glam::{DVec2, DVec3};
+use smallvec::SmallVec;
 
 use crate::geometry::{
     HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
@@ -414,7 +419,7 @@ impl PairPlanner {
     /// over the face's plane, the half-plane left by the point's tangent plane, and the visible
     /// window (the face's hull, clipped), in face coordinates and in space; or the view when
     /// nothing of the face is in front.
-    fn window(&self, p: DVec3, z: f64, normal: DVec3, face: usize) -> Result<Window, FaceView> {
+    fn window(&self, p: DVec3, z: f64, normal: DVec3, face: usize) -> Result<Window<'_>, FaceView> {
         let f = &self.faces[face];
         // On or behind the face's plane, up to the rounding of the height itself: G vanishes
         // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
@@ -444,10 +449,10 @@ impl PairPlanner {
         let clip = behind.then_some(hp);
         let polygon = match &clip {
             Some(hp) => match clip_convex(&f.hull, hp) {
-                Some(w) => w,
+                Some(w) => Cow::Owned(w),
                 None => return Err(FaceView::Skip(SkipReason::FacingAway)),
             },
-            None => f.hull.clone(),
+            None => Cow::Borrowed(f.hull.as_slice()),
         };
         // Segments from p to the visible window lie in the pyramid with apex p over it, in front
         // of both faces.
@@ -592,15 +597,15 @@ impl RecentHiders {
 }
 
 /// What a point has in front of it of a face ([`PairPlanner::face_view`]).
-struct Window {
+struct Window<'a> {
     /// The point's height over the face's plane.
     z: f64,
     /// The half-plane in front of the point's tangent plane, when the face straddles it.
     clip: Option<HalfPlane>,
-    /// The face's hull, clipped (face coordinates).
-    polygon: Vec<DVec2>,
+    /// The face's hull, clipped (face coordinates; the hull itself where nothing is clipped).
+    polygon: Cow<'a, [DVec2]>,
     /// The same in space.
-    corners: Vec<DVec3>,
+    corners: SmallVec<[DVec3; 8]>,
 }
 
 /// The segments from a point to the window of a face it sees ([`PairPlanner::face_view`]).
