@@ -661,7 +661,7 @@ impl Pyramid<'_> {
 
     /// The central projection of the whole of `piece` onto the face's plane (counter-clockwise,
     /// face coordinates), when every vertex lies between that plane and the apex, no more than
-    /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than four
+    /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than ten
     /// times as far out as the piece); its part in the window is the piece's shadow.
     fn projection(&self, piece: &Occluder) -> Option<SmallPolygon<DVec2>> {
         let frame = &self.face.face.frame;
