@@ -179,15 +179,22 @@ impl PairPlanner {
         a == b || fa.face.is_coplanar_at_size(&fb.face, || fa.size.max(fb.size))
     }
 
-    /// [`PairPlanner::same_plane`] for a point `p` of face `own_face` at height `z` over the
-    /// plane of `face`: the height of a point of a face is an average of its vertices' heights,
-    /// all within the coplanarity tolerance of a face in its plane, so a larger height (beyond
+    /// The height of `p` over the plane of `face`, with a bound of its distance from the plane's
+    /// origin (the sum of the coordinates' sizes: no square root) for the height's rounding.
+    fn height(&self, p: DVec3, face: usize) -> Height {
+        let frame = &self.faces[face].face.frame;
+        Height { z: frame.height(p), distance_bound: (p - frame.origin).abs().element_sum() }
+    }
+
+    /// [`PairPlanner::same_plane`] for a point of face `own_face` at height `h` over the plane
+    /// of `face`: the height of a point of a face is an average of its vertices' heights, all
+    /// within the coplanarity tolerance of a face in its plane, so a larger height (beyond
     /// twice that tolerance and the height's rounding) decides it without measuring the faces.
-    fn same_plane_seen_from(&self, p: DVec3, z: f64, own_face: usize, face: usize) -> bool {
+    fn same_plane_seen_from(&self, h: Height, own_face: usize, face: usize) -> bool {
         let (own, f) = (&self.faces[own_face], &self.faces[face]);
-        let rounding = HEIGHT_ROUNDING * (p - f.face.frame.origin).abs().element_sum();
+        let rounding = HEIGHT_ROUNDING * h.distance_bound;
         let reach = 2.0 * COPLANAR_DISTANCE * own.size.max(f.size) + rounding;
-        z.abs() <= reach && self.same_plane(own_face, face)
+        h.z.abs() <= reach && self.same_plane(own_face, face)
     }
 
     /// Occluders in the box of faces `a` and `b` and in front of both, in index order.
@@ -324,15 +331,15 @@ impl PairPlanner {
         hiders: &mut RecentHiders,
     ) -> FaceView {
         let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
-        let z = self.faces[face].face.frame.height(p);
+        let h = self.height(p, face);
         let coplanar = match pair {
             Some((coplanar, _)) => *coplanar,
-            None => self.same_plane_seen_from(p, z, own_face, face),
+            None => self.same_plane_seen_from(h, own_face, face),
         };
         if coplanar {
             return FaceView::Skip(SkipReason::SamePlane);
         }
-        let Window { z, clip, polygon: window, corners } = match self.window(p, z, normal, face) {
+        let Window { z, clip, polygon: window, corners } = match self.window(p, h, normal, face) {
             Ok(window) => window,
             Err(view) => return view,
         };
@@ -419,16 +426,23 @@ impl PairPlanner {
     /// over the face's plane, the half-plane left by the point's tangent plane, and the visible
     /// window (the face's hull, clipped), in face coordinates and in space; or the view when
     /// nothing of the face is in front.
-    fn window(&self, p: DVec3, z: f64, normal: DVec3, face: usize) -> Result<Window<'_>, FaceView> {
+    fn window(
+        &self,
+        p: DVec3,
+        Height { z, distance_bound }: Height,
+        normal: DVec3,
+        face: usize,
+    ) -> Result<Window<'_>, FaceView> {
         let f = &self.faces[face];
         // On or behind the face's plane, up to the rounding of the height itself: G vanishes
         // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
         // limit, e.g. 1/2 beside a common edge, so no larger tolerance is right.) The distance's
-        // square root is taken only where a bound of it (the sum of the coordinates) leaves the
-        // decision open.
-        let offset = p - f.face.frame.origin;
-        let bound = (1.0 + 1e-12) * offset.abs().element_sum();
-        if z <= 0.0 || (z <= HEIGHT_ROUNDING * bound && z <= HEIGHT_ROUNDING * offset.length()) {
+        // square root is taken only where its bound leaves the decision open.
+        let bound = (1.0 + 1e-12) * distance_bound;
+        if z <= 0.0
+            || (z <= HEIGHT_ROUNDING * bound
+                && z <= HEIGHT_ROUNDING * (p - f.face.frame.origin).length())
+        {
             return Err(FaceView::Skip(SkipReason::FacingAway));
         }
         // The node's tangent plane n·(Q - P) >= 0 restricted to the face's plane.
@@ -473,11 +487,11 @@ impl PairPlanner {
         face: usize,
         candidates: &[usize],
     ) -> FaceView {
-        let z = self.faces[face].face.frame.height(p);
-        if self.same_plane_seen_from(p, z, own_face, face) {
+        let h = self.height(p, face);
+        if self.same_plane_seen_from(h, own_face, face) {
             return FaceView::Skip(SkipReason::SamePlane);
         }
-        let Window { z, clip, polygon: window, corners } = match self.window(p, z, normal, face) {
+        let Window { z, clip, polygon: window, corners } = match self.window(p, h, normal, face) {
             Ok(window) => window,
             Err(view) => return view,
         };
@@ -594,6 +608,14 @@ impl RecentHiders {
         self.list.insert(0, occluder);
         self.list.truncate(RECENT_HIDERS);
     }
+}
+
+/// A point's height over a face's plane ([`PairPlanner::height`]).
+#[derive(Clone, Copy)]
+struct Height {
+    z: f64,
+    /// At least the point's distance from the plane's origin.
+    distance_bound: f64,
 }
 
 /// What a point has in front of it of a face ([`PairPlanner::face_view`]).
