@@ -698,7 +698,7 @@ impl Pyramid<'_> {
         }
         let area = signed_area(&projected);
         let scale = polygon_scale(&projected);
-        if area.abs() <= 1e-14 * scale * scale || !area.is_finite() {
+        if is_sliver(area, scale) {
             return None;
         }
         if area < 0.0 {
@@ -845,7 +845,7 @@ fn shadow(
         .collect();
     let area = signed_area(&projected);
     let scale = polygon_scale(window);
-    if area.abs() <= 1e-14 * scale * scale || !area.is_finite() {
+    if is_sliver(area, scale) {
         return None;
     }
     if area < 0.0 {
@@ -867,7 +867,14 @@ fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
     }
     let area = signed_area(&part);
     let scale = polygon_scale(window);
-    (area > 1e-14 * scale * scale).then_some(part)
+    (area > 0.0 && !is_sliver(area, scale)).then_some(part)
+}
+
+/// Whether a projected polygon's (signed) `area`, measured against a size `scale` (its window's,
+/// or its own), is no area at all: not finite, or within 1e-14 of the square of the size (a
+/// sliver, or an occluder seen edge-on).
+fn is_sliver(area: f64, scale: f64) -> bool {
+    area.abs() <= 1e-14 * scale * scale || !area.is_finite()
 }
 
 /// Whether the convex counter-clockwise `shadow` contains every point of `window`, up to rounding
