@@ -338,8 +338,8 @@ pub(crate) struct BenchArgs {
 pub(crate) struct ViewFactorArgs {
     #[command(flatten)]
     pub(crate) geometry: GeometryArgs,
-    /// Absolute tolerance of the outer tanh-sinh rule on parts of elements that touch (separated
-    /// parts use Gauss orders fitted to 1e-13)
+    /// Absolute tolerance on each F_ij: the outer integral is refined where its error estimates
+    /// (two Gauss orders, or two tanh-sinh levels where elements touch) add up to more
     #[arg(long, default_value_t = 1e-10)]
     pub(crate) tolerance: f64,
     /// Most times a touching part is split into four where the tanh-sinh levels disagree; each
