@@ -1215,10 +1215,7 @@ mod tests {
         // is integrated to the accuracy of a smooth integrand (6e-10 here, from the pieces that
         // touch a neighbouring wall).
         let scene = crate::scene::baffled_box().unwrap();
-        let (_, f) = compute(&scene, 0);
-        let (lo, hi) = f.row_sum_range();
-        assert!(lo > 1.0 - 1e-9 && hi < 1.0 + 1e-9, "{lo} {hi}");
-        assert!(f.reciprocity_error() < 1e-9, "{}", f.reciprocity_error());
+        assert_closed_and_reciprocal(&compute(&scene, 0).1);
     }
 
     #[test]
@@ -1227,16 +1224,9 @@ mod tests {
         // from one side (inside its shadow) are no events. Any event the pieces are not cut
         // along is left to the cells' estimates: rows 1 +- 6e-11 and reciprocity 1.7e-10
         // measured.
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
-        let text = std::fs::read_to_string(&path).unwrap();
-        let cube_only = &text[..text.find("[[faces]]\nname = \"tilted-plate\"").unwrap()];
-        let scene = crate::scene::parse_toml(cube_only, &path).unwrap();
+        let scene = example_before("occluded-box.toml", "tilted-plate");
         assert_eq!(scene.faces.len(), 12);
-        let (_, f) = compute(&scene, 0);
-        let (lo, hi) = f.row_sum_range();
-        assert!(lo > 1.0 - 1e-9 && hi < 1.0 + 1e-9, "{lo} {hi}");
-        assert!(f.reciprocity_error() < 1e-9, "{}", f.reciprocity_error());
+        assert_closed_and_reciprocal(&compute(&scene, 0).1);
     }
 
     #[test]
@@ -1244,13 +1234,21 @@ mod tests {
         // The furnished room without its furniture: each ceiling tile lies along part of a wall
         // element's top edge, so the contact ends inside that edge (reciprocity 4e-3 before T_i
         // was cut there; 6.6e-11 measured).
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/furnished-room.toml");
-        let text = std::fs::read_to_string(&path).unwrap();
-        let empty = &text[..text.find("[[faces]]\nname = \"desk-bottom\"").unwrap()];
-        let scene = crate::scene::parse_toml(empty, &path).unwrap();
+        let scene = example_before("furnished-room.toml", "desk-bottom");
         assert_eq!(scene.faces.len(), 14);
-        let (_, f) = compute(&scene, 0);
+        assert_closed_and_reciprocal(&compute(&scene, 0).1);
+    }
+
+    /// The faces of `examples/FILE` up to the one named `name`, left out with those after it.
+    fn example_before(file: &str, name: &str) -> Scene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let end = text.find(&format!("[[faces]]\nname = \"{name}\"")).unwrap();
+        crate::scene::parse_toml(&text[..end], &path).unwrap()
+    }
+
+    /// Rows of a closed scene sum to 1 and A_i F_ij = A_j F_ji, both within 1e-9.
+    fn assert_closed_and_reciprocal(f: &ViewFactors) {
         let (lo, hi) = f.row_sum_range();
         assert!(lo > 1.0 - 1e-9 && hi < 1.0 + 1e-9, "{lo} {hi}");
         assert!(f.reciprocity_error() < 1e-9, "{}", f.reciprocity_error());
