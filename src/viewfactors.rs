@@ -370,7 +370,11 @@ impl Context<'_> {
             }
         }
         let budget = self.options.tolerance * ei.area();
-        while cells.open_error > budget {
+        // Settled cells (at the split limit, or certified) keep their error: the open ones are
+        // refined until the two together meet the budget, or until they meet half of it where
+        // the settled ones already take more than the other half (refining every open cell to
+        // the limit would not help).
+        while cells.open_error > (budget - cells.settled_error).max(0.5 * budget) {
             let Some(cell) = cells.open.pop() else { break };
             cells.open_error -= cell.error;
             let part = &parts[cell.part];

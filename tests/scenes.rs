@@ -122,6 +122,26 @@ fn view_factors_of_howell_c11_and_a_closed_box() {
 }
 
 #[test]
+fn view_factors_say_when_their_estimates_miss_the_tolerance() {
+    // Howell's C-14 (squares meeting at a right angle along a whole edge): its touching outer
+    // triangles meet 1e-10 (the default) but not 1e-16, which rounding alone exceeds.
+    let dir = temp_dir("vf-tolerance");
+    let scene = dir.join("c14.toml");
+    std::fs::write(
+        &scene,
+        "[defaults]\nrho = 0.5\n[[faces]]\nname = \"a\"\nvertices = [[0,0,0],[1,0,0],[1,1,0],[0,1,0]]\n\
+         [[faces]]\nname = \"b\"\nvertices = [[0,0,0],[0,0,1],[1,0,1],[1,0,0]]\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let (ok, _, err) = radiosity(&["viewfactors", "--scene", scene, "--refine", "0"]);
+    assert!(ok && !err.contains("warning"), "{err}");
+    let (ok, _, err) =
+        radiosity(&["viewfactors", "--scene", scene, "--refine", "0", "--tolerance", "1e-16"]);
+    assert!(ok && err.contains("exceeds --tolerance 1.0e-16"), "{err}");
+}
+
+#[test]
 fn the_occluder_index_gives_the_views_of_the_core_plan() {
     let v = json(&["bench-plan", "--scene", "city:5x4", "--nodes", "12", "--json", "-"]);
     assert_eq!(v["faces"].as_u64().unwrap(), 4 * 20 + 11 * 9);

@@ -49,6 +49,14 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         evaluations: f.evaluations,
         seconds: started.elapsed().as_secs_f64(),
     };
+    if summary.error_estimate > args.tolerance {
+        // Cells deeper than the split limit are settled with the error they have.
+        eprintln!(
+            "warning: the largest estimated error of an entry, {:.1e}, exceeds --tolerance {:.1e}: \
+             outer triangles reached the split limit (6 rounds) before their estimates met it",
+            summary.error_estimate, args.tolerance
+        );
+    }
     if let Some(path) = &args.output {
         write_matrix(path, &f)?;
     }
