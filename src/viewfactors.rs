@@ -36,9 +36,10 @@
 use std::collections::{BinaryHeap, HashMap};
 use std::f64::consts::PI;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
+use smallvec::SmallVec;
 
 use crate::assembly::{AssemblyOptions, FullPair, PairIntegrator};
 use crate::discretization::{Discretization, Method};
@@ -49,8 +50,6 @@ use crate::mesh::{Element, Mesh};
 use crate::quadrature::TriangleRule;
 use crate::scene::Scene;
 use crate::visibility::{FaceView, PairPlanner, Visibility};
-use glam::DVec2;
-use smallvec::SmallVec;
 
 /// Accuracy settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,8 +77,9 @@ pub struct ViewFactors {
     /// Element areas A_i.
     pub areas: Vec<f64>,
     /// Largest estimated error of an entry F_ij: the sum of its triangles' estimates (the
-    /// difference of two Gauss orders, or of the last two tanh-sinh levels), each the error of
-    /// the coarser rule, where the finer one's value is kept.
+    /// difference of two Gauss orders, the error of the coarser one where the finer one's value
+    /// is kept; or Bailey's estimate from the last three tanh-sinh levels). Above the tolerance
+    /// only where triangles reached [`MAX_SPLITS`].
     pub error_estimate: f64,
     /// Point-to-element integrals evaluated.
     pub evaluations: u64,
@@ -244,8 +244,8 @@ const GAUSS_MAX: usize = 16;
 const CERTIFIED_TARGET: f64 = 1e-13;
 
 /// The same where occluders shadow T_j: only a first guess, since the estimate with one order
-/// more decides. On the occluded box a guess of 1e-13 took 73 s, 1e-10 54 s and 1e-7 165 s
-/// (more splits), to the same reciprocity.
+/// more decides. On the occluded box (2-core EPYC, 2026-11-24) a guess of 1e-12 took 29.8 s,
+/// 1e-10 26 s and 1e-8 50.9 s (more splits), to about the same reciprocity.
 const GUESS_TARGET: f64 = 1e-10;
 
 impl OuterRules {
@@ -432,8 +432,9 @@ impl Context<'_> {
     }
 
     /// `∫_t g dA` over the triangle `t` of the piece with `part`, and its estimated error:
-    /// tanh-sinh where it touches an obstacle (d log d behaviour at a common edge; settled, its
-    /// error the difference of its last two levels); where T_j is seen whole, collapsed Gauss of
+    /// tanh-sinh where it touches an obstacle (d log d behaviour at a common edge; its error
+    /// [`kept_error`] of its last levels, to be split further if the pair needs it); where T_j
+    /// is seen whole, collapsed Gauss of
     /// the order that the triangle's separation asks for (settled, as the bound is trusted);
     /// otherwise that order and one more, the higher one's value with their difference as the
     /// error (which also catches what the separation does not: the curved events of three skew
@@ -651,6 +652,11 @@ struct ShadowCorners {
     frame: PlaneFrame,
     /// T_j's corners in its plane.
     corners: [DVec2; 3],
+    /// The sign of T_j's orientation in its plane's coordinates.
+    orientation: f64,
+    /// How far outside T_j a shadow corner still counts, as a side's cross product: each is
+    /// the side's length times the distance from it, so T_j's size squared times the margin.
+    margin: f64,
 }
 
 /// Within this fraction of T_j's size (or of a segment's length) a shadow corner counts as on
@@ -660,7 +666,16 @@ const CORNER_MARGIN: f64 = 1e-6;
 impl ShadowCorners {
     fn new(viewer: DVec3, frame: &PlaneFrame, target: &[DVec3; 3]) -> Self {
         let corners = target.map(|v| frame.to_local(v).truncate());
-        Self { viewer, height: frame.height(viewer), frame: *frame, corners }
+        let [a, b, c] = corners;
+        let size = (b - a).length().max((c - b).length()).max((a - c).length());
+        Self {
+            viewer,
+            height: frame.height(viewer),
+            frame: *frame,
+            corners,
+            orientation: (b - a).perp_dot(c - a).signum(),
+            margin: CORNER_MARGIN * size * size,
+        }
     }
 
     /// Where `v` casts its shadow on T_j's plane, if it lies strictly between the viewer and
@@ -679,12 +694,8 @@ impl ShadowCorners {
     fn vertex_corner(&self, shadow: Option<DVec2>) -> bool {
         let Some(p) = shadow else { return true };
         let [a, b, c] = self.corners;
-        let size = (b - a).length().max((c - b).length()).max((a - c).length());
-        // Each side's cross product is its length times the distance from it.
-        let margin = CORNER_MARGIN * size * size;
-        let orientation = (b - a).perp_dot(c - a).signum();
-        let side = |u: DVec2, w: DVec2| (w - u).perp_dot(p - u) * orientation;
-        side(a, b) >= -margin && side(b, c) >= -margin && side(c, a) >= -margin
+        let side = |u: DVec2, w: DVec2| (w - u).perp_dot(p - u) * self.orientation;
+        side(a, b) >= -self.margin && side(b, c) >= -self.margin && side(c, a) >= -self.margin
     }
 
     /// Whether the shadow of the edge between vertices with these shadows can cut T_j's edge
@@ -742,7 +753,7 @@ const TOUCHING: f64 = 1e-9;
 
 /// Most rounds of splitting an outer triangle: deeper, it is settled with its estimate (which
 /// the reported `error_estimate` then shows).
-const MAX_SPLITS: u32 = 6;
+pub const MAX_SPLITS: u32 = 6;
 
 /// Distance between two boxes (0 when they overlap or touch).
 fn box_distance((alo, ahi): (DVec3, DVec3), (blo, bhi): (DVec3, DVec3)) -> f64 {
@@ -766,11 +777,9 @@ fn event_planes(
 ) -> Vec<(DVec3, DVec3)> {
     let polygons: Vec<&[DVec3]> =
         occluders.iter().map(|&o| planner.occluders()[o].polygon.as_slice()).collect();
-    let mut planes: Vec<(DVec3, DVec3)> = occluders
-        .iter()
-        .map(|&o| (planner.occluders()[o].normal(), planner.occluders()[o].polygon[0]))
-        .collect();
     let normals: Vec<DVec3> = occluders.iter().map(|&o| planner.occluders()[o].normal()).collect();
+    let mut planes: Vec<(DVec3, DVec3)> =
+        normals.iter().zip(&polygons).map(|(&n, polygon)| (n, polygon[0])).collect();
     let twins = EdgeTwins::new(&polygons, &normals);
     // The vertices of one polygon against the edges of another; `None` is the target.
     let mut vertex_edge = |vertex_owner: Option<usize>, edge_owner: Option<usize>, side| {
@@ -966,7 +975,7 @@ impl Wedge {
 /// Where T_j touches T_i (frame `frame_i`) at one of its corners, T_i is cut across: the
 /// integrand has a log singularity along the contact and jumps where the contact ends, and the
 /// tanh-sinh rule of a touching triangle resolves such points at its corners, not inside its
-/// sides (a ceiling tile along part of a wall element's top edge: reciprocity 5e-3 without).
+/// sides (a ceiling tile along part of a wall element's top edge: reciprocity 4e-3 without).
 /// Each corner of T_j on T_i gets the plane through it across each edge of T_j that lies in
 /// T_i's plane from it (the contact's end), or across both of T_i's axes where none does (a
 /// point contact). Returns the planes' unit normals and a point of each.
@@ -1108,10 +1117,9 @@ impl<F: Fn(DVec3, &mut [f64])> Outer<'_, F> {
                     return (value, diff);
                 }
                 if level == self.rule.max_level && depth < self.options.max_depth {
-                    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
                     let mut sum = vec![0.0; len];
                     let mut error = 0.0f64;
-                    for child in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+                    for child in quarters(t) {
                         let (v, e) = self.integrate(child, len, depth + 1);
                         for (s, x) in sum.iter_mut().zip(v) {
                             *s += 0.25 * x;

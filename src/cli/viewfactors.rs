@@ -5,7 +5,9 @@ use radiosity::mesh::Mesh;
 use radiosity::pipeline::{self};
 use radiosity::report;
 use radiosity::scene::Scene;
-use radiosity::viewfactors::{ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors};
+use radiosity::viewfactors::{
+    MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors,
+};
 use radiosity::visibility::PairPlanner;
 
 use super::*;
@@ -53,7 +55,8 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         // Cells deeper than the split limit are settled with the error they have.
         eprintln!(
             "warning: the largest estimated error of an entry, {:.1e}, exceeds --tolerance {:.1e}: \
-             outer triangles reached the split limit (6 rounds) before their estimates met it",
+             outer triangles reached the split limit ({MAX_SPLITS} rounds) before their \
+             estimates met it",
             summary.error_estimate, args.tolerance
         );
     }
