@@ -83,7 +83,7 @@ fn scale_of(poly: &[DVec2]) -> f64 {
 
 /// Removes repeated vertices and returns `None` when fewer than three distinct vertices or no area
 /// is left.
-fn cleaned(mut poly: Vec<DVec2>, eps: f64) -> Option<Vec<DVec2>> {
+fn cleaned(mut poly: SmallPolygon<DVec2>, eps: f64) -> Option<SmallPolygon<DVec2>> {
     poly.dedup_by(|a, b| (*a - *b).length() <= eps);
     while poly.len() > 1 && (poly[0] - poly[poly.len() - 1]).length() <= eps {
         poly.pop();
@@ -100,13 +100,17 @@ fn cleaned(mut poly: Vec<DVec2>, eps: f64) -> Option<Vec<DVec2>> {
 pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
     let scale = scale_of(poly);
     let d = line_values(poly, hp, scale);
-    keep_side(poly, &d, scale)
+    keep_side(poly, &d, scale).map(SmallVec::into_vec)
 }
 
 /// The parts of a convex polygon of size `scale` outside and inside a half-plane whose values at
 /// its vertices are `d` ([`line_values`]), as [`clip_convex`] gives them (those of the flipped
 /// half-plane are their negatives, to the bit).
-fn split_convex(poly: &[DVec2], d: &[f64], scale: f64) -> (Option<Vec<DVec2>>, Option<Vec<DVec2>>) {
+fn split_convex(
+    poly: &[DVec2],
+    d: &[f64],
+    scale: f64,
+) -> (Option<SmallPolygon<DVec2>>, Option<SmallPolygon<DVec2>>) {
     let flipped: SmallVec<[f64; INLINE_VERTICES]> = d.iter().map(|&v| -v).collect();
     (keep_side(poly, &flipped, scale), keep_side(poly, d, scale))
 }
@@ -125,16 +129,16 @@ fn line_values(poly: &[DVec2], hp: &HalfPlane, scale: f64) -> SmallVec<[f64; INL
 
 /// The part of a convex polygon of size `scale` where the values `d` at its vertices are
 /// non-negative, if it has area.
-fn keep_side(poly: &[DVec2], d: &[f64], scale: f64) -> Option<Vec<DVec2>> {
+fn keep_side(poly: &[DVec2], d: &[f64], scale: f64) -> Option<SmallPolygon<DVec2>> {
     if d.iter().all(|&v| v >= 0.0) {
-        return cleaned(poly.to_vec(), ON_LINE * scale);
+        return cleaned(SmallVec::from_slice(poly), ON_LINE * scale);
     }
     if d.iter().all(|&v| v <= 0.0) {
         return None;
     }
     let mut out = SmallPolygon::new();
     keep_nonnegative_side(poly, d, &mut out);
-    cleaned(out.into_vec(), ON_LINE * scale)
+    cleaned(out, ON_LINE * scale)
 }
 
 /// Whether every point of `points` lies in a counter-clockwise convex polygon, boundary included
@@ -191,7 +195,7 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
     if phi.x <= hlo.x || hhi.x <= plo.x || phi.y <= hlo.y || hhi.y <= plo.y {
         return vec![piece.to_vec()];
     }
-    let mut rest = piece.to_vec();
+    let mut rest: SmallPolygon<DVec2> = SmallVec::from_slice(piece);
     // Whether `rest` is as `keep_side` leaves it (once it has been through it): a line that
     // leaves all of it inside then changes nothing, and most of a hole's lines do.
     let mut kept = false;
@@ -205,7 +209,7 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
             continue;
         }
         let (outside_part, inside_part) = split_convex(&rest, &d, scale);
-        out.extend(outside_part);
+        out.extend(outside_part.map(SmallVec::into_vec));
         match inside_part {
             Some(r) => rest = r,
             None => return out,
@@ -393,9 +397,80 @@ pub fn triangulate(poly: &[DVec2]) -> Option<Vec<[usize; 3]>> {
     )
 }
 
+/// Convex pieces of a simple polygon (convex or not), as counter-clockwise lists of vertex
+/// indices: its triangles ([`triangulate`]), merged across a shared diagonal wherever the union
+/// stays strictly convex (Hertel and Mehlhorn: at most four times the fewest pieces). An L-shaped
+/// plate is two pieces instead of four triangles, so it casts two shadows. `None` if the polygon
+/// cannot be triangulated.
+pub fn convex_partition(poly: &[DVec2]) -> Option<Vec<Vec<usize>>> {
+    let mut pieces: Vec<Vec<usize>> = triangulate(poly)?.into_iter().map(Vec::from).collect();
+    let eps = ON_LINE * scale_of(poly);
+    let strictly_convex = |piece: &[usize]| {
+        let m = piece.len();
+        (0..m).all(|k| {
+            let (a, b, c) = (poly[piece[k]], poly[piece[(k + 1) % m]], poly[piece[(k + 2) % m]]);
+            (b - a).perp_dot(c - b) > eps * ((b - a).length() + (c - b).length())
+        })
+    };
+    // Piece a runs u -> v where piece b runs v -> u: the union runs around a from v to u, then
+    // around b from u to v, the diagonal left out.
+    let merged = |a: &[usize], b: &[usize]| -> Option<Vec<usize>> {
+        let (m, n) = (a.len(), b.len());
+        let k = (0..m).find(|&k| {
+            let (u, v) = (a[k], a[(k + 1) % m]);
+            (0..n).any(|l| b[l] == v && b[(l + 1) % n] == u)
+        })?;
+        let (u, v) = (a[k], a[(k + 1) % m]);
+        let l = (0..n).find(|&l| b[l] == v)?;
+        let union: Vec<usize> =
+            (1..=m).map(|i| a[(k + i) % m]).chain((1..n - 1).map(|i| b[(l + 1 + i) % n])).collect();
+        debug_assert!(union[0] == v && union[m - 1] == u);
+        strictly_convex(&union).then_some(union)
+    };
+    let mut changed = true;
+    while changed {
+        changed = false;
+        'search: for i in 0..pieces.len() {
+            for j in i + 1..pieces.len() {
+                if let Some(union) = merged(&pieces[i], &pieces[j]) {
+                    pieces[i] = union;
+                    pieces.swap_remove(j);
+                    changed = true;
+                    break 'search;
+                }
+            }
+        }
+    }
+    Some(pieces)
+}
+
 #[cfg(test)]
 mod triangulation_tests {
     use super::*;
+
+    #[test]
+    fn an_l_shape_is_two_convex_pieces_and_a_square_one() {
+        let l = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(2.0, 0.0),
+            DVec2::new(2.0, 1.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(1.0, 2.0),
+            DVec2::new(0.0, 2.0),
+        ];
+        let pieces = convex_partition(&l).unwrap();
+        assert_eq!(pieces.len(), 2, "{pieces:?}");
+        let polygons: Vec<Vec<DVec2>> =
+            pieces.iter().map(|p| p.iter().map(|&k| l[k]).collect()).collect();
+        let area: f64 = polygons.iter().map(|p| signed_area(p)).sum();
+        assert!((area - 3.0).abs() < 1e-15, "{area}");
+        for p in &polygons {
+            let m = p.len();
+            assert!((0..m).all(|k| (p[(k + 1) % m] - p[k]).perp_dot(p[(k + 2) % m] - p[k]) > 0.0));
+        }
+        let square = [DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+        assert_eq!(convex_partition(&square).unwrap().len(), 1);
+    }
 
     #[test]
     fn an_l_shape_triangulates_into_four_ccw_triangles_of_total_area_three() {

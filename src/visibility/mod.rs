@@ -22,11 +22,13 @@
 
 mod bench;
 mod occluders;
+mod solids;
 mod stats;
 
 pub use bench::{PlanBench, bench_plan};
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
+use solids::Solid;
 pub use stats::PairStats;
 
 use std::borrow::Cow;
@@ -414,7 +416,9 @@ impl PairPlanner {
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         for o in found {
-            if pyramid.cast(&pieces[o], || hides(o), &mut shadows) {
+            let solid = self.occluders.solid_of(o, own_face, face);
+            let solids = &self.occluders.solids;
+            if pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows) {
                 hiders.remember(o);
                 return FaceView::Skip(SkipReason::Hidden);
             }
@@ -507,7 +511,8 @@ impl PairPlanner {
         for &o in candidates {
             let piece = &self.occluders.pieces[o];
             let crosses_all = || piece.crosses_every_segment(&[p], &corners, tol, -tol);
-            if pyramid.cast(piece, crosses_all, &mut shadows) {
+            let solid = self.occluders.solid_of(o, own_face, face);
+            if pyramid.cast_part(piece, solid, &self.occluders.solids, crosses_all, &mut shadows) {
                 return FaceView::Skip(SkipReason::Hidden);
             }
         }
@@ -681,6 +686,71 @@ impl Pyramid<'_> {
         }
     }
 
+    /// As [`Pyramid::cast`], for a piece that bounds the closed convex solid `solid` (an index
+    /// into `solids`), if any: the first of the solid's pieces that may shadow the window casts
+    /// the solid's whole shadow ([`Pyramid::cast_solid`]), and its other pieces cast nothing
+    /// more; where the solid cannot be projected whole, each piece casts its own.
+    fn cast_part(
+        &self,
+        piece: &Occluder,
+        solid: Option<usize>,
+        solids: &[Solid],
+        crosses_all: impl FnOnce() -> bool,
+        shadows: &mut ShadowSet,
+    ) -> bool {
+        let Some(s) = solid else { return self.cast(piece, crosses_all, shadows) };
+        match shadows.solids.iter().find(|&&(t, _)| t == s) {
+            Some(&(_, true)) => return false,
+            Some(&(_, false)) => return self.cast(piece, crosses_all, shadows),
+            None => {}
+        }
+        if !piece.may_shadow(self.apex, self.corners) {
+            return false;
+        }
+        match self.cast_solid(&solids[s], shadows) {
+            Some(hidden) => {
+                shadows.solids.push((s, true));
+                hidden
+            }
+            None => {
+                shadows.solids.push((s, false));
+                self.cast(piece, crosses_all, shadows)
+            }
+        }
+    }
+
+    /// Adds the shadow of a whole closed convex solid to `shadows`, as [`Pyramid::cast`] adds a
+    /// piece's, and returns whether it hides the whole window: the solid's central projection,
+    /// the convex hull of its vertices' projections. `None` where a vertex is not between the
+    /// face's plane and the apex (as [`Pyramid::projection`] asks), or the hull has no area.
+    fn cast_solid(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
+        let frame = &self.face.face.frame;
+        let mut projected: SmallVec<[DVec2; 16]> = SmallVec::new();
+        for &x in &solid.vertices {
+            let h = frame.height(x);
+            if !(0.0..=PROJECTION_REACH * self.z).contains(&h) {
+                return None;
+            }
+            let t = self.z / (self.z - h);
+            projected.push(frame.to_plane(self.apex + (x - self.apex) * t));
+        }
+        let outline: SmallPolygon<DVec2> = convex_hull(&projected).into_iter().collect();
+        if outline.len() < 3 || is_sliver(signed_area(&outline), polygon_scale(&outline)) {
+            return None;
+        }
+        if shadows.holds(&outline) {
+            return Some(false);
+        }
+        Some(match in_window(&outline, self.window) {
+            Some(s) if covers(&s, self.window) => true,
+            Some(s) => {
+                shadows.add(Some(outline), s);
+                false
+            }
+            None => false,
+        })
+    }
+
     /// The central projection of the whole of `piece` onto the face's plane (counter-clockwise,
     /// face coordinates), when every vertex lies between that plane and the apex, no more than
     /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than ten
@@ -720,6 +790,8 @@ struct ShadowSet {
     /// Each shadow with an outline that holds it: the whole projection of its occluder when
     /// known (whose part in the window is the shadow), else the shadow itself.
     casts: Vec<(SmallPolygon<DVec2>, Vec<DVec2>)>,
+    /// The closed convex solids met so far, and whether each was cast whole.
+    solids: SmallVec<[(usize, bool); 4]>,
 }
 
 impl ShadowSet {

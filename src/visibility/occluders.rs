@@ -1,4 +1,4 @@
-//! Occluders: the scene's faces as convex pieces (non-convex faces triangulated, the two sides of a
+//! Occluders: the scene's faces as convex pieces (non-convex faces cut into convex parts, the two sides of a
 //! double-sided plate merged), an index over their bounding boxes, and which of them can come
 //! between a point and a face.
 
@@ -7,6 +7,7 @@ use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree, SelectionFunction};
 use serde::Serialize;
 
+use super::solids::{Solid, closed_convex_solids};
 use crate::geometry::PlaneFrame;
 use crate::scene::Scene;
 
@@ -48,6 +49,10 @@ type Boxed = GeomWithData<Rectangle<[f64; 3]>, usize>;
 #[derive(Clone, Debug)]
 pub(super) struct OccluderIndex {
     pub(super) pieces: Vec<Occluder>,
+    /// The closed convex solids that pieces bound, and per piece its solid (none for
+    /// [`Acceleration::BoxScan`], the core plan, which shadows piece by piece).
+    pub(super) solids: Vec<Solid>,
+    solid_of: Vec<Option<usize>>,
     pub(super) acceleration: Acceleration,
     tree: Option<RTree<Boxed>>,
 }
@@ -66,7 +71,21 @@ impl OccluderIndex {
                     .collect(),
             )
         });
-        Self { pieces, acceleration, tree }
+        let (solids, solid_of) = if acceleration == Acceleration::BoxScan {
+            (Vec::new(), vec![None; pieces.len()])
+        } else {
+            closed_convex_solids(&pieces)
+        };
+        Self { pieces, solids, solid_of, acceleration, tree }
+    }
+
+    /// The solid that piece `o` bounds, unless it has a face of `a` or `b` (seen from or seen on
+    /// one of its own faces, a solid is no occluder of its own).
+    pub(super) fn solid_of(&self, o: usize, a: usize, b: usize) -> Option<usize> {
+        self.solid_of[o].filter(|&s| {
+            let faces = &self.solids[s].faces;
+            faces.binary_search(&a).is_err() && faces.binary_search(&b).is_err()
+        })
     }
 
     /// Occluders that may block a segment between faces `a` and `b` that lies in `volume`: not
@@ -178,10 +197,10 @@ fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
         let polygons: Vec<Vec<DVec3>> = if face.is_convex() {
             vec![face.vertices.clone()]
         } else {
-            crate::geometry::triangulate(&face.local_polygon())
+            crate::geometry::convex_partition(&face.local_polygon())
                 .expect(crate::scene::TRIANGULABLE)
                 .into_iter()
-                .map(|t| t.map(|i| face.vertices[i]).to_vec())
+                .map(|piece| piece.iter().map(|&i| face.vertices[i]).collect())
                 .collect()
         };
         for polygon in polygons {

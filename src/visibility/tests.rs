@@ -269,3 +269,153 @@ fn views_keep_only_the_shadows_that_no_other_holds() {
     }
     assert!(listed > 500 && 2 * kept < listed, "kept {kept} of {listed}");
 }
+
+/// The six faces of the box with centre `centre`, half-sides `half` along the axes of the rotation
+/// `axes`, each counter-clockwise seen from outside.
+fn box_faces(name: &str, centre: DVec3, axes: [DVec3; 3], half: DVec3) -> Vec<Face> {
+    let corner = |s: [f64; 3]| {
+        centre + axes[0] * (s[0] * half.x) + axes[1] * (s[1] * half.y) + axes[2] * (s[2] * half.z)
+    };
+    let quads = [
+        [[-1., -1., -1.], [-1., 1., -1.], [1., 1., -1.], [1., -1., -1.]],
+        [[-1., -1., 1.], [1., -1., 1.], [1., 1., 1.], [-1., 1., 1.]],
+        [[-1., -1., -1.], [1., -1., -1.], [1., -1., 1.], [-1., -1., 1.]],
+        [[-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.], [1., 1., -1.]],
+        [[-1., -1., -1.], [-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.]],
+        [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]],
+    ];
+    quads
+        .iter()
+        .enumerate()
+        .map(|(k, q)| Face::new(format!("{name}{k}"), q.map(corner).to_vec(), 0.5).unwrap())
+        .collect()
+}
+
+/// A closed convex solid casts one shadow, the hull of its vertices' projections, in place of
+/// its faces' shadows: the visible parts agree with ray casting, with the core plan (which
+/// shadows face by face) to rounding, and the views hold fewer shadows.
+#[test]
+fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
+    let mut rng = StdRng::seed_from_u64(11);
+    let (mut checked, mut fewer) = (0, 0);
+    for case in 0..8 {
+        let receiver = Face::new(
+            "receiver",
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            0.5,
+        )
+        .unwrap();
+        let source = Face::new(
+            "source",
+            vec![
+                DVec3::new(0.0, 0.0, 1.5),
+                DVec3::new(0.0, 1.0, 1.5),
+                DVec3::new(1.0, 1.0, 1.5),
+                DVec3::new(1.0, 0.0, 1.5),
+            ],
+            0.5,
+        )
+        .unwrap();
+        let a = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 1.0);
+        let x = a.normalize();
+        let y = x.any_orthonormal_vector();
+        let centre = DVec3::new(rng.random_range(0.3..0.7), rng.random_range(0.3..0.7), 0.75);
+        let half = DVec3::new(
+            rng.random_range(0.05..0.2),
+            rng.random_range(0.05..0.2),
+            rng.random_range(0.05..0.2),
+        );
+        let mut faces = vec![receiver, source];
+        faces.extend(box_faces("box", centre, [x, y, x.cross(y)], half));
+        let scene = Scene::new("boxed", faces).unwrap();
+        let (solid, core) = (
+            PairPlanner::new(&scene),
+            PairPlanner::with_acceleration(&scene, Acceleration::BoxScan),
+        );
+        assert_eq!(solid.occluders.solids.len(), 1, "case {case}");
+        assert_eq!(solid.occluders.solids[0].faces, (2..8).collect::<Vec<_>>());
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        let frame = scene.faces[0].frame;
+        for _ in 0..6 {
+            let p = DVec3::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0), 1.5);
+            let view = solid.face_view(p, -DVec3::Z, 1, 0);
+            let core_view = core.face_view(p, -DVec3::Z, 1, 0);
+            let count = |view: &FaceView| match view {
+                FaceView::Visible { shadows, .. } => shadows.len(),
+                FaceView::Skip(_) => 0,
+            };
+            fewer += usize::from(count(&view) < count(&core_view));
+            for e in &mesh.elements()[mesh.face_range(0)] {
+                let tri: Vec<DVec2> = e.vertices.iter().map(|&v| frame.to_plane(v)).collect();
+                let (vis, core_vis) = (solid.visible(&view, &tri), core.visible(&core_view, &tri));
+                let area = |vis: &Visibility| match vis {
+                    Visibility::Skip(_) => 0.0,
+                    Visibility::Full => signed_area(&tri),
+                    Visibility::Partial(pieces) => pieces.iter().map(|p| signed_area(p)).sum(),
+                };
+                let (got, want) = (area(&vis), area(&core_vis));
+                assert!((got - want).abs() <= 1e-13, "case {case}, p {p}: {got} vs {want}");
+                for _ in 0..30 {
+                    let (a, b): (f64, f64) =
+                        (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+                    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                    let x = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
+                    let q = frame.to_global(x);
+                    let truth = !scene.faces[2..].iter().any(|f| segment_hits(p, q, &f.vertices));
+                    let planned = match &vis {
+                        Visibility::Skip(_) => false,
+                        Visibility::Full => true,
+                        Visibility::Partial(pieces) => inside_any(pieces, x),
+                    };
+                    assert_eq!(planned, truth, "case {case}, p {p}, q {q}: {vis:?}");
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 5_000 && fewer > 20, "{checked} points, {fewer} views with fewer shadows");
+}
+
+/// Only closed convex groups of pieces are solids: the occluded box's cube and its walls, not
+/// its plates; a box without its lid, or with one corner pushed in, is none.
+#[test]
+fn only_closed_convex_groups_of_pieces_are_solids() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
+    let scene = crate::scene::load(&path).unwrap();
+    let solids = &PairPlanner::new(&scene).occluders.solids;
+    let names = |s: &solids::Solid| -> Vec<String> {
+        s.faces.iter().map(|&f| scene.faces[f].name.clone()).collect()
+    };
+    assert_eq!(solids.len(), 2);
+    assert!(names(&solids[0]).iter().all(|n| n.starts_with("box-")), "{:?}", names(&solids[0]));
+    assert!(names(&solids[1]).iter().all(|n| n.starts_with("cube-")), "{:?}", names(&solids[1]));
+    assert!(solids.iter().all(|s| s.faces.len() == 6 && s.vertices.len() == 8));
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
+    let mut open = box_faces("open", DVec3::splat(0.5), axes, DVec3::splat(0.2));
+    open.remove(1);
+    let mut dented = box_faces("dented", DVec3::splat(0.5), axes, DVec3::splat(0.2));
+    // Moving the corner (0.7, 0.7, 0.7) inwards along the diagonal breaks the planes of the
+    // three faces at it; they are split into triangles so that each piece stays planar.
+    let corner = DVec3::splat(0.7);
+    let pushed = DVec3::splat(0.62);
+    dented = dented
+        .into_iter()
+        .flat_map(|f| {
+            let v = f.vertices.clone();
+            match v.iter().position(|&x| x == corner) {
+                None => vec![f],
+                Some(k) => {
+                    let at = |i: usize| v[(k + i) % 4];
+                    vec![
+                        Face::new(format!("{}a", f.name), vec![pushed, at(1), at(2)], 0.5).unwrap(),
+                        Face::new(format!("{}b", f.name), vec![pushed, at(2), at(3)], 0.5).unwrap(),
+                    ]
+                }
+            }
+        })
+        .collect();
+    for (name, faces) in [("open", open), ("dented", dented)] {
+        let scene = Scene::new(name, faces).unwrap();
+        assert!(PairPlanner::new(&scene).occluders.solids.is_empty(), "{name}");
+    }
+}
