@@ -81,38 +81,31 @@ fn scale_of(poly: &[DVec2]) -> f64 {
     (hi - lo).length()
 }
 
-/// Removes repeated vertices and returns `None` when fewer than three distinct vertices or no area
-/// is left.
-fn cleaned(mut poly: SmallPolygon<DVec2>, eps: f64) -> Option<SmallPolygon<DVec2>> {
-    poly.dedup_by(|a, b| (*a - *b).length() <= eps);
-    while poly.len() > 1 && (poly[0] - poly[poly.len() - 1]).length() <= eps {
+/// Removes repeated vertices (within `eps`) in place and returns whether three distinct
+/// vertices and some area are left.
+fn clean(poly: &mut SmallPolygon<DVec2>, eps: f64) -> bool {
+    let eps2 = eps * eps;
+    poly.dedup_by(|a, b| (*a - *b).length_squared() <= eps2);
+    while poly.len() > 1 && (poly[0] - poly[poly.len() - 1]).length_squared() <= eps2 {
         poly.pop();
     }
-    if poly.len() < 3 || signed_area(&poly).abs() <= eps * eps {
-        return None;
-    }
-    Some(poly)
+    poly.len() >= 3 && signed_area(poly).abs() > eps2
 }
 
 /// Clips a convex polygon to a half-plane (Sutherland–Hodgman, one plane). Vertices within a relative
 /// tolerance of the line count as on it, so no slivers are made. Returns `None` if nothing with area
 /// is left.
 pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
-    let scale = scale_of(poly);
-    let d = line_values(poly, hp, scale);
-    keep_side(poly, &d, scale).map(SmallVec::into_vec)
+    let mut out = SmallPolygon::new();
+    clip_convex_into(poly, hp, &mut out).then(|| out.into_vec())
 }
 
-/// The parts of a convex polygon of size `scale` outside and inside a half-plane whose values at
-/// its vertices are `d` ([`line_values`]), as [`clip_convex`] gives them (those of the flipped
-/// half-plane are their negatives, to the bit).
-fn split_convex(
-    poly: &[DVec2],
-    d: &[f64],
-    scale: f64,
-) -> (Option<SmallPolygon<DVec2>>, Option<SmallPolygon<DVec2>>) {
-    let flipped: SmallVec<[f64; INLINE_VERTICES]> = d.iter().map(|&v| -v).collect();
-    (keep_side(poly, &flipped, scale), keep_side(poly, d, scale))
+/// [`clip_convex`] into `out` (cleared first), without a heap allocation for small polygons;
+/// returns whether anything with area is left.
+pub fn clip_convex_into(poly: &[DVec2], hp: &HalfPlane, out: &mut SmallPolygon<DVec2>) -> bool {
+    let scale = scale_of(poly);
+    let d = line_values(poly, hp, scale);
+    keep_side(poly, &d, scale, out)
 }
 
 /// The half-plane's values at the vertices of a polygon of size `scale`, those within the
@@ -128,17 +121,19 @@ fn line_values(poly: &[DVec2], hp: &HalfPlane, scale: f64) -> SmallVec<[f64; INL
 }
 
 /// The part of a convex polygon of size `scale` where the values `d` at its vertices are
-/// non-negative, if it has area.
-fn keep_side(poly: &[DVec2], d: &[f64], scale: f64) -> Option<SmallPolygon<DVec2>> {
+/// non-negative, into `out` (cleared first); returns whether it has area. Where `d` holds
+/// the values of a half-plane ([`line_values`]), this is [`clip_convex`]; their negatives (to
+/// the bit) give the part outside.
+fn keep_side(poly: &[DVec2], d: &[f64], scale: f64, out: &mut SmallPolygon<DVec2>) -> bool {
+    out.clear();
     if d.iter().all(|&v| v >= 0.0) {
-        return cleaned(SmallVec::from_slice(poly), ON_LINE * scale);
+        out.extend_from_slice(poly);
+    } else if d.iter().all(|&v| v <= 0.0) {
+        return false;
+    } else {
+        keep_nonnegative_side(poly, d, out);
     }
-    if d.iter().all(|&v| v <= 0.0) {
-        return None;
-    }
-    let mut out = SmallPolygon::new();
-    keep_nonnegative_side(poly, d, &mut out);
-    cleaned(out, ON_LINE * scale)
+    clean(out, ON_LINE * scale)
 }
 
 /// Whether every point of `points` lies in a counter-clockwise convex polygon, boundary included
@@ -195,25 +190,32 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
     if phi.x <= hlo.x || hhi.x <= plo.x || phi.y <= hlo.y || hhi.y <= plo.y {
         return vec![piece.to_vec()];
     }
-    let mut rest: SmallPolygon<DVec2> = SmallVec::from_slice(piece);
-    // Whether `rest` is as `keep_side` leaves it (once it has been through it): a line that
-    // leaves all of it inside then changes nothing, and most of a hole's lines do.
+    // What is left (inside every hole edge so far) and the next such part, by turns.
+    let mut parts: [SmallPolygon<DVec2>; 2] = [SmallVec::from_slice(piece), SmallVec::new()];
+    let mut outside = SmallPolygon::new();
+    let mut rest = 0;
+    // Whether what is left is as `keep_side` leaves it (once it has been through it): a line
+    // that leaves all of it inside then changes nothing, and most of a hole's lines do.
     let mut kept = false;
     let mut out = Vec::new();
     let n = hole.len();
     for k in 0..n {
         let inside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
-        let scale = scale_of(&rest);
-        let d = line_values(&rest, &inside, scale);
+        let [a, b] = &mut parts;
+        let (current, next) = if rest == 0 { (a, b) } else { (b, a) };
+        let scale = scale_of(current);
+        let d = line_values(current, &inside, scale);
         if kept && d.iter().all(|&v| v >= 0.0) {
             continue;
         }
-        let (outside_part, inside_part) = split_convex(&rest, &d, scale);
-        out.extend(outside_part.map(SmallVec::into_vec));
-        match inside_part {
-            Some(r) => rest = r,
-            None => return out,
+        let flipped: SmallVec<[f64; INLINE_VERTICES]> = d.iter().map(|&v| -v).collect();
+        if keep_side(current, &flipped, scale, &mut outside) {
+            out.push(outside.to_vec());
         }
+        if !keep_side(current, &d, scale, next) {
+            return out;
+        }
+        rest = 1 - rest;
         kept = true;
     }
     out

@@ -37,8 +37,8 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use crate::geometry::{
-    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
-    convex_contains, signed_area, subtract_convex, wholly_inside_3d,
+    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_convex_into,
+    clip_polygon_3d, convex_contains, signed_area, subtract_convex, wholly_inside_3d,
 };
 use crate::scene::{COPLANAR_DISTANCE, Scene};
 
@@ -930,16 +930,20 @@ fn shadow(
 /// coordinates), if it has area as [`shadow`] decides it.
 fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
     let m = window.len();
-    let mut part = polygon.to_vec();
+    let (mut part, mut next): (SmallPolygon<DVec2>, SmallPolygon<DVec2>) =
+        (SmallVec::from_slice(polygon), SmallVec::new());
     for k in 0..m {
         let edge = HalfPlane::left_of(window[k], window[(k + 1) % m]);
         if part.iter().any(|&x| edge.eval(x) < 0.0) {
-            part = clip_convex(&part, &edge)?;
+            if !clip_convex_into(&part, &edge, &mut next) {
+                return None;
+            }
+            std::mem::swap(&mut part, &mut next);
         }
     }
     let area = signed_area(&part);
     let scale = polygon_scale(window);
-    (area > 0.0 && !is_sliver(area, scale)).then_some(part)
+    (area > 0.0 && !is_sliver(area, scale)).then(|| part.into_vec())
 }
 
 /// Whether a projected polygon's (signed) `area`, measured against a size `scale` (its window's,
