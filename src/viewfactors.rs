@@ -405,9 +405,10 @@ impl Context<'_> {
         let vis = match sight {
             Sight::Whole => Visibility::Full,
             Sight::PerPoint(among) => {
-                match self.planner.face_view_among(p, normal, ei.face, el.face, among) {
+                let part = el.in_face();
+                match self.planner.part_view_among(p, normal, ei.face, el.face, &part, among) {
                     FaceView::Skip(reason) => Visibility::Skip(reason),
-                    view => self.planner.visible(&view, &el.in_face()),
+                    view => self.planner.visible(&view, &part),
                 }
             }
         };

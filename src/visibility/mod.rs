@@ -341,10 +341,12 @@ impl PairPlanner {
         if coplanar {
             return FaceView::Skip(SkipReason::SamePlane);
         }
-        let Window { z, clip, polygon: window, corners } = match self.window(p, h, normal, face) {
-            Ok(window) => window,
-            Err(view) => return view,
-        };
+        let outline = &self.faces[face].hull;
+        let Window { z, clip, polygon: window, corners } =
+            match self.window(p, h, normal, face, outline) {
+                Ok(window) => window,
+                Err(view) => return view,
+            };
         let f = &self.faces[face];
         let own = &self.faces[own_face];
         if self.occluders.acceleration == Acceleration::BoxScan {
@@ -428,15 +430,16 @@ impl PairPlanner {
 
     /// The part of face `face` in front of the point `p` with unit normal `normal`: its height
     /// over the face's plane, the half-plane left by the point's tangent plane, and the visible
-    /// window (the face's hull, clipped), in face coordinates and in space; or the view when
-    /// nothing of the face is in front.
-    fn window(
+    /// window (`outline`, the face's hull or a convex part of it, clipped), in face coordinates
+    /// and in space; or the view when nothing of it is in front.
+    fn window<'a>(
         &self,
         p: DVec3,
         Height { z, distance_bound }: Height,
         normal: DVec3,
         face: usize,
-    ) -> Result<Window<'_>, FaceView> {
+        outline: &'a [DVec2],
+    ) -> Result<Window<'a>, FaceView> {
         let f = &self.faces[face];
         // On or behind the face's plane, up to the rounding of the height itself: G vanishes
         // there. (A node 1e-12 of the face's size above it still sees it, and K is then near its
@@ -456,7 +459,7 @@ impl PairPlanner {
         };
         let eps = PLANE_TOLERANCE * f.size;
         let (mut front, mut behind) = (false, false);
-        for &q in &f.polygon {
+        for &q in outline {
             let v = hp.eval(q);
             front |= v > eps;
             behind |= v < -eps;
@@ -466,11 +469,11 @@ impl PairPlanner {
         }
         let clip = behind.then_some(hp);
         let polygon = match &clip {
-            Some(hp) => match clip_convex(&f.hull, hp) {
+            Some(hp) => match clip_convex(outline, hp) {
                 Some(w) => Cow::Owned(w),
                 None => return Err(FaceView::Skip(SkipReason::FacingAway)),
             },
-            None => Cow::Borrowed(f.hull.as_slice()),
+            None => Cow::Borrowed(outline),
         };
         // Segments from p to the visible window lie in the pyramid with apex p over it, in front
         // of both faces.
@@ -491,14 +494,31 @@ impl PairPlanner {
         face: usize,
         candidates: &[usize],
     ) -> FaceView {
+        self.part_view_among(p, normal, own_face, face, &self.faces[face].hull, candidates)
+    }
+
+    /// As [`PairPlanner::face_view_among`] for the convex counter-clockwise part `part` of face
+    /// `face` (face coordinates; an element): the shadows are clipped to it instead of the whole
+    /// face, and one that covers it hides it. [`PairPlanner::visible`] then gives the same
+    /// visible part of `part` as with the face's view.
+    pub fn part_view_among(
+        &self,
+        p: DVec3,
+        normal: DVec3,
+        own_face: usize,
+        face: usize,
+        part: &[DVec2],
+        candidates: &[usize],
+    ) -> FaceView {
         let h = self.height(p, face);
         if self.same_plane_seen_from(h, own_face, face) {
             return FaceView::Skip(SkipReason::SamePlane);
         }
-        let Window { z, clip, polygon: window, corners } = match self.window(p, h, normal, face) {
-            Ok(window) => window,
-            Err(view) => return view,
-        };
+        let Window { z, clip, polygon: window, corners } =
+            match self.window(p, h, normal, face, part) {
+                Ok(window) => window,
+                Err(view) => return view,
+            };
         if candidates.is_empty() {
             return FaceView::Visible { clip, shadows: Vec::new() };
         }
