@@ -243,11 +243,6 @@ const GAUSS_MAX: usize = 16;
 /// estimate), as it has been since the first exact rule.
 const CERTIFIED_TARGET: f64 = 1e-13;
 
-/// The same where occluders shadow T_j: only a first guess, since the estimate with one order
-/// more decides. On the occluded box (2-core EPYC, 2026-11-24) a guess of 1e-12 took 29.8 s,
-/// 1e-10 26 s and 1e-8 50.9 s (more splits), to about the same reciprocity.
-const GUESS_TARGET: f64 = 1e-10;
-
 impl OuterRules {
     fn new(max_level: u32) -> Self {
         Self {
@@ -485,7 +480,12 @@ impl Context<'_> {
             return cell;
         }
         let certified = matches!(part.sight, Sight::Whole);
-        let target = if certified { CERTIFIED_TARGET } else { GUESS_TARGET };
+        // Where occluders shadow T_j the order is only a first guess, since the estimate with
+        // one order more decides: it aims at the tolerance itself. On the occluded box at
+        // --tolerance 1e-10 (2-core EPYC, 2026-11-24) aiming at 3e-11 took 11.3 s, 1e-10
+        // 11.7 s and 1e-9 13.7 s (more splits); at --tolerance 1e-9, aiming at 1e-10 took
+        // 8.35 s and at 1e-9 7.6 s, to a reciprocity of 8.4e-9 and 3.0e-9.
+        let target = if certified { CERTIFIED_TARGET } else { self.options.tolerance };
         let order = rules.gauss_order(size, distance, target);
         let mut estimate = |q: usize| {
             let points: Vec<(DVec3, f64)> = rules.gauss[q]
