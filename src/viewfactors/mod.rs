@@ -20,13 +20,14 @@
 //!   ([`PairPlanner::polygon_shaft`]): none, and it sees T_j whole; one across that shaft, and it
 //!   sees nothing; otherwise each point's view is shadowed by those alone
 //!   ([`PairPlanner::face_view_among`], no search);
-//! - each piece's triangles are integrated by collapsed Gauss of an order fitted to their
-//!   separation from T_j and from the poles of the shadow corners the piece has (the
+//! - each piece is covered by quadrilaterals and triangles (`patch.rs`), integrated by Gauss
+//!   rules (tensor through the bilinear map, collapsed on a triangle) of an order fitted to
+//!   their separation from T_j and from the poles of the shadow corners the piece has (the
 //!   Bernstein-ellipse bound), and again with one order more, whose difference is the error
 //!   estimate; the nested tensor tanh-sinh rule takes the triangles that touch T_j (d log d
 //!   behaviour beside a common edge), collapsed at the corner nearest a corner of T_j, with
 //!   Bailey's estimate from its last three levels (`kept_error`). The pair is globally
-//!   adaptive: the triangle with the largest estimate is split in four until the estimates
+//!   adaptive: the patch with the largest estimate is split in four until the estimates
 //!   together are within `--tolerance` on F_ij. The estimates also find what the a priori order
 //!   does not see: the curved events of three mutually skew edges, which are not cut along.
 //!
@@ -47,14 +48,16 @@ use crate::error::Result;
 use crate::geometry::{self, PlaneFrame, SmallPolygon, bounding_box_3d};
 use crate::kernels::lanes;
 use crate::mesh::{Element, Mesh};
-use crate::quadrature::TriangleRule;
 use crate::scene::Scene;
 use crate::visibility::{FaceView, PairPlanner, Visibility};
+
+mod patch;
+use patch::{GaussRules, Patch, triangle_quarters};
 
 /// Accuracy settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewFactorOptions {
-    /// Absolute tolerance on each F_ij: the sum of its triangles' error estimates (default 1e-10);
+    /// Absolute tolerance on each F_ij: the sum of its patches' error estimates (default 1e-10);
     /// on each touching triangle, also the tanh-sinh rule's on the mean of its integrand.
     pub tolerance: f64,
     /// Finest tanh-sinh level: step 2^-max_level (default 3).
@@ -76,10 +79,10 @@ pub struct ViewFactors {
     pub matrix: Vec<f64>,
     /// Element areas A_i.
     pub areas: Vec<f64>,
-    /// Largest estimated error of an entry F_ij: the sum of its triangles' estimates (the
+    /// Largest estimated error of an entry F_ij: the sum of its patches' estimates (the
     /// difference of two Gauss orders, the error of the coarser one where the finer one's value
     /// is kept; or Bailey's estimate from the last three tanh-sinh levels). Above the tolerance
-    /// only where triangles reached [`MAX_SPLITS`].
+    /// only where patches reached [`MAX_SPLITS`].
     pub error_estimate: f64,
     /// Point-to-element integrals evaluated.
     pub evaluations: u64,
@@ -230,8 +233,7 @@ struct Tally {
 /// The outer rules: tanh-sinh for elements that touch, Gauss of a chosen order otherwise.
 struct OuterRules {
     tanh_sinh: TanhSinh,
-    /// Collapsed Gauss–Legendre rules on the unit triangle, by order (index 0 unused).
-    gauss: Vec<TriangleRule>,
+    gauss: GaussRules,
 }
 
 /// Highest order of the collapsed Gauss rule (GAUSS_MAX² points).
@@ -245,13 +247,10 @@ const CERTIFIED_TARGET: f64 = 1e-13;
 
 impl OuterRules {
     fn new(max_level: u32) -> Self {
-        Self {
-            tanh_sinh: TanhSinh::new(max_level),
-            gauss: (0..=GAUSS_MAX).map(|q| TriangleRule::collapsed_gauss(q.max(1))).collect(),
-        }
+        Self { tanh_sinh: TanhSinh::new(max_level), gauss: GaussRules::new(GAUSS_MAX) }
     }
 
-    /// The Gauss order for a triangle of size `size` at distance `distance` from the nearest
+    /// The Gauss order for a patch of size `size` at distance `distance` from the nearest
     /// point where the integrand is not analytic (the other element, an occluder): the
     /// integrand is analytic in an ellipse with foci at a side's ends and semi-axis sum
     /// rho = a + sqrt(a² - 1), a = 1 + 2 distance / size, and the q-point rule's error falls
@@ -359,9 +358,8 @@ impl Context<'_> {
         // until the estimates together are within the tolerance on F_ij.
         let mut cells = Cells::default();
         for (k, (piece, _)) in shafts.iter().enumerate() {
-            for l in 1..piece.len() - 1 {
-                let t = [piece[0], piece[l], piece[l + 1]];
-                cells.place(self.cell(i, j, t, &parts[k], k, 0, rules, tally));
+            for patch in Patch::cover(piece) {
+                cells.place(self.cell(i, j, patch, &parts[k], k, 0, rules, tally));
             }
         }
         let budget = self.options.tolerance * ei.area();
@@ -373,7 +371,7 @@ impl Context<'_> {
             let Some(cell) = cells.open.pop() else { break };
             cells.open_error -= cell.error;
             let part = &parts[cell.part];
-            for child in quarters(cell.triangle) {
+            for child in cell.patch.quarters() {
                 cells.place(self.cell(i, j, child, part, cell.part, cell.depth + 1, rules, tally));
             }
         }
@@ -427,55 +425,38 @@ impl Context<'_> {
         sum / PI
     }
 
-    /// `∫_t g dA` over the triangle `t` of the piece with `part`, and its estimated error:
-    /// tanh-sinh where it touches an obstacle (d log d behaviour at a common edge; its error
-    /// [`kept_error`] of its last levels, to be split further if the pair needs it); where T_j
-    /// is seen whole, collapsed Gauss of
-    /// the order that the triangle's separation asks for (settled, as the bound is trusted);
-    /// otherwise that order and one more, the higher one's value with their difference as the
-    /// error (which also catches what the separation does not: the curved events of three skew
-    /// edges), to be split further if the pair needs it.
+    /// `∫ g dA` over the patch `patch` of the piece with `part`, and its estimated error:
+    /// tanh-sinh on its triangles where it touches an obstacle (d log d behaviour at a common
+    /// edge; its error [`kept_error`] of its last levels, to be split further if the pair needs
+    /// it); where T_j is seen whole, Gauss of the order that the patch's separation asks for
+    /// (settled, as the bound is trusted); otherwise that order and one more, the higher one's
+    /// value with their difference as the error (which also catches what the separation does
+    /// not: the curved events of three skew edges), to be split further if the pair needs it.
     #[allow(clippy::too_many_arguments)]
     fn cell(
         &self,
         i: usize,
         j: usize,
-        t: [DVec3; 3],
+        patch: Patch,
         part: &Part,
         index: usize,
         depth: u32,
         rules: &OuterRules,
         tally: &mut Tally,
     ) -> Cell {
-        let [a, b, c] = t;
-        let area = 0.5 * (b - a).cross(c - a).length();
-        let mut cell =
-            Cell { triangle: t, part: index, depth, value: 0.0, error: 0.0, refinable: false };
+        let area = patch.area();
+        let mut cell = Cell { patch, part: index, depth, value: 0.0, error: 0.0, refinable: false };
         if area == 0.0 {
             return cell;
         }
-        let size = (b - a).length().max((c - b).length()).max((a - c).length());
-        let distance = part.distance(&t, size);
+        let size = patch.size();
+        let distance = part.distance(patch.corners(), size);
         if distance <= TOUCHING * size {
-            // The rule collapses the triangle at its last corner, where a point singularity
-            // (an integrand whose limit depends on the direction, as at a corner of T_j on
-            // T_i) costs nothing: put the corner nearest a corner of T_j there.
-            let corners = &self.mesh.elements()[j].vertices;
-            let near = |v: DVec3| corners.iter().map(|&w| v.distance(w)).fold(f64::MAX, f64::min);
-            let k = (0..3).min_by(|&k, &l| near(t[k]).total_cmp(&near(t[l]))).unwrap_or(2);
-            let t = [t[(k + 1) % 3], t[(k + 2) % 3], t[k]];
-            let mut outer = Outer {
-                rule: &rules.tanh_sinh,
-                options: self.options,
-                integrand: |p: DVec3, out: &mut [f64]| {
-                    out[0] = self.point_to_element(i, j, p, part.sight)
-                },
-                evaluations: 0,
-            };
-            let (value, error) = outer.integrate(t, 1, 0);
-            tally.evaluations += outer.evaluations;
-            cell.value = area * value[0];
-            cell.error = area * error;
+            for t in patch.triangles() {
+                let (value, error) = self.touching_triangle(i, j, t, part, rules, tally);
+                cell.value += value;
+                cell.error += error;
+            }
             cell.refinable = depth < MAX_SPLITS;
             return cell;
         }
@@ -488,11 +469,7 @@ impl Context<'_> {
         let target = if certified { CERTIFIED_TARGET } else { self.options.tolerance };
         let order = rules.gauss_order(size, distance, target);
         let mut estimate = |q: usize| {
-            let points: Vec<(DVec3, f64)> = rules.gauss[q]
-                .points()
-                .iter()
-                .map(|&[u, v, w]| (a + (b - a) * u + (c - a) * v, 2.0 * area * w))
-                .collect();
+            let points = patch.gauss_points(&rules.gauss, q);
             tally.evaluations += points.len() as u64;
             self.weighted_sum(i, j, part.sight, &points)
         };
@@ -504,7 +481,7 @@ impl Context<'_> {
                 }
                 // Too close to T_j for the bound: its quarters, settled together.
                 None if depth < MAX_SPLITS => {
-                    for child in quarters(t) {
+                    for child in patch.quarters() {
                         let c = self.cell(i, j, child, part, index, depth + 1, rules, tally);
                         cell.value += c.value;
                         cell.error += c.error;
@@ -520,6 +497,41 @@ impl Context<'_> {
         cell.error = (high - low).abs();
         cell.refinable = depth < MAX_SPLITS;
         cell
+    }
+
+    /// `∫_t g dA` and its estimated error over a triangle `t` that touches an obstacle, by the
+    /// tanh-sinh rule. The rule collapses the triangle at its last corner, where a point
+    /// singularity (an integrand whose limit depends on the direction, as at a corner of T_j on
+    /// T_i) costs nothing: the corner nearest a corner of T_j is put there.
+    fn touching_triangle(
+        &self,
+        i: usize,
+        j: usize,
+        t: [DVec3; 3],
+        part: &Part,
+        rules: &OuterRules,
+        tally: &mut Tally,
+    ) -> (f64, f64) {
+        let [a, b, c] = t;
+        let area = 0.5 * (b - a).cross(c - a).length();
+        if area == 0.0 {
+            return (0.0, 0.0);
+        }
+        let corners = &self.mesh.elements()[j].vertices;
+        let near = |v: DVec3| corners.iter().map(|&w| v.distance(w)).fold(f64::MAX, f64::min);
+        let k = (0..3).min_by(|&k, &l| near(t[k]).total_cmp(&near(t[l]))).unwrap_or(2);
+        let t = [t[(k + 1) % 3], t[(k + 2) % 3], t[k]];
+        let mut outer = Outer {
+            rule: &rules.tanh_sinh,
+            options: self.options,
+            integrand: |p: DVec3, out: &mut [f64]| {
+                out[0] = self.point_to_element(i, j, p, part.sight)
+            },
+            evaluations: 0,
+        };
+        let (value, error) = outer.integrate(t, 1, 0);
+        tally.evaluations += outer.evaluations;
+        (area * value[0], area * error)
     }
 }
 
@@ -553,9 +565,9 @@ impl Cells {
     }
 }
 
-/// A triangle of a pair's outer integral, with its estimate.
+/// A patch of a pair's outer integral, with its estimate.
 struct Cell {
-    triangle: [DVec3; 3],
+    patch: Patch,
     /// Index of its piece's [`Part`].
     part: usize,
     /// Rounds of splitting that made it.
@@ -587,12 +599,6 @@ impl Ord for Cell {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
         self.error.total_cmp(&other.error)
     }
-}
-
-/// The four triangles that joining a triangle's side midpoints makes.
-fn quarters([a, b, c]: [DVec3; 3]) -> [[DVec3; 3]; 4] {
-    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
-    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
 }
 
 /// Where the integrand over a piece of T_i (unit normal `ni`, a point `viewer` inside it) stops
@@ -729,18 +735,18 @@ struct Part<'a> {
 }
 
 impl Part<'_> {
-    /// A lower bound of the distance from the outer triangle `t` (longest side `size`) to the
+    /// A lower bound of the distance from the outer patch with corners `t` (longest side `size`) to the
     /// points where the integrand is not analytic.
-    fn distance(&self, t: &[DVec3; 3], size: f64) -> f64 {
+    fn distance(&self, t: &[DVec3], size: f64) -> f64 {
         let to_target = box_distance(bounding_box_3d(t), self.target);
         self.poles
             .iter()
             .filter_map(|&(m, point, sin)| {
-                // A line through a corner of the triangle, up to rounding, passes through the
+                // A line through a corner of the patch, up to rounding, passes through the
                 // corner of the piece where event lines meet (in an axis-aligned scene they
                 // often meet there): it crosses the piece, not its side.
                 let margin = TOUCHING * size * sin;
-                let h = t.map(|v| m.dot(v - point));
+                let h: SmallVec<[f64; 4]> = t.iter().map(|&v| m.dot(v - point)).collect();
                 let one_side = h.iter().all(|&x| x > margin) || h.iter().all(|&x| x < -margin);
                 one_side.then(|| h.iter().fold(f64::INFINITY, |d, x| d.min(x.abs())) / sin)
             })
@@ -748,11 +754,11 @@ impl Part<'_> {
     }
 }
 
-/// Distance, relative to an outer triangle's size, under which it touches what makes the
+/// Distance, relative to an outer patch's size, under which it touches what makes the
 /// integrand non-analytic (tanh-sinh then takes it whole).
 const TOUCHING: f64 = 1e-9;
 
-/// Most rounds of splitting an outer triangle: deeper, it is settled with its estimate (which
+/// Most rounds of splitting an outer patch: deeper, it is settled with its estimate (which
 /// the reported `error_estimate` then shows).
 pub const MAX_SPLITS: u32 = 6;
 
@@ -1120,7 +1126,7 @@ impl<F: Fn(DVec3, &mut [f64])> Outer<'_, F> {
                 if level == self.rule.max_level && depth < self.options.max_depth {
                     let mut sum = vec![0.0; len];
                     let mut error = 0.0f64;
-                    for child in quarters(t) {
+                    for child in triangle_quarters(t) {
                         let (v, e) = self.integrate(child, len, depth + 1);
                         for (s, x) in sum.iter_mut().zip(v) {
                             *s += 0.25 * x;
