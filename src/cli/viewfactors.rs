@@ -55,7 +55,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         // Cells deeper than the split limit are settled with the error they have.
         eprintln!(
             "warning: the largest estimated error of an entry, {:.1e}, exceeds --tolerance {:.1e}: \
-             outer triangles reached the split limit ({MAX_SPLITS} rounds) before their \
+             outer patches reached the split limit ({MAX_SPLITS} rounds) before their \
              estimates met it",
             summary.error_estimate, args.tolerance
         );
