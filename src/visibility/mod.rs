@@ -362,9 +362,16 @@ impl PairPlanner {
         }
         let tol = 1e-12 * own.size.max(f.size);
         let pieces = &self.occluders.pieces;
+        // The segments lie in the pyramid's bounding box: a piece that crosses them all meets
+        // it (a test of six comparisons before the crossings, for the occluders that hid other
+        // faces, most of them elsewhere).
+        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
         let hides = |o: usize| {
             let piece = &pieces[o];
-            !piece.faces.contains(&own_face)
+            let (plo, phi) = piece.bounding_box();
+            (plo - hi).cmple(DVec3::splat(tol)).all()
+                && (lo - phi).cmple(DVec3::splat(tol)).all()
+                && !piece.faces.contains(&own_face)
                 && !piece.faces.contains(&face)
                 && piece.crosses_every_segment(&[p], &corners, tol, -tol)
         };
@@ -377,7 +384,6 @@ impl PairPlanner {
         // an axis.
         let sides = pyramid_sides(p, &corners);
         let mut volume = ViewVolume::default();
-        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
         volume.push_box(lo, hi, -tol);
         // A piece that reaches into the pyramid by less than the tolerance (the faces next to
         // the window, touching it along an edge) would shadow a sliver under the clipping's own
@@ -392,15 +398,18 @@ impl PairPlanner {
         volume.push_front_of(&f.face.frame, tol);
         for &c in &corners {
             for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
-                let n = axis.cross(c - p).normalize_or_zero();
+                // Not normalised: the margin is the tolerance times the normal's 1-norm, no
+                // less than its length, so the plane admits no fewer pieces than the unit one.
+                let n = axis.cross(c - p);
                 let side = |q: &DVec3| n.dot(*q - p);
                 if n == DVec3::ZERO {
                     continue;
                 }
+                let margin = -tol * n.abs().element_sum();
                 if corners.iter().all(|q| side(q) >= 0.0) {
-                    volume.push(n, -n.dot(p), -tol);
+                    volume.push(n, -n.dot(p), margin);
                 } else if corners.iter().all(|q| side(q) <= 0.0) {
-                    volume.push(-n, n.dot(p), -tol);
+                    volume.push(-n, n.dot(p), margin);
                 }
             }
         }
