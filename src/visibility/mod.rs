@@ -362,20 +362,20 @@ impl PairPlanner {
         }
         let tol = 1e-12 * own.size.max(f.size);
         let pieces = &self.occluders.pieces;
-        // The segments lie in the pyramid's bounding box: a piece that crosses them all meets
-        // it (a test of six comparisons before the crossings, for the occluders that hid other
-        // faces, most of them elsewhere).
-        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
         let hides = |o: usize| {
             let piece = &pieces[o];
-            let (plo, phi) = piece.bounding_box();
-            (plo - hi).cmple(DVec3::splat(tol)).all()
-                && (lo - phi).cmple(DVec3::splat(tol)).all()
-                && !piece.faces.contains(&own_face)
+            !piece.faces.contains(&own_face)
                 && !piece.faces.contains(&face)
                 && piece.crosses_every_segment(&[p], &corners, tol, -tol)
         };
-        if let Some(k) = hiders.list.iter().position(|&o| hides(o)) {
+        // The segments lie in the pyramid's bounding box: a piece that crosses them all meets
+        // it. The recent hiders carry their boxes, so that those elsewhere (most of them) are
+        // passed over by six comparisons, without a look at the pieces themselves.
+        let (lo, hi) = corners.iter().fold((p, p), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+        let meets = |h: &Hider| {
+            (h.lo - hi).cmple(DVec3::splat(tol)).all() && (lo - h.hi).cmple(DVec3::splat(tol)).all()
+        };
+        if let Some(k) = hiders.list.iter().position(|h| meets(h) && hides(h.occluder)) {
             hiders.list[..=k].rotate_right(1);
             return FaceView::Skip(SkipReason::Hidden);
         }
@@ -430,7 +430,7 @@ impl PairPlanner {
             let solid = self.occluders.solid_of(o, own_face, face);
             let solids = &self.occluders.solids;
             if pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows) {
-                hiders.remember(o);
+                hiders.remember(o, &pieces[o]);
                 return FaceView::Skip(SkipReason::Hidden);
             }
         }
@@ -629,7 +629,15 @@ impl PairPlanner {
 /// before any search ([`PairPlanner::face_view_with`]). One per point and thread.
 #[derive(Clone, Debug, Default)]
 pub struct RecentHiders {
-    list: Vec<usize>,
+    list: Vec<Hider>,
+}
+
+/// An occluder piece that hid a face, and its bounding box.
+#[derive(Clone, Debug)]
+struct Hider {
+    occluder: usize,
+    lo: DVec3,
+    hi: DVec3,
 }
 
 /// How many occluders [`RecentHiders`] keeps: in a city of 3 281 faces, 32 catch most of the
@@ -637,9 +645,10 @@ pub struct RecentHiders {
 const RECENT_HIDERS: usize = 32;
 
 impl RecentHiders {
-    fn remember(&mut self, occluder: usize) {
-        self.list.retain(|&o| o != occluder);
-        self.list.insert(0, occluder);
+    fn remember(&mut self, occluder: usize, piece: &Occluder) {
+        self.list.retain(|h| h.occluder != occluder);
+        let (lo, hi) = piece.bounding_box();
+        self.list.insert(0, Hider { occluder, lo, hi });
         self.list.truncate(RECENT_HIDERS);
     }
 }
