@@ -450,16 +450,21 @@ pub fn convex_partition(poly: &[DVec2]) -> Option<Vec<Vec<usize>>> {
 mod triangulation_tests {
     use super::*;
 
-    #[test]
-    fn an_l_shape_is_two_convex_pieces_and_a_square_one() {
-        let l = [
+    /// An L of three unit squares.
+    fn l_shape() -> [DVec2; 6] {
+        [
             DVec2::new(0.0, 0.0),
             DVec2::new(2.0, 0.0),
             DVec2::new(2.0, 1.0),
             DVec2::new(1.0, 1.0),
             DVec2::new(1.0, 2.0),
             DVec2::new(0.0, 2.0),
-        ];
+        ]
+    }
+
+    #[test]
+    fn an_l_shape_is_two_convex_pieces_and_a_square_one() {
+        let l = l_shape();
         let pieces = convex_partition(&l).unwrap();
         assert_eq!(pieces.len(), 2, "{pieces:?}");
         let polygons: Vec<Vec<DVec2>> =
@@ -476,14 +481,7 @@ mod triangulation_tests {
 
     #[test]
     fn an_l_shape_triangulates_into_four_ccw_triangles_of_total_area_three() {
-        let l = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(2.0, 0.0),
-            DVec2::new(2.0, 1.0),
-            DVec2::new(1.0, 1.0),
-            DVec2::new(1.0, 2.0),
-            DVec2::new(0.0, 2.0),
-        ];
+        let l = l_shape();
         let tris = triangulate(&l).unwrap();
         assert_eq!(tris.len(), 4);
         let area: f64 = tris.iter().map(|t| signed_area(&t.map(|k| l[k]))).sum();

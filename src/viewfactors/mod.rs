@@ -19,7 +19,7 @@
 //! - each piece keeps only the pair's occluders in its own shaft to T_j
 //!   ([`PairPlanner::polygon_shaft`]): none, and it sees T_j whole; one across that shaft, and it
 //!   sees nothing; otherwise each point's view is shadowed by those alone
-//!   ([`PairPlanner::face_view_among`], no search);
+//!   ([`PairPlanner::part_view_among`], no search);
 //! - each piece is covered by quadrilaterals and triangles (`patch.rs`), integrated by Gauss
 //!   rules (tensor through the bilinear map, collapsed on a triangle) of an order fitted to
 //!   their separation from T_j and from the poles of the shadow corners the piece has (the

@@ -7,7 +7,8 @@
 //! plane. Each element of the face is then classified against the view ([`PairPlanner::visible`]):
 //! no clip and no shadow means every element is fully visible, without per-element work.
 //!
-//! Shadows are convex (occluders are split into convex pieces), and the visible part of an element
+//! Shadows are convex (occluders are split into convex pieces; a closed convex solid among them casts
+//! one shadow, the hull of its projected vertices), and the visible part of an element
 //! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
 //! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates). A view keeps
 //! no shadow that another of its shadows holds (a building's far side behind its near side), which
@@ -490,26 +491,13 @@ impl PairPlanner {
         Ok(Window { z, clip, polygon, corners })
     }
 
-    /// As [`PairPlanner::face_view`], when the occluders that can come between `p` and the part
-    /// of the face that matters are known: only `candidates` cast shadows (pieces of neither
-    /// face, a superset of those meeting a segment from `p` to that part, e.g.
-    /// [`PairPlanner::polygon_shaft`]'s). The view then agrees with [`PairPlanner::face_view`] on
-    /// that part, without any search.
-    pub fn face_view_among(
-        &self,
-        p: DVec3,
-        normal: DVec3,
-        own_face: usize,
-        face: usize,
-        candidates: &[usize],
-    ) -> FaceView {
-        self.part_view_among(p, normal, own_face, face, &self.faces[face].hull, candidates)
-    }
-
-    /// As [`PairPlanner::face_view_among`] for the convex counter-clockwise part `part` of face
-    /// `face` (face coordinates; an element): the shadows are clipped to it instead of the whole
-    /// face, and one that covers it hides it. [`PairPlanner::visible`] then gives the same
-    /// visible part of `part` as with the face's view.
+    /// What the point `p` (normal `normal`, on face `own_face`) sees of `part`, a convex
+    /// counter-clockwise part of face `face` (face coordinates: an element, or the face's hull),
+    /// when the occluders that can come between `p` and it are known: only `candidates` cast
+    /// shadows (pieces of neither face, a superset of those meeting a segment from `p` to
+    /// `part`, e.g. [`PairPlanner::polygon_shaft`]'s), clipped to `part`, and one that covers
+    /// it hides it. [`PairPlanner::visible`] then gives the same visible part of `part` as with
+    /// [`PairPlanner::face_view`], without any search.
     pub fn part_view_among(
         &self,
         p: DVec3,
@@ -762,16 +750,7 @@ impl Pyramid<'_> {
     /// the convex hull of its vertices' projections. `None` where a vertex is not between the
     /// face's plane and the apex (as [`Pyramid::projection`] asks), or the hull has no area.
     fn cast_solid(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
-        let frame = &self.face.face.frame;
-        let mut projected: SmallVec<[DVec2; 16]> = SmallVec::new();
-        for &x in &solid.vertices {
-            let h = frame.height(x);
-            if !(0.0..=PROJECTION_REACH * self.z).contains(&h) {
-                return None;
-            }
-            let t = self.z / (self.z - h);
-            projected.push(frame.to_plane(self.apex + (x - self.apex) * t));
-        }
+        let projected: SmallVec<[DVec2; 16]> = self.project(&solid.vertices)?;
         let outline: SmallPolygon<DVec2> = convex_hull(&projected).into_iter().collect();
         if outline.len() < 3 || is_sliver(signed_area(&outline), polygon_scale(&outline)) {
             return None;
@@ -794,16 +773,7 @@ impl Pyramid<'_> {
     /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than ten
     /// times as far out as the piece); its part in the window is the piece's shadow.
     fn projection(&self, piece: &Occluder) -> Option<SmallPolygon<DVec2>> {
-        let frame = &self.face.face.frame;
-        let mut projected = SmallPolygon::new();
-        for &x in &piece.polygon {
-            let h = frame.height(x);
-            if !(0.0..=PROJECTION_REACH * self.z).contains(&h) {
-                return None;
-            }
-            let t = self.z / (self.z - h);
-            projected.push(frame.to_plane(self.apex + (x - self.apex) * t));
-        }
+        let mut projected: SmallPolygon<DVec2> = self.project(&piece.polygon)?;
         let area = signed_area(&projected);
         let scale = polygon_scale(&projected);
         if is_sliver(area, scale) {
@@ -813,6 +783,22 @@ impl Pyramid<'_> {
             projected.reverse();
         }
         Some(projected)
+    }
+
+    /// The central projections of `points` onto the face's plane (face coordinates), when each
+    /// lies between that plane and the apex, no more than [`PROJECTION_REACH`] of the way up.
+    fn project<C: FromIterator<DVec2>>(&self, points: &[DVec3]) -> Option<C> {
+        let frame = &self.face.face.frame;
+        points
+            .iter()
+            .map(|&x| {
+                let h = frame.height(x);
+                (0.0..=PROJECTION_REACH * self.z).contains(&h).then(|| {
+                    let t = self.z / (self.z - h);
+                    frame.to_plane(self.apex + (x - self.apex) * t)
+                })
+            })
+            .collect()
     }
 }
 

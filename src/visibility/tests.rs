@@ -51,29 +51,63 @@ fn random_polygon(rng: &mut StdRng, centre: DVec3, n: DVec3, convex: bool) -> Ve
         .collect()
 }
 
+/// The unit square at z = 0 facing up, and the square [lo, hi]² at z = 1.5 facing down.
+fn receiver_and_source(lo: f64, hi: f64) -> Vec<Face> {
+    let receiver = Face::new(
+        "receiver",
+        vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+        0.5,
+    )
+    .unwrap();
+    let source = Face::new(
+        "source",
+        vec![
+            DVec3::new(lo, lo, 1.5),
+            DVec3::new(lo, hi, 1.5),
+            DVec3::new(hi, hi, 1.5),
+            DVec3::new(hi, lo, 1.5),
+        ],
+        0.5,
+    )
+    .unwrap();
+    vec![receiver, source]
+}
+
+/// Checks `vis`, the visible part of the triangle `tri` of the receiver (face 0, `frame`) from
+/// `p` with normal `normal`, against ray casting to the occluders (faces 2 and on) at `samples`
+/// random points of the triangle.
+fn assert_agrees_with_ray_casting(
+    rng: &mut StdRng,
+    scene: &Scene,
+    (p, normal): (DVec3, DVec3),
+    tri: &[DVec2],
+    vis: &Visibility,
+    samples: usize,
+) {
+    let frame = scene.faces[0].frame;
+    for _ in 0..samples {
+        let (a, b): (f64, f64) = (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+        let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+        let x = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
+        let q = frame.to_global(x);
+        let in_front = normal.dot(q - p) > 0.0;
+        let blocked = scene.faces[2..].iter().any(|f| segment_hits(p, q, &f.vertices));
+        let truth = in_front && !blocked;
+        let planned = match vis {
+            Visibility::Skip(_) => false,
+            Visibility::Full => true,
+            Visibility::Partial(pieces) => inside_any(pieces, x),
+        };
+        assert_eq!(planned, truth, "{}, p {p}, q {q}: {vis:?}", scene.name);
+    }
+}
+
 #[test]
 fn visible_pieces_agree_with_ray_casting() {
     let mut rng = StdRng::seed_from_u64(7);
     let mut checked = 0;
     for case in 0..12 {
-        let receiver = Face::new(
-            "receiver",
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            0.5,
-        )
-        .unwrap();
-        let source = Face::new(
-            "source",
-            vec![
-                DVec3::new(0.2, 0.2, 1.5),
-                DVec3::new(0.2, 0.8, 1.5),
-                DVec3::new(0.8, 0.8, 1.5),
-                DVec3::new(0.8, 0.2, 1.5),
-            ],
-            0.5,
-        )
-        .unwrap();
-        let mut faces = vec![receiver, source];
+        let mut faces = receiver_and_source(0.2, 0.8);
         for k in 0..3 {
             let centre = DVec3::new(
                 rng.random_range(0.2..0.8),
@@ -85,7 +119,7 @@ fn visible_pieces_agree_with_ray_casting() {
             let poly = random_polygon(&mut rng, centre, tilt.normalize(), convex);
             faces.push(Face::new(format!("occluder{k}"), poly, 0.5).unwrap());
         }
-        let scene = Scene::new("random", faces).unwrap();
+        let scene = Scene::new(format!("random {case}"), faces).unwrap();
         let planner = PairPlanner::new(&scene);
         assert!(planner.has_occlusion());
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
@@ -98,23 +132,8 @@ fn visible_pieces_agree_with_ray_casting() {
             for e in &mesh.elements()[mesh.face_range(0)] {
                 let tri: Vec<DVec2> = e.vertices.iter().map(|&v| frame.to_plane(v)).collect();
                 let vis = planner.visible(&view, &tri);
-                for _ in 0..40 {
-                    let (a, b): (f64, f64) =
-                        (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
-                    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
-                    let x = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
-                    let q = frame.to_global(x);
-                    let in_front = normal.dot(q - p) > 0.0;
-                    let blocked = scene.faces[2..].iter().any(|f| segment_hits(p, q, &f.vertices));
-                    let truth = in_front && !blocked;
-                    let planned = match &vis {
-                        Visibility::Skip(_) => false,
-                        Visibility::Full => true,
-                        Visibility::Partial(pieces) => inside_any(pieces, x),
-                    };
-                    assert_eq!(planned, truth, "case {case}, p {p}, q {q}: {vis:?}");
-                    checked += 1;
-                }
+                assert_agrees_with_ray_casting(&mut rng, &scene, (p, normal), &tri, &vis, 40);
+                checked += 40;
             }
         }
     }
@@ -209,7 +228,8 @@ fn views_among_a_polygons_shaft_occluders_equal_the_searched_views_there() {
                     assert!(searched.abs() <= 1e-12, "hidden shaft, yet {searched} seen");
                     continue;
                 }
-                let got = area(&visible(&planner.face_view_among(p, normal, a, b, &among)));
+                let hull = &planner.faces[b].hull;
+                let got = area(&visible(&planner.part_view_among(p, normal, a, b, hull, &among)));
                 let part_view = planner.part_view_among(p, normal, a, b, &target, &among);
                 let of_part = area(&visible(&part_view));
                 for got in [got, of_part] {
@@ -303,23 +323,6 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
     let mut rng = StdRng::seed_from_u64(11);
     let (mut checked, mut fewer) = (0, 0);
     for case in 0..8 {
-        let receiver = Face::new(
-            "receiver",
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            0.5,
-        )
-        .unwrap();
-        let source = Face::new(
-            "source",
-            vec![
-                DVec3::new(0.0, 0.0, 1.5),
-                DVec3::new(0.0, 1.0, 1.5),
-                DVec3::new(1.0, 1.0, 1.5),
-                DVec3::new(1.0, 0.0, 1.5),
-            ],
-            0.5,
-        )
-        .unwrap();
         let a = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 1.0);
         let x = a.normalize();
         let y = x.any_orthonormal_vector();
@@ -329,9 +332,9 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
             rng.random_range(0.05..0.2),
             rng.random_range(0.05..0.2),
         );
-        let mut faces = vec![receiver, source];
+        let mut faces = receiver_and_source(0.0, 1.0);
         faces.extend(box_faces("box", centre, [x, y, x.cross(y)], half));
-        let scene = Scene::new("boxed", faces).unwrap();
+        let scene = Scene::new(format!("boxed {case}"), faces).unwrap();
         let (solid, core) = (
             PairPlanner::new(&scene),
             PairPlanner::with_acceleration(&scene, Acceleration::BoxScan),
@@ -359,21 +362,8 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
                 };
                 let (got, want) = (area(&vis), area(&core_vis));
                 assert!((got - want).abs() <= 1e-13, "case {case}, p {p}: {got} vs {want}");
-                for _ in 0..30 {
-                    let (a, b): (f64, f64) =
-                        (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
-                    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
-                    let x = tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b;
-                    let q = frame.to_global(x);
-                    let truth = !scene.faces[2..].iter().any(|f| segment_hits(p, q, &f.vertices));
-                    let planned = match &vis {
-                        Visibility::Skip(_) => false,
-                        Visibility::Full => true,
-                        Visibility::Partial(pieces) => inside_any(pieces, x),
-                    };
-                    assert_eq!(planned, truth, "case {case}, p {p}, q {q}: {vis:?}");
-                    checked += 1;
-                }
+                assert_agrees_with_ray_casting(&mut rng, &scene, (p, -DVec3::Z), &tri, &vis, 30);
+                checked += 30;
             }
         }
     }
