@@ -7,7 +7,7 @@ use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree, SelectionFunction};
 use serde::Serialize;
 
-use super::solids::{Solid, closed_convex_solids};
+use super::solids::{Solid, convex_solids};
 use crate::geometry::PlaneFrame;
 use crate::scene::Scene;
 
@@ -74,7 +74,7 @@ impl OccluderIndex {
         let (solids, solid_of) = if acceleration == Acceleration::BoxScan {
             (Vec::new(), vec![None; pieces.len()])
         } else {
-            closed_convex_solids(&pieces)
+            convex_solids(&pieces)
         };
         Self { pieces, solids, solid_of, acceleration, tree }
     }

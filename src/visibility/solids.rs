@@ -22,89 +22,156 @@ pub(super) struct Solid {
     pub(super) vertices: Vec<DVec3>,
 }
 
-/// The closed convex solids among `pieces`, and per piece the solid it bounds, if any.
+/// The convex solids among `pieces`, and per piece the solid it bounds, if any.
 ///
-/// Pieces that share an edge (the same two vertices, to the bit, as faces of one scene file or
-/// OBJ mesh share them) are joined; a group is a closed convex solid when each of its edges
-/// bounds exactly two of its pieces and all its vertices lie on one side of each piece's plane
-/// (within 1e-12 of its size). Anything else (an open box, a T-junction, a dent) is left as
-/// pieces, which is always right, only slower.
-pub(super) fn closed_convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usize>>) {
+/// From each piece not yet in a solid, a group grows across shared edges (the same two
+/// vertices, to the bit, as faces of one scene file or OBJ mesh share them) by every neighbour
+/// that keeps all the group's vertices on one side of each of its pieces' planes (within 1e-12
+/// of the scene's size). The group is a solid when each of its edges bounds two of its pieces,
+/// or when the edges that bound one form a single planar loop, the cap, whose plane has every
+/// vertex of the scene on the group's side: then no segment between two points of the scene
+/// crosses the cap (a building standing on the ground, a box on the floor), and the group
+/// shadows as the closed solid does. Anything else (a T-junction, a dent, an open box in
+/// mid-air) is left as pieces, which is always right, only slower.
+pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usize>>) {
     let key = |v: DVec3| v.to_array().map(f64::to_bits);
     let edge_key = |a: DVec3, b: DVec3| {
         let (a, b) = (key(a), key(b));
         if a <= b { (a, b) } else { (b, a) }
     };
+    let edges_of = |k: usize| {
+        let polygon = &pieces[k].polygon;
+        let m = polygon.len();
+        (0..m).map(move |l| edge_key(polygon[l], polygon[(l + 1) % m]))
+    };
     let mut edges: HashMap<_, Vec<usize>> = HashMap::new();
-    for (k, piece) in pieces.iter().enumerate() {
-        let m = piece.polygon.len();
-        for l in 0..m {
-            edges
-                .entry(edge_key(piece.polygon[l], piece.polygon[(l + 1) % m]))
-                .or_default()
-                .push(k);
-        }
-    }
-    let mut group: Vec<usize> = (0..pieces.len()).collect();
-    fn root(group: &mut [usize], mut k: usize) -> usize {
-        while group[k] != k {
-            group[k] = group[group[k]];
-            k = group[k];
-        }
-        k
-    }
-    for sharing in edges.values() {
-        for w in sharing.windows(2) {
-            let (a, b) = (root(&mut group, w[0]), root(&mut group, w[1]));
-            group[a.max(b)] = a.min(b);
-        }
-    }
-    let mut members: HashMap<usize, Vec<usize>> = HashMap::new();
     for k in 0..pieces.len() {
-        let r = root(&mut group, k);
-        members.entry(r).or_default().push(k);
+        for e in edges_of(k) {
+            edges.entry(e).or_default().push(k);
+        }
     }
-    let mut groups: Vec<Vec<usize>> = members.into_values().filter(|g| g.len() >= 4).collect();
-    groups.sort_unstable();
+    let all: Vec<DVec3> = pieces.iter().flat_map(|p| p.polygon.iter().copied()).collect();
+    let (lo, hi) = crate::geometry::bounding_box_3d(&all);
+    let tol = 1e-12 * (hi - lo).length();
+    // Whether `points` all lie on one side of the plane through `origin` with normal `n`.
+    let one_side = |n: DVec3, origin: DVec3, points: &[DVec3]| {
+        let heights = || points.iter().map(move |&v| n.dot(v - origin));
+        heights().all(|h| h >= -tol) || heights().all(|h| h <= tol)
+    };
     let mut solids = Vec::new();
     let mut solid_of = vec![None; pieces.len()];
-    for g in groups {
-        let closed = g.iter().all(|&k| {
-            let polygon = &pieces[k].polygon;
-            let m = polygon.len();
-            (0..m).all(|l| edges[&edge_key(polygon[l], polygon[(l + 1) % m])].len() == 2)
-        });
-        if !closed {
+    let mut tried = vec![false; pieces.len()];
+    for seed in 0..pieces.len() {
+        if tried[seed] || pieces[seed].normal() == DVec3::ZERO {
             continue;
         }
+        let mut group = vec![seed];
         let mut vertices: Vec<DVec3> = Vec::new();
-        for &k in &g {
+        let add_vertices = |vertices: &mut Vec<DVec3>, k: usize| {
             for &v in &pieces[k].polygon {
                 if !vertices.iter().any(|&w| key(w) == key(v)) {
                     vertices.push(v);
                 }
             }
+        };
+        add_vertices(&mut vertices, seed);
+        let mut next = 0;
+        while next < group.len() && group.len() <= MAX_SOLID_PIECES {
+            let k = group[next];
+            next += 1;
+            for e in edges_of(k) {
+                for &nb in &edges[&e] {
+                    if group.contains(&nb) || tried[nb] || pieces[nb].normal() == DVec3::ZERO {
+                        continue;
+                    }
+                    let piece = &pieces[nb];
+                    let convex = one_side(piece.normal(), piece.polygon[0], &vertices)
+                        && group.iter().all(|&g| {
+                            one_side(pieces[g].normal(), pieces[g].polygon[0], &piece.polygon)
+                        });
+                    if convex {
+                        group.push(nb);
+                        add_vertices(&mut vertices, nb);
+                    }
+                }
+            }
         }
-        let (lo, hi) = crate::geometry::bounding_box_3d(&vertices);
-        let tol = 1e-12 * (hi - lo).length();
-        let convex = g.iter().all(|&k| {
-            let (n, origin) = (pieces[k].normal(), pieces[k].polygon[0]);
-            let heights = || vertices.iter().map(move |&v| n.dot(v - origin));
-            n != DVec3::ZERO
-                && (heights().all(|h| h >= -tol) || heights().all(|h| h <= tol))
-                && heights().any(|h| h.abs() > tol)
+        for &k in &group {
+            tried[k] = true;
+        }
+        if group.len() < 4 || group.len() > MAX_SOLID_PIECES {
+            continue;
+        }
+        // The edges that bound one piece of the group (each must bound one or two).
+        let mut open: Vec<(DVec3, DVec3)> = Vec::new();
+        let mut closed = true;
+        for &k in &group {
+            let polygon = &pieces[k].polygon;
+            let m = polygon.len();
+            for l in 0..m {
+                let (u, v) = (polygon[l], polygon[(l + 1) % m]);
+                match edges[&edge_key(u, v)].iter().filter(|g| group.contains(g)).count() {
+                    1 => open.push((u, v)),
+                    2 => {}
+                    _ => closed = false,
+                }
+            }
+        }
+        let solid_volume = group.iter().all(|&k| {
+            vertices.iter().any(|&v| pieces[k].normal().dot(v - pieces[k].polygon[0]).abs() > tol)
         });
-        if !convex {
+        if !closed || !solid_volume || !(open.is_empty() || caps(&open, &vertices, &all, tol)) {
             continue;
         }
         let mut faces: Vec<usize> =
-            g.iter().flat_map(|&k| pieces[k].faces.iter().copied()).collect();
+            group.iter().flat_map(|&k| pieces[k].faces.iter().copied()).collect();
         faces.sort_unstable();
         faces.dedup();
-        for &k in &g {
+        for &k in &group {
             solid_of[k] = Some(solids.len());
         }
         solids.push(Solid { faces, vertices });
     }
     (solids, solid_of)
+}
+
+/// Largest group of pieces grown into a solid (a flat floor of many tiles stops there).
+const MAX_SOLID_PIECES: usize = 64;
+
+/// Whether the open edges of a group (with vertices `vertices`) form one loop in a plane that
+/// has the group and every vertex of the scene (`all`) on one side.
+fn caps(open: &[(DVec3, DVec3)], vertices: &[DVec3], all: &[DVec3], tol: f64) -> bool {
+    // One loop: every vertex of the open edges ends exactly two of them (pieces need not agree
+    // on their orientation), and walking from the first edge visits them all.
+    let ends = |p: DVec3| open.iter().filter(|e| e.0 == p || e.1 == p).count();
+    if open.iter().any(|e| ends(e.0) != 2 || ends(e.1) != 2) {
+        return false;
+    }
+    let mut loop_points = vec![open[0].0];
+    let (mut previous, mut at) = (0, open[0].1);
+    while at != open[0].0 {
+        loop_points.push(at);
+        let Some(k) =
+            (0..open.len()).find(|&k| k != previous && (open[k].0 == at || open[k].1 == at))
+        else {
+            return false;
+        };
+        at = if open[k].0 == at { open[k].1 } else { open[k].0 };
+        previous = k;
+        if loop_points.len() > open.len() {
+            return false;
+        }
+    }
+    if loop_points.len() != open.len() {
+        return false;
+    }
+    let normal = (1..loop_points.len() - 1)
+        .map(|k| (loop_points[k] - loop_points[0]).cross(loop_points[k + 1] - loop_points[0]))
+        .sum::<DVec3>();
+    let Some(n) = normal.try_normalize() else { return false };
+    let h = |v: DVec3| n.dot(v - loop_points[0]);
+    let planar = loop_points.iter().all(|&v| h(v).abs() <= tol);
+    let up =
+        vertices.iter().map(|&v| h(v)).fold(0.0, |a: f64, x| if x.abs() > a.abs() { x } else { a });
+    planar && up != 0.0 && all.iter().all(|&v| h(v) * up.signum() >= -tol)
 }

@@ -370,10 +370,12 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
     assert!(checked > 5_000 && fewer > 20, "{checked} points, {fewer} views with fewer shadows");
 }
 
-/// Only closed convex groups of pieces are solids: the occluded box's cube and its walls, not
-/// its plates; a box without its lid, or with one corner pushed in, is none.
+/// Only convex groups of pieces closed, or capped by a plane that the whole scene lies on one
+/// side of, are solids: the occluded box's cube and its walls, not its plates; a city's
+/// buildings (capped by the ground), not its ground; a box without its lid alone, but not with
+/// a plate over it, nor a box with one corner pushed in.
 #[test]
-fn only_closed_convex_groups_of_pieces_are_solids() {
+fn only_closed_or_capped_convex_groups_of_pieces_are_solids() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
     let scene = crate::scene::load(&path).unwrap();
     let solids = &PairPlanner::new(&scene).occluders.solids;
@@ -384,9 +386,20 @@ fn only_closed_convex_groups_of_pieces_are_solids() {
     assert!(names(&solids[0]).iter().all(|n| n.starts_with("box-")), "{:?}", names(&solids[0]));
     assert!(names(&solids[1]).iter().all(|n| n.starts_with("cube-")), "{:?}", names(&solids[1]));
     assert!(solids.iter().all(|s| s.faces.len() == 6 && s.vertices.len() == 8));
+    let city = crate::scene::city(2, 3).unwrap();
+    let solids = &PairPlanner::new(&city).occluders.solids;
+    assert_eq!(solids.len(), 6);
+    assert!(solids.iter().all(|s| s.faces.len() == 5 && s.vertices.len() == 8));
     let axes = [DVec3::X, DVec3::Y, DVec3::Z];
     let mut open = box_faces("open", DVec3::splat(0.5), axes, DVec3::splat(0.2));
     open.remove(1);
+    let alone = Scene::new("open", open.clone()).unwrap();
+    assert_eq!(PairPlanner::new(&alone).occluders.solids.len(), 1);
+    let lid = |z: f64| {
+        let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        Face::new("plate", corners.map(|(x, y)| DVec3::new(x, y, z)).to_vec(), 0.5).unwrap()
+    };
+    open.push(lid(1.0));
     let mut dented = box_faces("dented", DVec3::splat(0.5), axes, DVec3::splat(0.2));
     // Moving the corner (0.7, 0.7, 0.7) inwards along the diagonal breaks the planes of the
     // three faces at it; they are split into triangles so that each piece stays planar.
@@ -408,7 +421,7 @@ fn only_closed_convex_groups_of_pieces_are_solids() {
             }
         })
         .collect();
-    for (name, faces) in [("open", open), ("dented", dented)] {
+    for (name, faces) in [("open under a plate", open), ("dented", dented)] {
         let scene = Scene::new(name, faces).unwrap();
         assert!(PairPlanner::new(&scene).occluders.solids.is_empty(), "{name}");
     }
