@@ -7,7 +7,7 @@
 //! plane. Each element of the face is then classified against the view ([`PairPlanner::visible`]):
 //! no clip and no shadow means every element is fully visible, without per-element work.
 //!
-//! Shadows are convex (occluders are split into convex pieces; a closed convex solid among them casts
+//! Shadows are convex (occluders are split into convex pieces; a convex solid among them casts
 //! one shadow, the hull of its projected vertices), and the visible part of an element
 //! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
 //! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates). A view keeps
@@ -712,7 +712,7 @@ impl Pyramid<'_> {
         }
     }
 
-    /// As [`Pyramid::cast`], for a piece that bounds the closed convex solid `solid` (an index
+    /// As [`Pyramid::cast`], for a piece that bounds the convex solid `solid` (an index
     /// into `solids`), if any: the first of the solid's pieces that may shadow the window casts
     /// the solid's whole shadow ([`Pyramid::cast_solid`]), and its other pieces cast nothing
     /// more; where the solid cannot be projected whole, each piece casts its own.
@@ -745,7 +745,7 @@ impl Pyramid<'_> {
         }
     }
 
-    /// Adds the shadow of a whole closed convex solid to `shadows`, as [`Pyramid::cast`] adds a
+    /// Adds the shadow of a whole convex solid to `shadows`, as [`Pyramid::cast`] adds a
     /// piece's, and returns whether it hides the whole window: the solid's central projection,
     /// the convex hull of its vertices' projections. `None` where a vertex is not between the
     /// face's plane and the apex (as [`Pyramid::projection`] asks), or the hull has no area.
@@ -814,7 +814,7 @@ struct ShadowSet {
     /// Each shadow with an outline that holds it: the whole projection of its occluder when
     /// known (whose part in the window is the shadow), else the shadow itself.
     casts: Vec<(SmallPolygon<DVec2>, Vec<DVec2>)>,
-    /// The closed convex solids met so far, and whether each was cast whole.
+    /// The convex solids met so far, and whether each was cast whole.
     solids: SmallVec<[(usize, bool); 4]>,
 }
 

@@ -1,11 +1,14 @@
-//! Closed convex solids among the occluder pieces: a cube of six faces, a box of furniture.
+//! Convex solids among the occluder pieces: a cube of six faces, a box of furniture, a building
+//! standing open on the ground.
 //!
 //! Seen from a point outside it, a convex solid lying wholly between the point and a plane casts
 //! one convex shadow on that plane, the convex hull of its vertices' central projections. Its
 //! faces cast up to six overlapping shadows, and subtracting those cuts the visible part of an
 //! element into many more pieces than subtracting the one hull (the floating cube of the
 //! occluded box, seen by a wall). The hull is the same set as the union of the faces' shadows,
-//! so the visible parts are the same up to rounding.
+//! so the visible parts are the same up to rounding. A solid may lack one face (its cap) where
+//! no segment between two points of the scene can cross the cap's plane: the whole scene lies
+//! on one side of it.
 
 use std::collections::HashMap;
 
@@ -13,7 +16,8 @@ use glam::DVec3;
 
 use super::Occluder;
 
-/// A closed convex polyhedron whose faces are occluder pieces.
+/// A convex polyhedron whose faces are occluder pieces, but for a cap that no segment of the
+/// scene crosses.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct Solid {
     /// The scene faces of its pieces (a view from or of one of them does not use the solid).
@@ -53,16 +57,12 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
     let all: Vec<DVec3> = pieces.iter().flat_map(|p| p.polygon.iter().copied()).collect();
     let (lo, hi) = crate::geometry::bounding_box_3d(&all);
     let tol = 1e-12 * (hi - lo).length();
-    // Whether `points` all lie on one side of the plane through `origin` with normal `n`.
-    let one_side = |n: DVec3, origin: DVec3, points: &[DVec3]| {
-        let heights = || points.iter().map(move |&v| n.dot(v - origin));
-        heights().all(|h| h >= -tol) || heights().all(|h| h <= tol)
-    };
     let mut solids = Vec::new();
     let mut solid_of = vec![None; pieces.len()];
-    let mut tried = vec![false; pieces.len()];
+    // Pieces already in a solid; a group that is no solid leaves its pieces to others (a wall
+    // that a ground tile's group took in is still its building's).
     for seed in 0..pieces.len() {
-        if tried[seed] || pieces[seed].normal() == DVec3::ZERO {
+        if solid_of[seed].is_some() || pieces[seed].normal() == DVec3::ZERO {
             continue;
         }
         let mut group = vec![seed];
@@ -75,29 +75,43 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
             }
         };
         add_vertices(&mut vertices, seed);
+        // Per piece of the group, the side of its plane that the group's vertices lie on (0
+        // while they all lie in it).
+        let mut sides = vec![0.0];
         let mut next = 0;
         while next < group.len() && group.len() <= MAX_SOLID_PIECES {
             let k = group[next];
             next += 1;
             for e in edges_of(k) {
                 for &nb in &edges[&e] {
-                    if group.contains(&nb) || tried[nb] || pieces[nb].normal() == DVec3::ZERO {
+                    if group.contains(&nb)
+                        || solid_of[nb].is_some()
+                        || pieces[nb].normal() == DVec3::ZERO
+                    {
                         continue;
                     }
-                    let piece = &pieces[nb];
-                    let convex = one_side(piece.normal(), piece.polygon[0], &vertices)
-                        && group.iter().all(|&g| {
-                            one_side(pieces[g].normal(), pieces[g].polygon[0], &piece.polygon)
-                        });
+                    // The group's vertices on one side of the piece's plane, and the piece's
+                    // on the group's side of every plane of the group.
+                    let Some(own_side) = side(&pieces[nb], &vertices, tol) else { continue };
+                    let mut new_sides = sides.clone();
+                    let convex = group.iter().zip(&mut new_sides).all(|(&g, s)| {
+                        match side(&pieces[g], &pieces[nb].polygon, tol) {
+                            Some(0.0) => true,
+                            Some(t) if *s == 0.0 || *s == t => {
+                                *s = t;
+                                true
+                            }
+                            _ => false,
+                        }
+                    });
                     if convex {
                         group.push(nb);
+                        new_sides.push(own_side);
+                        sides = new_sides;
                         add_vertices(&mut vertices, nb);
                     }
                 }
             }
-        }
-        for &k in &group {
-            tried[k] = true;
         }
         if group.len() < 4 || group.len() > MAX_SOLID_PIECES {
             continue;
@@ -135,8 +149,27 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
     (solids, solid_of)
 }
 
-/// Largest group of pieces grown into a solid (a flat floor of many tiles stops there).
-const MAX_SOLID_PIECES: usize = 64;
+/// The side of `piece`'s plane that `points` lie on: 1 or -1, 0 where all lie in it (within
+/// `tol`), `None` where they lie on both sides.
+fn side(piece: &Occluder, points: &[DVec3], tol: f64) -> Option<f64> {
+    let (n, origin) = (piece.normal(), piece.polygon[0]);
+    let (mut above, mut below) = (false, false);
+    for &v in points {
+        let h = n.dot(v - origin);
+        above |= h > tol;
+        below |= h < -tol;
+    }
+    match (above, below) {
+        (true, true) => None,
+        (true, false) => Some(1.0),
+        (false, true) => Some(-1.0),
+        (false, false) => Some(0.0),
+    }
+}
+
+/// Largest group of pieces grown into a solid (a flat floor of many tiles stops there; each
+/// piece seeds a group of its own).
+const MAX_SOLID_PIECES: usize = 16;
 
 /// Whether the open edges of a group (with vertices `vertices`) form one loop in a plane that
 /// has the group and every vertex of the scene (`all`) on one side.

@@ -397,9 +397,9 @@ fn only_closed_or_capped_convex_groups_of_pieces_are_solids() {
     assert!(names(&solids[0]).iter().all(|n| n.starts_with("box-")), "{:?}", names(&solids[0]));
     assert!(names(&solids[1]).iter().all(|n| n.starts_with("cube-")), "{:?}", names(&solids[1]));
     assert!(solids.iter().all(|s| s.faces.len() == 6 && s.vertices.len() == 8));
-    let city = crate::scene::city(2, 3).unwrap();
+    let city = crate::scene::city(5, 6).unwrap();
     let solids = &PairPlanner::new(&city).occluders.solids;
-    assert_eq!(solids.len(), 6);
+    assert_eq!(solids.len(), 30);
     assert!(solids.iter().all(|s| s.faces.len() == 5 && s.vertices.len() == 8));
     let axes = [DVec3::X, DVec3::Y, DVec3::Z];
     let mut open = box_faces("open", DVec3::splat(0.5), axes, DVec3::splat(0.2));
@@ -432,7 +432,22 @@ fn only_closed_or_capped_convex_groups_of_pieces_are_solids() {
             }
         })
         .collect();
-    for (name, faces) in [("open under a plate", open), ("dented", dented)] {
+    // A closed step: an L in the x-z plane drawn out along y (no three of its faces' planes
+    // leave all its vertices on one side).
+    let l = [(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0)];
+    let side = |y: f64| l.iter().map(|&(x, z)| DVec3::new(x, y, z)).collect::<Vec<_>>();
+    let (front, mut back) = (side(0.0), side(1.0));
+    back.reverse();
+    let mut step = vec![
+        Face::new("front", front.clone(), 0.5).unwrap(),
+        Face::new("back", back, 0.5).unwrap(),
+    ];
+    for k in 0..l.len() {
+        let (a, b) = (front[k], front[(k + 1) % l.len()]);
+        let (c, d) = (b + DVec3::Y, a + DVec3::Y);
+        step.push(Face::new(format!("side{k}"), vec![a, d, c, b], 0.5).unwrap());
+    }
+    for (name, faces) in [("open under a plate", open), ("dented", dented), ("step", step)] {
         let scene = Scene::new(name, faces).unwrap();
         assert!(PairPlanner::new(&scene).occluders.solids.is_empty(), "{name}");
     }
