@@ -429,19 +429,22 @@ pub fn convex_partition(poly: &[DVec2]) -> Option<Vec<Vec<usize>>> {
         debug_assert!(union[0] == v && union[m - 1] == u);
         strictly_convex(&union).then_some(union)
     };
-    let mut changed = true;
-    while changed {
-        changed = false;
-        'search: for i in 0..pieces.len() {
-            for j in i + 1..pieces.len() {
-                if let Some(union) = merged(&pieces[i], &pieces[j]) {
+    // Each piece takes in the later ones it can, looking again at all of them after each
+    // merge (quadratic in the number of triangles).
+    let mut i = 0;
+    while i < pieces.len() {
+        let mut j = i + 1;
+        while j < pieces.len() {
+            match merged(&pieces[i], &pieces[j]) {
+                Some(union) => {
                     pieces[i] = union;
                     pieces.swap_remove(j);
-                    changed = true;
-                    break 'search;
+                    j = i + 1;
                 }
+                None => j += 1,
             }
         }
+        i += 1;
     }
     Some(pieces)
 }

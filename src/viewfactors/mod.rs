@@ -236,7 +236,7 @@ struct OuterRules {
     gauss: GaussRules,
 }
 
-/// Highest order of the collapsed Gauss rule (GAUSS_MAX² points).
+/// Highest order of the Gauss rules on a patch (GAUSS_MAX² points).
 const GAUSS_MAX: usize = 16;
 
 /// The outer rule's target error, relative to the integrand's size near the element: the Gauss
@@ -417,7 +417,7 @@ impl Context<'_> {
                 let (mut added, mut taken) = (vec![window], Vec::new());
                 for subset in 1usize..1 << shadows.len() {
                     let mut members = (0..shadows.len()).filter(|&k| subset & 1 << k != 0);
-                    let first = shadows[members.next().unwrap_or(0)].clone();
+                    let first = shadows[members.next().expect("a subset has a member")].clone();
                     let common = members.try_fold(first, |a, k| intersect_convex(&a, &shadows[k]));
                     if let Some(common) = common {
                         let odd = subset.count_ones() % 2 == 1;

@@ -428,7 +428,7 @@ impl PairPlanner {
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         for o in found {
-            let solid = self.occluders.solid_of(o, own_face, face);
+            let solid = self.occluders.solid_for_view(o, own_face, face);
             let solids = &self.occluders.solids;
             if pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows) {
                 hiders.remember(o, &pieces[o]);
@@ -528,7 +528,7 @@ impl PairPlanner {
         for &o in candidates {
             let piece = &self.occluders.pieces[o];
             let crosses_all = || piece.crosses_every_segment(&[p], &corners, tol, -tol);
-            let solid = self.occluders.solid_of(o, own_face, face);
+            let solid = self.occluders.solid_for_view(o, own_face, face);
             if pyramid.cast_part(piece, solid, &self.occluders.solids, crosses_all, &mut shadows) {
                 return FaceView::Skip(SkipReason::Hidden);
             }
@@ -655,7 +655,8 @@ struct Window<'a> {
     z: f64,
     /// The half-plane in front of the point's tangent plane, when the face straddles it.
     clip: Option<HalfPlane>,
-    /// The face's hull, clipped (face coordinates; the hull itself where nothing is clipped).
+    /// The outline (the face's hull, or an element of it), clipped (face coordinates; the outline
+    /// itself where nothing is clipped).
     polygon: Cow<'a, [DVec2]>,
     /// The same in space.
     corners: SmallVec<[DVec3; 8]>,

@@ -28,7 +28,8 @@ pub struct Occluder {
     edge_normals: Vec<DVec3>,
 }
 
-/// How candidate occluders of a view are found. All three give the same views.
+/// How candidate occluders of a view are found. All three leave the same visible parts, to
+/// rounding (the core plan's shadows are piece by piece, the others' one per convex solid).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Acceleration {
@@ -49,7 +50,7 @@ type Boxed = GeomWithData<Rectangle<[f64; 3]>, usize>;
 #[derive(Clone, Debug)]
 pub(super) struct OccluderIndex {
     pub(super) pieces: Vec<Occluder>,
-    /// The closed convex solids that pieces bound, and per piece its solid (none for
+    /// The convex solids that pieces bound, and per piece its solid (none for
     /// [`Acceleration::BoxScan`], the core plan, which shadows piece by piece).
     pub(super) solids: Vec<Solid>,
     solid_of: Vec<Option<usize>>,
@@ -81,7 +82,7 @@ impl OccluderIndex {
 
     /// The solid that piece `o` bounds, unless it has a face of `a` or `b` (seen from or seen on
     /// one of its own faces, a solid is no occluder of its own).
-    pub(super) fn solid_of(&self, o: usize, a: usize, b: usize) -> Option<usize> {
+    pub(super) fn solid_for_view(&self, o: usize, a: usize, b: usize) -> Option<usize> {
         self.solid_of[o].filter(|&s| {
             let faces = &self.solids[s].faces;
             faces.binary_search(&a).is_err() && faces.binary_search(&b).is_err()

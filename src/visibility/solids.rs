@@ -134,7 +134,8 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
         let solid_volume = group.iter().all(|&k| {
             vertices.iter().any(|&v| pieces[k].normal().dot(v - pieces[k].polygon[0]).abs() > tol)
         });
-        if !closed || !solid_volume || !(open.is_empty() || caps(&open, &vertices, &all, tol)) {
+        if !closed || !solid_volume || !(open.is_empty() || is_capped(&open, &vertices, &all, tol))
+        {
             continue;
         }
         let mut faces: Vec<usize> =
@@ -173,7 +174,7 @@ const MAX_SOLID_PIECES: usize = 16;
 
 /// Whether the open edges of a group (with vertices `vertices`) form one loop in a plane that
 /// has the group and every vertex of the scene (`all`) on one side.
-fn caps(open: &[(DVec3, DVec3)], vertices: &[DVec3], all: &[DVec3], tol: f64) -> bool {
+fn is_capped(open: &[(DVec3, DVec3)], vertices: &[DVec3], all: &[DVec3], tol: f64) -> bool {
     // One loop: every vertex of the open edges ends exactly two of them (pieces need not agree
     // on their orientation), and walking from the first edge visits them all.
     let ends = |p: DVec3| open.iter().filter(|e| e.0 == p || e.1 == p).count();

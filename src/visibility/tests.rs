@@ -432,8 +432,8 @@ fn only_closed_or_capped_convex_groups_of_pieces_are_solids() {
             }
         })
         .collect();
-    // A closed step: an L in the x-z plane drawn out along y (no three of its faces' planes
-    // leave all its vertices on one side).
+    // A closed step: an L in the x-z plane drawn out along y (the planes of its inner corner's
+    // two faces have vertices on both sides).
     let l = [(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0)];
     let side = |y: f64| l.iter().map(|&(x, z)| DVec3::new(x, y, z)).collect::<Vec<_>>();
     let (front, mut back) = (side(0.0), side(1.0));
