@@ -108,6 +108,25 @@ pub fn clip_convex_into(poly: &[DVec2], hp: &HalfPlane, out: &mut SmallPolygon<D
     keep_side(poly, &d, scale, out)
 }
 
+/// The part of the convex polygon `poly` inside the convex counter-clockwise `window`: clipped
+/// ([`clip_convex_into`]) by each edge of the window that leaves a vertex outside; `None` when
+/// nothing with area is left.
+pub fn clip_to_convex(poly: &[DVec2], window: &[DVec2]) -> Option<SmallPolygon<DVec2>> {
+    let m = window.len();
+    let (mut part, mut next): (SmallPolygon<DVec2>, SmallPolygon<DVec2>) =
+        (SmallVec::from_slice(poly), SmallVec::new());
+    for k in 0..m {
+        let edge = HalfPlane::left_of(window[k], window[(k + 1) % m]);
+        if part.iter().any(|&x| edge.eval(x) < 0.0) {
+            if !clip_convex_into(&part, &edge, &mut next) {
+                return None;
+            }
+            std::mem::swap(&mut part, &mut next);
+        }
+    }
+    Some(part)
+}
+
 /// The half-plane's values at the vertices of a polygon of size `scale`, those within the
 /// tolerance of the line snapped to 0.
 fn line_values(poly: &[DVec2], hp: &HalfPlane, scale: f64) -> SmallVec<[f64; INLINE_VERTICES]> {

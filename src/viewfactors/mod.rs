@@ -418,7 +418,9 @@ impl Context<'_> {
                 for subset in 1usize..1 << shadows.len() {
                     let mut members = (0..shadows.len()).filter(|&k| subset & 1 << k != 0);
                     let first = shadows[members.next().expect("a subset has a member")].clone();
-                    let common = members.try_fold(first, |a, k| intersect_convex(&a, &shadows[k]));
+                    let common = members.try_fold(first, |a, k| {
+                        geometry::clip_to_convex(&a, &shadows[k]).map(SmallVec::into_vec)
+                    });
                     if let Some(common) = common {
                         let odd = subset.count_ones() % 2 == 1;
                         if odd { &mut taken } else { &mut added }.push(common);
@@ -782,14 +784,6 @@ impl Part<'_> {
 /// shadows' intersections (2^k - 1 convex polygons) instead of over the pieces left by
 /// subtracting them.
 const INCLUSION_EXCLUSION: usize = 3;
-
-/// The intersection of two convex counter-clockwise polygons, if it has area.
-fn intersect_convex(a: &[DVec2], b: &[DVec2]) -> Option<Vec<DVec2>> {
-    let m = b.len();
-    (0..m).try_fold(a.to_vec(), |part, k| {
-        geometry::clip_convex(&part, &geometry::HalfPlane::left_of(b[k], b[(k + 1) % m]))
-    })
-}
 
 /// Distance, relative to an outer patch's size, under which it touches what makes the
 /// integrand non-analytic (tanh-sinh then takes it whole).

@@ -38,8 +38,8 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use crate::geometry::{
-    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_convex_into,
-    clip_polygon_3d, convex_contains, signed_area, subtract_convex, wholly_inside_3d,
+    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
+    clip_to_convex, convex_contains, signed_area, subtract_convex, wholly_inside_3d,
 };
 use crate::scene::{COPLANAR_DISTANCE, Scene};
 
@@ -427,9 +427,9 @@ impl PairPlanner {
         };
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
+        let solids = &self.occluders.solids;
         for o in found {
             let solid = self.occluders.solid_for_view(o, own_face, face);
-            let solids = &self.occluders.solids;
             if pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows) {
                 hiders.remember(o, &pieces[o]);
                 return FaceView::Skip(SkipReason::Hidden);
@@ -954,18 +954,7 @@ fn shadow(
 /// The part of the convex counter-clockwise `polygon` in the convex `window` (face
 /// coordinates), if it has area as [`shadow`] decides it.
 fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
-    let m = window.len();
-    let (mut part, mut next): (SmallPolygon<DVec2>, SmallPolygon<DVec2>) =
-        (SmallVec::from_slice(polygon), SmallVec::new());
-    for k in 0..m {
-        let edge = HalfPlane::left_of(window[k], window[(k + 1) % m]);
-        if part.iter().any(|&x| edge.eval(x) < 0.0) {
-            if !clip_convex_into(&part, &edge, &mut next) {
-                return None;
-            }
-            std::mem::swap(&mut part, &mut next);
-        }
-    }
+    let part = clip_to_convex(polygon, window)?;
     let area = signed_area(&part);
     let scale = polygon_scale(window);
     (area > 0.0 && !is_sliver(area, scale)).then(|| part.into_vec())

@@ -59,8 +59,9 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
     let tol = 1e-12 * (hi - lo).length();
     let mut solids = Vec::new();
     let mut solid_of = vec![None; pieces.len()];
-    // Pieces already in a solid; a group that is no solid leaves its pieces to others (a wall
-    // that a ground tile's group took in is still its building's).
+    // Pieces already in a solid are no seeds and join no group; a group that is no solid
+    // leaves its pieces to others (a wall that a ground tile's group took in is still its
+    // building's).
     for seed in 0..pieces.len() {
         if solid_of[seed].is_some() || pieces[seed].normal() == DVec3::ZERO {
             continue;
@@ -131,9 +132,8 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
                 }
             }
         }
-        let solid_volume = group.iter().all(|&k| {
-            vertices.iter().any(|&v| pieces[k].normal().dot(v - pieces[k].polygon[0]).abs() > tol)
-        });
+        // Vertices off every plane of the group (not all in one plane).
+        let solid_volume = sides.iter().all(|&s| s != 0.0);
         if !closed || !solid_volume || !(open.is_empty() || is_capped(&open, &vertices, &all, tol))
         {
             continue;
