@@ -212,8 +212,8 @@ pub fn assemble(
     let stats = matrix
         .rows_mut()
         .enumerate()
-        .map(|(i, row)| {
-            let s = assemble_row(&disc.nodes[i], row, mesh, disc, planner, &integrator);
+        .map_init(RecentHiders::default, |hiders, (i, row)| {
+            let s = assemble_row(&disc.nodes[i], row, mesh, disc, planner, &integrator, hiders);
             progress(1);
             s
         })
@@ -276,10 +276,10 @@ pub fn apply_at(
     Ok(points
         .par_iter()
         .map_init(
-            || vec![0.0; disc.dof()],
-            |row, point| {
+            || (vec![0.0; disc.dof()], RecentHiders::default()),
+            |(row, hiders), point| {
                 row.fill(0.0);
-                assemble_row(point, row, mesh, disc, planner, &integrator);
+                assemble_row(point, row, mesh, disc, planner, &integrator, hiders);
                 row.iter().zip(u).map(|(k, v)| k * v).sum()
             },
         )
@@ -295,6 +295,7 @@ pub(crate) fn assemble_row(
     disc: &Discretization,
     planner: &PairPlanner,
     integrator: &PairIntegrator,
+    hiders: &mut RecentHiders,
 ) -> PairStats {
     let per = disc.method.nodes_per_element() as u64;
     if node.rho == 0.0 {
@@ -302,11 +303,10 @@ pub(crate) fn assemble_row(
     }
     let scale = node.rho / PI;
     let mut stats = PairStats::default();
-    let mut hiders = RecentHiders::default();
     let mut batch = lanes::Batch::<usize>::default();
     for face in 0..mesh.face_count() {
         let range = mesh.face_range(face);
-        let view = planner.face_view_with(node.position, node.normal, node.face, face, &mut hiders);
+        let view = planner.face_view_with(node.position, node.normal, node.face, face, hiders);
         if let FaceView::Skip(reason) = view {
             stats.record(&Visibility::Skip(reason), range.len() as u64);
             continue;

@@ -100,6 +100,7 @@ fn plan_row(
     mesh: &Mesh,
     disc: &Discretization,
     planner: &PairPlanner,
+    hiders: &mut RecentHiders,
 ) -> RowPlan {
     let node = &disc.nodes[i];
     let faces = mesh.face_count();
@@ -113,10 +114,9 @@ fn plan_row(
         plan.stats = PairStats::not_reflecting_row(disc.elements.len());
         return plan;
     }
-    let mut hiders = RecentHiders::default();
     for face in 0..faces {
         let range = mesh.face_range(face);
-        let view = planner.face_view_with(node.position, node.normal, node.face, face, &mut hiders);
+        let view = planner.face_view_with(node.position, node.normal, node.face, face, hiders);
         if let FaceView::Skip(reason) = view {
             plan.stats.record(&Visibility::Skip(reason), range.len() as u64);
             continue;
@@ -161,7 +161,9 @@ fn plan_tile(
     let row_plans: Vec<RowPlan> = rows
         .clone()
         .into_par_iter()
-        .map(|i| plan_row(unit, i, scene, mesh, disc, planner))
+        .map_init(RecentHiders::default, |hiders, i| {
+            plan_row(unit, i, scene, mesh, disc, planner, hiders)
+        })
         .collect();
     let mut views = Vec::with_capacity(rows.len() * mesh.face_count() * VIEW_STRIDE);
     let mut records = Vec::new();

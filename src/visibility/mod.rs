@@ -612,9 +612,10 @@ impl PairPlanner {
     }
 }
 
-/// The occluders that last hid a whole face from one point, most recent first: a building that
-/// hides one face of another from a node usually hides its neighbours too, so they are tried
-/// before any search ([`PairPlanner::face_view_with`]). One per point and thread.
+/// The occluders that last hid a whole face from a point, most recent first: a building that
+/// hides one face of another from a node usually hides its neighbours too, and hides them from
+/// the next node of the same face as well, so they are tried before any search
+/// ([`PairPlanner::face_view_with`]). One per thread, kept across the points it treats in turn.
 #[derive(Clone, Debug, Default)]
 pub struct RecentHiders {
     list: Vec<Hider>,
