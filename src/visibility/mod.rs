@@ -397,8 +397,17 @@ impl PairPlanner {
         }
         volume.push_front_of(&own.face.frame, tol);
         volume.push_front_of(&f.face.frame, tol);
-        for &c in &corners {
+        let m = corners.len();
+        for (k, &c) in corners.iter().enumerate() {
+            let edges = [corners[(k + 1) % m] - c, c - corners[(k + m - 1) % m]];
             for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+                // Along an edge of the window, the plane is that edge's side, already pushed.
+                if edges
+                    .iter()
+                    .any(|e| e.cross(axis).length_squared() <= 1e-24 * e.length_squared())
+                {
+                    continue;
+                }
                 // Not normalised: the margin is the tolerance times the normal's 1-norm, no
                 // less than its length, so the plane admits no fewer pieces than the unit one.
                 let n = axis.cross(c - p);
