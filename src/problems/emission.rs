@@ -56,12 +56,10 @@ pub fn emission_at(
     let imt = ImtRule::new(options.imt_nodes.max(2));
     let per_point: Vec<(f64, f64)> = points
         .par_iter()
-        .map(|node| {
+        .map_init(RecentHiders::default, |hiders, node| {
             let (mut integral, mut error) = (0.0, 0.0);
-            let mut hiders = RecentHiders::default();
             for (k, face) in scene.faces.iter().enumerate() {
-                let view =
-                    planner.face_view_with(node.position, node.normal, node.face, k, &mut hiders);
+                let view = planner.face_view_with(node.position, node.normal, node.face, k, hiders);
                 if matches!(view, FaceView::Skip(_)) {
                     continue;
                 }
