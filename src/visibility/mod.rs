@@ -401,7 +401,8 @@ impl PairPlanner {
         for (k, &c) in corners.iter().enumerate() {
             let edges = [corners[(k + 1) % m] - c, c - corners[(k + m - 1) % m]];
             for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
-                // Along an edge of the window, the plane is that edge's side, already pushed.
+                // Along an edge of the window, the plane is that edge's side (a plane of the
+                // volume unless degenerate): leaving it out only widens the volume.
                 if edges
                     .iter()
                     .any(|e| e.cross(axis).length_squared() <= 1e-24 * e.length_squared())
