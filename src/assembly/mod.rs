@@ -37,6 +37,16 @@ pub struct PairIntegrator {
     lanes: bool,
 }
 
+/// How a node's integrals over an element are evaluated ([`PairIntegrator::lane_observer`]).
+pub(crate) enum LaneObserver {
+    /// Not at all: the node is not above the element's plane, and they vanish.
+    Unseen,
+    /// By [`PairIntegrator::integrate`] (another rule than the closed form).
+    Scalar,
+    /// The centroid method's closed form in lanes, for this observer.
+    Lane(Observer),
+}
+
 /// A fully visible element's integrals, or what to evaluate with others in lanes.
 pub(crate) enum FullPair {
     /// Already evaluated (another rule than the closed form, or nothing to see).
@@ -79,17 +89,35 @@ impl PairIntegrator {
         p: glam::DVec3,
         normal: glam::DVec3,
     ) -> FullPair {
-        let full = || FullPair::Values(self.integrate(el, basis, p, normal, &Visibility::Full));
+        match self.lane_observer(el, p, normal) {
+            LaneObserver::Unseen => FullPair::Values([0.0; 3]),
+            LaneObserver::Scalar => {
+                FullPair::Values(self.integrate(el, basis, p, normal, &Visibility::Full))
+            }
+            LaneObserver::Lane(obs) => FullPair::Lane(obs, el.scaled),
+        }
+    }
+
+    /// Whether the centroid method's closed form over (any part of) element `el`, seen from a
+    /// node at `p` with unit normal `normal`, may be evaluated in lanes, and the observer to
+    /// give them with triangles in the element's units ([`ElementFrame::to_scaled`]).
+    #[inline(always)]
+    pub(crate) fn lane_observer(
+        &self,
+        el: &ElementFrame,
+        p: glam::DVec3,
+        normal: glam::DVec3,
+    ) -> LaneObserver {
         if !self.lanes {
-            return full();
+            return LaneObserver::Scalar;
         }
         let Some(obs) = self.observer(el, p, normal) else {
-            return FullPair::Values([0.0; 3]);
+            return LaneObserver::Unseen;
         };
         let thin = self.subdivision.is_some() && el.thin;
         let banded =
             self.far_field.as_ref().is_some_and(|rule| rule.band(&obs, el.scaled_radius).is_some());
-        if thin || banded { full() } else { FullPair::Lane(obs, el.scaled) }
+        if thin || banded { LaneObserver::Scalar } else { LaneObserver::Lane(obs) }
     }
 
     /// The node seen from the element's frame in the element's units ([`ElementFrame::unit`]),
@@ -132,7 +160,7 @@ impl PairIntegrator {
             Visibility::Partial(pieces) => {
                 let shifted: Vec<Vec<DVec2>> = pieces
                     .iter()
-                    .map(|piece| piece.iter().map(|&q| (q - el.centroid_in_face) * unit).collect())
+                    .map(|piece| piece.iter().map(|&q| el.to_scaled(q)).collect())
                     .collect();
                 let loops: Vec<&[DVec2]> = shifted.iter().map(Vec::as_slice).collect();
                 self.integrate_loops(&obs, el, &loops, &basis)

@@ -117,6 +117,12 @@ impl ElementFrame {
     pub fn in_face(&self) -> [DVec2; 3] {
         self.local.map(|v| v + self.centroid_in_face)
     }
+
+    /// A point of the face frame's 2-D coordinates in the element's local coordinates and units
+    /// (those of `scaled`, where the kernels integrate).
+    pub fn to_scaled(&self, q: DVec2) -> DVec2 {
+        (q - self.centroid_in_face) * self.unit
+    }
 }
 
 /// Nodes and basis functions of a mesh under a collocation method.
