@@ -113,18 +113,30 @@ pub fn clip_convex_into(poly: &[DVec2], hp: &HalfPlane, out: &mut SmallPolygon<D
 /// nothing with area is left.
 pub fn clip_to_convex(poly: &[DVec2], window: &[DVec2]) -> Option<SmallPolygon<DVec2>> {
     let m = window.len();
-    let (mut part, mut next): (SmallPolygon<DVec2>, SmallPolygon<DVec2>) =
-        (SmallVec::from_slice(poly), SmallVec::new());
+    // Two buffers in turn, the last clip's result in `current` (none yet: `poly` itself);
+    // swapping them would copy both inline buffers at every clip.
+    let mut buffers: [SmallPolygon<DVec2>; 2] = [SmallVec::new(), SmallVec::new()];
+    let mut current: Option<usize> = None;
     for k in 0..m {
         let edge = HalfPlane::left_of(window[k], window[(k + 1) % m]);
+        let next = current.map_or(0, |c| 1 - c);
+        let [first, second] = &mut buffers;
+        let (part, out) = match current {
+            None => (poly, first),
+            Some(0) => (&first[..], second),
+            Some(_) => (&second[..], first),
+        };
         if part.iter().any(|&x| edge.eval(x) < 0.0) {
-            if !clip_convex_into(&part, &edge, &mut next) {
+            if !clip_convex_into(part, &edge, out) {
                 return None;
             }
-            std::mem::swap(&mut part, &mut next);
+            current = Some(next);
         }
     }
-    Some(part)
+    match current {
+        None => Some(SmallVec::from_slice(poly)),
+        Some(c) => Some(std::mem::take(&mut buffers[c])),
+    }
 }
 
 /// The half-plane's values at the vertices of a polygon of size `scale`, those within the

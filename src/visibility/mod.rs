@@ -925,24 +925,33 @@ fn shadow(
     occluder: &Occluder,
 ) -> Option<Vec<DVec2>> {
     let normal = f.face.frame.normal;
-    let (mut poly, mut next) = (SmallPolygon::new(), SmallPolygon::new());
-    let mut cut = false;
+    // Two buffers in turn, the last clip's result in `current` (none yet: the piece itself);
+    // swapping them would copy both inline buffers at every clip.
+    let mut buffers: [SmallPolygon<DVec3>; 2] = [SmallPolygon::new(), SmallPolygon::new()];
+    let mut current: Option<usize> = None;
     // In front of the face's plane, inside the pyramid. Most planes leave the piece whole, and
     // the piece's own size bounds every tolerance of the clips: those are passed over.
     let planes = std::iter::once((normal, -normal.dot(f.face.frame.origin)))
         .chain(sides.iter().map(|&s| (s, -s.dot(p))));
     for (n, offset) in planes {
-        let current: &[DVec3] = if cut { &poly } else { &occluder.polygon };
-        if wholly_inside_3d(current, n, offset, occluder.diameter) {
+        let [first, second] = &mut buffers;
+        let (poly, out): (&[DVec3], _) = match current {
+            None => (&occluder.polygon, first),
+            Some(0) => (first, second),
+            Some(_) => (second, first),
+        };
+        if wholly_inside_3d(poly, n, offset, occluder.diameter) {
             continue;
         }
-        if !clip_polygon_3d(current, n, offset, &mut next) {
+        if !clip_polygon_3d(poly, n, offset, out) {
             return None;
         }
-        std::mem::swap(&mut poly, &mut next);
-        cut = true;
+        current = Some(current.map_or(0, |c| 1 - c));
     }
-    let poly: &[DVec3] = if cut { &poly } else { &occluder.polygon };
+    let poly: &[DVec3] = match current {
+        None => &occluder.polygon,
+        Some(c) => &buffers[c],
+    };
     // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
     let mut projected: Vec<DVec2> = poly
         .iter()
