@@ -9,8 +9,11 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 /// Vertices a clipped polygon holds without a heap allocation (clipping runs for every candidate
-/// occluder of every view).
-const INLINE_VERTICES: usize = 12;
+/// occluder of every view). Fewer make the polygons cheaper to move, which they are more often
+/// than they grow past it: on a 2-core EPYC (2026-11-25) the occluded box's view factors took
+/// 4.78 s with 12, 4.62 s with 8, 4.36 s with 6 and 4.48 s with 4; the city:20x20 plan 2.64,
+/// 2.53, 2.52 and 2.62 s.
+const INLINE_VERTICES: usize = 6;
 
 /// A polygon as clipping returns it.
 pub type SmallPolygon<P> = SmallVec<[P; INLINE_VERTICES]>;
