@@ -1458,27 +1458,49 @@ mod tests {
         crate::scene::parse_toml(&text[..end], &path).unwrap()
     }
 
+    /// The occluded box at refine 0 and what a [`Context`] of its view factors borrows.
+    struct OccludedBox {
+        scene: Scene,
+        mesh: Mesh,
+        planner: PairPlanner,
+        disc: Discretization,
+        integrator: PairIntegrator,
+        options: ViewFactorOptions,
+    }
+
+    impl OccludedBox {
+        fn new() -> Self {
+            let path =
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
+            let scene = crate::scene::load(&path).unwrap();
+            let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
+            let planner = PairPlanner::new(&scene);
+            let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
+            let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
+            let options = ViewFactorOptions::default();
+            Self { scene, mesh, planner, disc, integrator, options }
+        }
+
+        fn context(&self) -> Context<'_> {
+            Context {
+                scene: &self.scene,
+                mesh: &self.mesh,
+                disc: &self.disc,
+                planner: &self.planner,
+                integrator: &self.integrator,
+                options: &self.options,
+            }
+        }
+    }
+
     /// A point's view of T_j integrated by inclusion and exclusion of up to four shadows equals
     /// the integral over the pieces that subtracting them leaves, on the occluded box (a cube,
     /// a tilted plate and an L plate between the walls), to rounding.
     #[test]
     fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
-        let scene = crate::scene::load(&path).unwrap();
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
-        let options = ViewFactorOptions::default();
-        let context = Context {
-            scene: &scene,
-            mesh: &mesh,
-            disc: &disc,
-            planner: &planner,
-            integrator: &integrator,
-            options: &options,
-        };
+        let fixture = OccludedBox::new();
+        let context = fixture.context();
+        let OccludedBox { scene, mesh, planner, disc, integrator, .. } = &fixture;
         let mut shadows_seen = [0usize; INCLUSION_EXCLUSION + 1];
         for (i, ei) in mesh.elements().iter().enumerate() {
             for (j, ej) in mesh.elements().iter().enumerate() {
@@ -1516,22 +1538,9 @@ mod tests {
     /// box's shadowed pairs.
     #[test]
     fn shadowed_points_in_lanes_equal_the_scalar_closed_forms() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
-        let scene = crate::scene::load(&path).unwrap();
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
-        let options = ViewFactorOptions::default();
-        let context = Context {
-            scene: &scene,
-            mesh: &mesh,
-            disc: &disc,
-            planner: &planner,
-            integrator: &integrator,
-            options: &options,
-        };
+        let fixture = OccludedBox::new();
+        let context = fixture.context();
+        let OccludedBox { mesh, planner, .. } = &fixture;
         let rules = GaussRules::new(6);
         let (mut pairs, mut partial) = (0, 0);
         for (i, ei) in mesh.elements().iter().enumerate() {
