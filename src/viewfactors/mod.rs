@@ -383,9 +383,8 @@ impl Context<'_> {
     /// `Σ w (1/π) ∫ G V` over element `j` from the weighted points `(p, w)` of a piece of
     /// element `i`.
     fn weighted_sum(&self, i: usize, j: usize, sight: Sight<'_>, points: &[(DVec3, f64)]) -> f64 {
-        let Sight::PerPoint(among) = sight else { return self.whole_sum(i, j, points) };
         let mut sum = 0.0;
-        self.shadowed_values(i, j, among, points, |_, v| sum += v);
+        self.point_values(i, j, sight, points, |_, v| sum += v);
         sum / PI
     }
 
@@ -394,24 +393,18 @@ impl Context<'_> {
     fn values(&self, i: usize, j: usize, sight: Sight<'_>, points: &[DVec3], values: &mut [f64]) {
         let weighted: Vec<(DVec3, f64)> = points.iter().map(|&p| (p, 1.0)).collect();
         values.fill(0.0);
-        match sight {
-            Sight::Whole => self.whole_values(i, j, &weighted, |k, v| values[k] += v),
-            Sight::PerPoint(among) => {
-                self.shadowed_values(i, j, among, &weighted, |k, v| values[k] += v)
-            }
-        }
+        self.point_values(i, j, sight, &weighted, |k, v| values[k] += v);
         values.iter_mut().for_each(|v| *v /= PI);
     }
 
-    /// `w ∫ G V` over element `j`, shadowed by the occluder pieces `among`, from each weighted
-    /// point `(p, w)` of element `i`, given to `sink` with the point's index in parts: the
-    /// closed forms of the whole element, or of the pieces of its visible part, eight at a time
-    /// in vector lanes.
-    fn shadowed_values(
+    /// `w ∫ G V` over element `j` from each weighted point `(p, w)` of element `i`, seen as
+    /// `sight` says, given to `sink` with the point's index (in parts): the closed forms of the
+    /// whole element, or of the pieces of its visible part, eight at a time in vector lanes.
+    fn point_values(
         &self,
         i: usize,
         j: usize,
-        among: &[usize],
+        sight: Sight<'_>,
         points: &[(DVec3, f64)],
         mut sink: impl FnMut(usize, f64),
     ) {
@@ -420,7 +413,11 @@ impl Context<'_> {
         let mut batch = lanes::Batch::<(usize, f64)>::default();
         let mut lane_sink = |(k, w): (usize, f64), v: f64| sink(k, w * v);
         for (k, &(p, w)) in points.iter().enumerate() {
-            let (added, taken) = match self.point_view(i, j, p, among) {
+            let view = match sight {
+                Sight::Whole => PointView::Whole,
+                Sight::PerPoint(among) => self.point_view(i, j, p, among),
+            };
+            let (added, taken) = match view {
                 PointView::Nothing => continue,
                 PointView::Whole => {
                     match self.integrator.full_pair(el, basis, p, normal) {
@@ -518,36 +515,6 @@ impl Context<'_> {
                 }
             },
         }
-    }
-
-    /// `Σ w (1/π) ∫ G` over element `j`, seen whole from each point `p` of element `i` (with its
-    /// weight `w`).
-    fn whole_sum(&self, i: usize, j: usize, points: &[(DVec3, f64)]) -> f64 {
-        let mut sum = 0.0;
-        self.whole_values(i, j, points, |_, v| sum += v);
-        sum / PI
-    }
-
-    /// `w ∫ G` over element `j`, seen whole from each weighted point `(p, w)` of element `i`,
-    /// given to `sink` with the point's index: the closed forms eight at a time in vector lanes.
-    fn whole_values(
-        &self,
-        i: usize,
-        j: usize,
-        points: &[(DVec3, f64)],
-        mut sink: impl FnMut(usize, f64),
-    ) {
-        let (el, basis) = (&self.disc.elements[j], &self.disc.bases[j]);
-        let normal = self.scene.faces[self.mesh.elements()[i].face].frame.normal;
-        let mut batch = lanes::Batch::<(usize, f64)>::default();
-        let mut lane_sink = |(k, w): (usize, f64), v: f64| sink(k, w * v);
-        for (k, &(p, w)) in points.iter().enumerate() {
-            match self.integrator.full_pair(el, basis, p, normal) {
-                FullPair::Values(values) => lane_sink((k, w), values[0]),
-                FullPair::Lane(obs, tri) => batch.push((k, w), obs, tri, &mut lane_sink),
-            }
-        }
-        batch.flush(&mut lane_sink);
     }
 
     /// `∫ g dA` over the patch `patch` of the piece with `part`, and its estimated error:
@@ -906,17 +873,16 @@ fn inclusion_exclusion(
     let mut signed = [vec![window], Vec::new()];
     // (last shadow, number of shadows, their intersection) still to extend.
     let mut sets: SmallVec<[(usize, usize, SmallPolygon<DVec2>); 4]> = SmallVec::new();
-    for a in 0..shadows.len() {
-        let extend =
-            |last: usize, members: usize, common: &[DVec2], own, sets: &mut SmallVec<_>| {
-                for b in last + 1..shadows.len() {
-                    if !apart(own, boxes[b]) {
-                        if let Some(next) = geometry::clip_to_convex(common, &shadows[b]) {
-                            sets.push((b, members + 1, next));
-                        }
-                    }
+    let extend = |last: usize, members: usize, common: &[DVec2], own, sets: &mut SmallVec<_>| {
+        for b in last + 1..shadows.len() {
+            if !apart(own, boxes[b]) {
+                if let Some(next) = geometry::clip_to_convex(common, &shadows[b]) {
+                    sets.push((b, members + 1, next));
                 }
-            };
+            }
+        }
+    };
+    for a in 0..shadows.len() {
         extend(a, 1, &shadows[a], boxes[a], &mut sets);
         while let Some((last, members, common)) = sets.pop() {
             extend(last, members, &common, geometry::bounding_box(&common), &mut sets);
