@@ -656,7 +656,7 @@ pub fn build_compressed(
         planner,
         &config.assembly,
         &config.compression,
-        device.as_ref(),
+        device.as_ref().map(|d| d as &dyn crate::assembly::PairEvaluation),
         &*config.progress,
     )?;
     op.device = assembler.device();

@@ -6,9 +6,11 @@
 
 mod matrix;
 mod options;
+mod pairs;
 
 pub use matrix::{CollocationMatrix, available_memory, check_fits, memory_allowance};
 pub use options::{AssemblyOptions, Quadrature};
+pub use pairs::{CpuPairs, PairEvaluation, PairTask};
 
 use std::f64::consts::PI;
 
@@ -22,7 +24,7 @@ use crate::kernels::graded::GradedRule;
 use crate::kernels::{Affine2, Observer, exact, lanes};
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
-use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
+use crate::visibility::{FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility};
 
 /// Evaluates the collocation integrals of one (node, element) pair.
 pub struct PairIntegrator {
@@ -268,25 +270,40 @@ pub fn recompute_thin_columns(
     }
     let integrator = PairIntegrator::new(disc.method, options);
     let per = disc.method.nodes_per_element();
-    assembly.matrix.rows_mut().enumerate().for_each(|(i, row)| {
-        let node = &disc.nodes[i];
-        if node.rho == 0.0 {
-            return;
+    let mut by_face: Vec<(usize, Vec<usize>)> = Vec::new();
+    for &j in &thin {
+        match by_face.last_mut() {
+            Some((face, list)) if *face == disc.elements[j].face => list.push(j),
+            _ => by_face.push((disc.elements[j].face, vec![j])),
         }
-        let scale = node.rho / PI;
-        for &j in &thin {
-            let el = &disc.elements[j];
-            let view = planner.face_view(node.position, node.normal, node.face, el.face);
-            let vis = match view {
-                FaceView::Skip(reason) => Visibility::Skip(reason),
-                _ => planner.visible(&view, &el.in_face()),
+    }
+    assembly.matrix.rows_mut().enumerate().for_each_init(
+        RecentHiders::default,
+        |hiders, (i, row)| {
+            let node = &disc.nodes[i];
+            let scale = node.rho / PI;
+            let mut write = |j: usize, vis: &Visibility| {
+                let el = &disc.elements[j];
+                let values =
+                    integrator.integrate(el, &disc.bases[j], node.position, node.normal, vis);
+                for (c, v) in values.iter().take(per).enumerate() {
+                    row[j * per + c] = scale * v;
+                }
             };
-            let values = integrator.integrate(el, &disc.bases[j], node.position, node.normal, &vis);
-            for (c, v) in values.iter().take(per).enumerate() {
-                row[j * per + c] = scale * v;
-            }
-        }
-    });
+            let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
+            planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, list, sight| {
+                match sight {
+                    FaceSight::Hidden(reason) => {
+                        list.for_each(|j| write(j, &Visibility::Skip(reason)))
+                    }
+                    FaceSight::Whole => list.for_each(|j| write(j, &Visibility::Full)),
+                    FaceSight::Part(mut part) => {
+                        list.for_each(|j| write(j, &part.element(&disc.elements[j].in_face())))
+                    }
+                }
+            });
+        },
+    );
 }
 
 /// `(K u)(P)` at arbitrary points of S (the operator of (1.4) applied to the collocation solution
@@ -325,46 +342,45 @@ pub(crate) fn assemble_row(
     integrator: &PairIntegrator,
     hiders: &mut RecentHiders,
 ) -> PairStats {
-    let per = disc.method.nodes_per_element() as u64;
-    if node.rho == 0.0 {
-        return PairStats::not_reflecting_row(disc.elements.len());
-    }
+    let per = disc.method.nodes_per_element();
     let scale = node.rho / PI;
-    let mut stats = PairStats::default();
     let mut batch = lanes::Batch::<usize>::default();
-    for face in 0..mesh.face_count() {
-        let range = mesh.face_range(face);
-        let view = planner.face_view_with(node.position, node.normal, node.face, face, hiders);
-        if let FaceView::Skip(reason) = view {
-            stats.record(&Visibility::Skip(reason), range.len() as u64);
-            continue;
-        }
-        let unobstructed = view.is_unobstructed();
-        for j in range {
-            let el = &disc.elements[j];
-            let vis =
-                if unobstructed { Visibility::Full } else { planner.visible(&view, &el.in_face()) };
-            stats.record(&vis, 1);
-            if matches!(vis, Visibility::Skip(_)) {
-                continue;
+    let mut evaluate = |j: usize, vis: &Visibility, row: &mut [f64]| {
+        let el = &disc.elements[j];
+        let values = if matches!(vis, Visibility::Full) && integrator.uses_lanes() {
+            match integrator.full_pair(el, &disc.bases[j], node.position, node.normal) {
+                FullPair::Values(values) => values,
+                FullPair::Lane(obs, tri) => {
+                    batch.push(j, obs, tri, |j, v| row[j] = scale * v);
+                    return;
+                }
             }
-            let values = if matches!(vis, Visibility::Full) && integrator.uses_lanes() {
-                match integrator.full_pair(el, &disc.bases[j], node.position, node.normal) {
-                    FullPair::Values(values) => values,
-                    FullPair::Lane(obs, tri) => {
-                        batch.push(j, obs, tri, |j, v| row[j] = scale * v);
-                        continue;
+        } else {
+            integrator.integrate(el, &disc.bases[j], node.position, node.normal, vis)
+        };
+        for (c, v) in values.iter().take(per).enumerate() {
+            row[j * per + c] = scale * v;
+        }
+    };
+    let faces = (0..mesh.face_count()).map(|face| (face, mesh.face_range(face)));
+    let stats =
+        planner.walk_row(
+            &node.viewer(),
+            faces,
+            Views::Fresh(hiders),
+            |_, range, sight| match sight {
+                FaceSight::Hidden(_) => {}
+                FaceSight::Whole => range.for_each(|j| evaluate(j, &Visibility::Full, row)),
+                FaceSight::Part(mut part) => {
+                    for j in range {
+                        let vis = part.element(&disc.elements[j].in_face());
+                        if !matches!(vis, Visibility::Skip(_)) {
+                            evaluate(j, &vis, row);
+                        }
                     }
                 }
-            } else {
-                integrator.integrate(el, &disc.bases[j], node.position, node.normal, &vis)
-            };
-            let l = per as usize;
-            for (c, v) in values.iter().take(l).enumerate() {
-                row[j * l + c] = scale * v;
-            }
-        }
-    }
+            },
+        );
     batch.flush(|j, v| row[j] = scale * v);
     stats
 }

@@ -104,3 +104,53 @@ fn lanes_assemble_the_scalar_matrix() {
         assert!(diff > 0.0, "{}: the lanes were not used", scene.name);
     }
 }
+
+/// FNV-1a over the bytes of the entries (little-endian), row by row.
+fn fingerprint(matrix: &CollocationMatrix) -> u64 {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for byte in matrix.as_slice().iter().flat_map(|v| v.to_le_bytes()) {
+        hash = (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+    }
+    hash
+}
+
+#[test]
+#[cfg(all(target_arch = "x86_64", target_os = "linux"))]
+fn the_row_walk_keeps_every_matrix_bit_for_bit() {
+    // Fingerprints of K as `radiosity assemble` wrote it before the pair plan's row walk was made
+    // one (x86-64, glibc's libm): a change in how any pair is classified, or in the order of the
+    // arithmetic, shows here. A change that is meant to alter the matrices updates them.
+    let example = |name: &str| {
+        crate::scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap()
+    };
+    let five = || crate::scene::five_piece(Default::default()).unwrap();
+    let linear = Method::linear(1.0 / 6.0).unwrap();
+    let cases: [(&str, Scene, Method, u32, u64); 6] = [
+        ("five-piece", five(), Method::Centroid, 3, 0x641e_9db2_bd7e_9b50),
+        ("five-piece linear", five(), linear, 2, 0xca39_1789_78e4_cbb1),
+        (
+            "furnished room",
+            example("examples/furnished-room.toml"),
+            Method::Centroid,
+            1,
+            0xb343_62e9_daa5_ecc8,
+        ),
+        (
+            "occluded box",
+            example("examples/occluded-box.toml"),
+            Method::Centroid,
+            1,
+            0x77a0_e887_2253_02fe,
+        ),
+        ("city 4x4", crate::scene::city(4, 4).unwrap(), Method::Centroid, 0, 0x471b_6f1a_a165_7ead),
+        ("baffled box linear", baffled_box().unwrap(), linear, 2, 0x11b8_8288_ee40_8135),
+    ];
+    for (name, scene, method, refine, expected) in cases {
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
+        let disc = Discretization::new(&scene, &mesh, method).unwrap();
+        let planner = PairPlanner::new(&scene);
+        let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &|_| {}).unwrap();
+        let found = fingerprint(&a.matrix);
+        assert_eq!(found, expected, "{name}: fingerprint {found:#x}, expected {expected:#x}");
+    }
+}

@@ -15,6 +15,7 @@ use crate::geometry::PlaneFrame;
 use crate::kernels::{Affine2, far_field};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
+use crate::visibility::Viewer;
 
 /// The collocation method.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,6 +88,13 @@ pub struct Node {
     pub element: usize,
     /// Reflectivity at the node.
     pub rho: f64,
+}
+
+impl Node {
+    /// The node as a point that looks at the scene (the pair plan's rows).
+    pub fn viewer(&self) -> Viewer {
+        Viewer { position: self.position, normal: self.normal, face: self.face, rho: self.rho }
+    }
 }
 
 /// An element described in its own frame: origin at its centroid, axes of its face.

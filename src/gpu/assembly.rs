@@ -24,7 +24,7 @@ use crate::kernels::far_field::FarFieldRule;
 use crate::mesh::Mesh;
 use crate::quadrature::ImtRule;
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
+use crate::visibility::{FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility};
 
 /// Upper bounds on the work of one tile, below what the device allows (for tests and tuning).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,44 +109,34 @@ fn plan_row(
         exceptions: Vec::new(),
         stats: PairStats::default(),
     };
-    if node.rho == 0.0 {
-        // A zero row: every view stays "skipped" (all zeros), nothing is evaluated.
-        plan.stats = PairStats::not_reflecting_row(disc.elements.len());
-        return plan;
-    }
-    for face in 0..faces {
-        let range = mesh.face_range(face);
-        let view = planner.face_view_with(node.position, node.normal, node.face, face, hiders);
-        if let FaceView::Skip(reason) = view {
-            plan.stats.record(&Visibility::Skip(reason), range.len() as u64);
-            continue;
-        }
-        let frame = &scene.faces[face].frame;
-        let (p, n) = (frame.to_local(node.position) * unit, frame.dir_to_local(node.normal));
-        let scale = node.rho / std::f64::consts::PI;
-        plan.views[face * VIEW_STRIDE..face * VIEW_STRIDE + 7]
-            .copy_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, scale]);
-        if view.is_unobstructed() {
-            plan.stats.record(&Visibility::Full, range.len() as u64);
-            continue;
-        }
-        for j in range {
-            let vis = planner.visible(&view, &disc.elements[j].in_face());
-            plan.stats.record(&vis, 1);
-            match vis {
-                Visibility::Full => {}
-                Visibility::Skip(_) => plan.exceptions.push((j as u32, Vec::new())),
-                Visibility::Partial(pieces) => {
-                    let c = disc.elements[j].centroid_in_face;
-                    let local = pieces
-                        .into_iter()
-                        .map(|p| p.into_iter().map(|q| (q - c) * unit).collect())
-                        .collect();
-                    plan.exceptions.push((j as u32, local));
+    // A row that reflects nothing keeps every view "skipped" (all zeros): nothing is evaluated.
+    let faces = (0..faces).map(|face| (face, mesh.face_range(face)));
+    plan.stats =
+        planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |face, range, sight| {
+            if let FaceSight::Hidden(_) = sight {
+                return;
+            }
+            let frame = &scene.faces[face].frame;
+            let (p, n) = (frame.to_local(node.position) * unit, frame.dir_to_local(node.normal));
+            let scale = node.rho / std::f64::consts::PI;
+            plan.views[face * VIEW_STRIDE..face * VIEW_STRIDE + 7]
+                .copy_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, scale]);
+            let FaceSight::Part(mut part) = sight else { return };
+            for j in range {
+                match part.element(&disc.elements[j].in_face()) {
+                    Visibility::Full => {}
+                    Visibility::Skip(_) => plan.exceptions.push((j as u32, Vec::new())),
+                    Visibility::Partial(pieces) => {
+                        let c = disc.elements[j].centroid_in_face;
+                        let local = pieces
+                            .into_iter()
+                            .map(|p| p.into_iter().map(|q| (q - c) * unit).collect())
+                            .collect();
+                        plan.exceptions.push((j as u32, local));
+                    }
                 }
             }
-        }
-    }
+        });
     plan
 }
 

@@ -11,7 +11,7 @@ pub mod shaders;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
 pub use context::{AdapterRequest, AdapterSummary, GpuContext, INSTALL_HINT};
-pub use pairs::{PairEvaluator, PairTask};
+pub use pairs::PairEvaluator;
 pub use shaders::Precision;
 
 use std::sync::OnceLock;

@@ -8,23 +8,11 @@ use rayon::prelude::*;
 use super::assembly::{GpuAssembler, RuleCounts, Uploaded};
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
-use crate::assembly::{AssemblyOptions, PairIntegrator};
+use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, PairTask};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::visibility::Visibility;
-
-/// One pair to evaluate: node `node` against element `element`, wholly visible
-/// ([`Visibility::Full`]) or over its visible pieces ([`Visibility::Partial`], none: hidden).
-#[derive(Clone, Debug)]
-pub struct PairTask {
-    /// Index of the collocation node.
-    pub node: usize,
-    /// Index of the element.
-    pub element: usize,
-    /// What the node sees of the element; a skipped pair is not listed.
-    pub visible: Visibility,
-}
 
 /// Piece count of a record that stands for the whole element (`WHOLE_ELEMENT` in the shader).
 const WHOLE_ELEMENT: u32 = u32::MAX;
@@ -78,47 +66,6 @@ impl<'a> PairEvaluator<'a> {
             counts,
             budget,
         })
-    }
-
-    /// The values of every task (rho/pi included, the first `nodes_per_element` used), in
-    /// batches that fit the device's bindings.
-    pub fn evaluate(&self, tasks: &[PairTask]) -> Result<Vec<[f64; 3]>> {
-        let mut out = vec![[0.0; 3]; tasks.len()];
-        let bytes = self.assembler.precision.bytes() as u64;
-        let mut start = 0;
-        while start < tasks.len() {
-            let (mut end, mut vertices, mut words) = (start, 0u64, 0u64);
-            while end < tasks.len() {
-                let (pieces, v) = match &tasks[end].visible {
-                    Visibility::Partial(pieces) => {
-                        (pieces.len() as u64, pieces.iter().map(|p| p.len() as u64).sum())
-                    }
-                    _ => (0, 0),
-                };
-                let views = (end - start + 1) as u64 * (VIEW_STRIDE as u64 * bytes);
-                let over = views > self.budget
-                    || (vertices + v) * 2 * bytes > self.budget
-                    || (words + 4 + 2 * pieces) * 4 > self.budget;
-                if over && end > start {
-                    break;
-                }
-                (vertices, words, end) = (vertices + v, words + 4 + 2 * pieces, end + 1);
-            }
-            self.batch(&tasks[start..end], &mut out[start..end])?;
-            start = end;
-        }
-        out.par_iter_mut().zip(tasks).filter(|(_, t)| self.thin[t.element]).for_each(|(o, t)| {
-            let node = &self.disc.nodes[t.node];
-            let values = self.integrator.integrate(
-                &self.disc.elements[t.element],
-                &self.disc.bases[t.element],
-                node.position,
-                node.normal,
-                &t.visible,
-            );
-            *o = values.map(|v| v * node.rho / std::f64::consts::PI);
-        });
-        Ok(out)
     }
 
     /// One batch: views, records and pieces up, `assemble_pairs`, values back.
@@ -214,5 +161,47 @@ impl<'a> PairEvaluator<'a> {
             o[..per].copy_from_slice(v);
         }
         Ok(())
+    }
+}
+
+impl PairEvaluation for PairEvaluator<'_> {
+    /// In batches that fit the device's bindings; thin elements' pairs on the CPU.
+    fn evaluate(&self, tasks: &[PairTask]) -> Result<Vec<[f64; 3]>> {
+        let mut out = vec![[0.0; 3]; tasks.len()];
+        let bytes = self.assembler.precision.bytes() as u64;
+        let mut start = 0;
+        while start < tasks.len() {
+            let (mut end, mut vertices, mut words) = (start, 0u64, 0u64);
+            while end < tasks.len() {
+                let (pieces, v) = match &tasks[end].visible {
+                    Visibility::Partial(pieces) => {
+                        (pieces.len() as u64, pieces.iter().map(|p| p.len() as u64).sum())
+                    }
+                    _ => (0, 0),
+                };
+                let views = (end - start + 1) as u64 * (VIEW_STRIDE as u64 * bytes);
+                let over = views > self.budget
+                    || (vertices + v) * 2 * bytes > self.budget
+                    || (words + 4 + 2 * pieces) * 4 > self.budget;
+                if over && end > start {
+                    break;
+                }
+                (vertices, words, end) = (vertices + v, words + 4 + 2 * pieces, end + 1);
+            }
+            self.batch(&tasks[start..end], &mut out[start..end])?;
+            start = end;
+        }
+        out.par_iter_mut().zip(tasks).filter(|(_, t)| self.thin[t.element]).for_each(|(o, t)| {
+            let node = &self.disc.nodes[t.node];
+            let values = self.integrator.integrate(
+                &self.disc.elements[t.element],
+                &self.disc.bases[t.element],
+                node.position,
+                node.normal,
+                &t.visible,
+            );
+            *o = values.map(|v| v * node.rho / std::f64::consts::PI);
+        });
+        Ok(out)
     }
 }

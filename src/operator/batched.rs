@@ -1,5 +1,5 @@
-//! The operator's blocks from batched pair evaluations (the GPU's pair kernel,
-//! [`PairEvaluator`]). Every cross approximation advances in lockstep ([`Aca`] as a state
+//! The operator's blocks from batched pair evaluations ([`PairEvaluation`]: the GPU's pair
+//! kernel, or the CPU's threads). Every cross approximation advances in lockstep ([`Aca`] as a state
 //! machine): the rows and columns they all ask for next are listed and evaluated in one batch,
 //! so a block of rank k costs about 2k rounds for all blocks together, not 2k trips to the device
 //! per block. The exact blocks are planned on the host by the dense path's pair plan (in
@@ -13,13 +13,13 @@ use rayon::prelude::*;
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
 use super::{Block, BlockData, Entries, MemoryGuard, NodeViews, by_node_cluster};
+use crate::assembly::{PairEvaluation, PairTask};
 use crate::error::Result;
-use crate::gpu::{PairEvaluator, PairTask};
 use crate::progress::Progress;
 use crate::visibility::{PairStats, Visibility};
 
 /// Pairs listed per round on the host (tasks and their values): bounds the memory of a round;
-/// the device's batches are sized by [`PairEvaluator`] itself.
+/// the engine sizes its own batches.
 const PAIRS_PER_ROUND: usize = 1 << 21;
 
 /// A far block under construction.
@@ -44,7 +44,7 @@ pub(super) fn build_blocks(
     plan: &BlockPlan,
     faces: &FacePairs,
     tolerance: f64,
-    device: &PairEvaluator,
+    device: &dyn PairEvaluation,
     guard: &MemoryGuard,
     progress: &dyn Progress,
 ) -> Result<Vec<(Block, PairStats, bool)>> {
@@ -151,7 +151,7 @@ pub(super) fn build_blocks(
 fn advance(
     entries: &Entries,
     faces: &FacePairs,
-    device: &PairEvaluator,
+    device: &dyn PairEvaluation,
     crossings: &mut [Crossing],
 ) -> Result<()> {
     let mut samples: Vec<(Vec<PairTask>, Vec<Slot>)> =

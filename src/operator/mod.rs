@@ -28,14 +28,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairIntegrator, memory_allowance};
+use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, memory_allowance};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
-use crate::gpu::PairEvaluator;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner, PairStats, RecentHiders, Visibility};
+use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility};
 
 use aca::LowRank;
 use blocks::{BlockPlan, FacePairs};
@@ -186,9 +185,9 @@ const MIN_USEFUL_RANK: usize = 4;
 
 impl CompressedOperator {
     /// Builds K for `disc` on `mesh` of `scene`; `progress` counts the blocks (stage
-    /// `compression`). With `device`, the entries are evaluated there in batches (the exact
-    /// blocks' pairs planned on the host, the cross approximations in lockstep), else on the CPU
-    /// block by block.
+    /// `compression`). With `batches` (the GPU's pair kernel), the entries are evaluated by it in
+    /// batches (the exact blocks' pairs planned on the host, the cross approximations in
+    /// lockstep), else on the CPU block by block.
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         scene: &Scene,
@@ -197,7 +196,7 @@ impl CompressedOperator {
         planner: &PairPlanner,
         assembly: &AssemblyOptions,
         options: &CompressionOptions,
-        device: Option<&PairEvaluator>,
+        batches: Option<&dyn PairEvaluation>,
         progress: &dyn Progress,
     ) -> Result<Self> {
         options.validate()?;
@@ -236,13 +235,13 @@ impl CompressedOperator {
             per,
         };
         progress.start("compression", plan.near.len() + plan.far.len());
-        let built: Vec<(Block, PairStats, bool)> = match device {
-            Some(device) => batched::build_blocks(
+        let built: Vec<(Block, PairStats, bool)> = match batches {
+            Some(evaluator) => batched::build_blocks(
                 &entries,
                 &plan,
                 &faces,
                 options.tolerance,
-                device,
+                evaluator,
                 &guard,
                 progress,
             )?,
@@ -469,13 +468,7 @@ fn by_node_cluster<T: Copy + Ord>(blocks: &[(usize, usize, T)]) -> Vec<Vec<(usiz
 #[derive(Default)]
 struct NodeViews {
     cluster: Option<usize>,
-    rows: Vec<RowViews>,
-}
-
-#[derive(Default)]
-struct RowViews {
-    views: Vec<(usize, FaceView)>,
-    hiders: RecentHiders,
+    rows: Vec<KeptViews>,
 }
 
 impl NodeViews {
@@ -484,7 +477,7 @@ impl NodeViews {
         if self.cluster != Some(t) {
             self.cluster = Some(t);
             self.rows.clear();
-            self.rows.resize_with(m, RowViews::default);
+            self.rows.resize_with(m, KeptViews::default);
         }
     }
 }
@@ -501,10 +494,10 @@ struct Entries<'a> {
 }
 
 impl Entries<'_> {
-    /// Walks the pairs of block (t, s) by the dense path's pair plan (views per node and face,
-    /// exact visible parts), calling `each(r, k, i, j, visibility)` for every pair that is not
-    /// skipped: row r of the block (node i), element k of the block (element j). `views` keeps
-    /// the nodes' views of faces between blocks of the same node cluster.
+    /// Walks the pairs of block (t, s) by the dense path's pair plan (the row walk of
+    /// [`PairPlanner::walk_row`]), calling `each(r, k, i, j, visibility)` for every pair that is
+    /// not skipped: row r of the block (node i), element k of the block (element j). `views`
+    /// keeps the nodes' views of faces between blocks of the same node cluster.
     fn visible_pairs(
         &self,
         t: usize,
@@ -513,42 +506,37 @@ impl Entries<'_> {
         mut each: impl FnMut(usize, usize, usize, usize, Visibility),
     ) -> PairStats {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
-        let mut stats = PairStats::default();
         let element_ids = &self.elements.order[sc.start..sc.end];
+        // The block's elements face by face (positions k in the block), as the walk takes them.
+        let mut by_face: Vec<(usize, Vec<usize>)> = Vec::new();
+        for (k, &j) in element_ids.iter().enumerate() {
+            let face = self.disc.elements[j].face;
+            match by_face.iter_mut().find(|(f, _)| *f == face) {
+                Some((_, list)) => list.push(k),
+                None => by_face.push((face, vec![k])),
+            }
+        }
+        let mut stats = PairStats::default();
         views.prepare(t, tc.len());
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
-            let node = &self.disc.nodes[i];
-            if node.rho == 0.0 {
-                stats += PairStats::not_reflecting_row(sc.len());
-                continue;
-            }
-            let row = &mut views.rows[r];
-            for (k, &j) in element_ids.iter().enumerate() {
-                let el = &self.disc.elements[j];
-                let view = match row.views.iter().position(|(f, _)| *f == el.face) {
-                    Some(p) => &row.views[p].1,
-                    None => {
-                        let v = self.planner.face_view_with(
-                            node.position,
-                            node.normal,
-                            node.face,
-                            el.face,
-                            &mut row.hiders,
-                        );
-                        row.views.push((el.face, v));
-                        &row.views[row.views.len() - 1].1
-                    }
-                };
-                let vis = match view {
-                    FaceView::Skip(reason) => Visibility::Skip(*reason),
-                    v if v.is_unobstructed() => Visibility::Full,
-                    v => self.planner.visible(v, &el.in_face()),
-                };
-                stats.record(&vis, 1);
-                if !matches!(vis, Visibility::Skip(_)) {
-                    each(r, k, i, j, vis);
+            let viewer = self.disc.nodes[i].viewer();
+            let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
+            let kept = Views::Kept(&mut views.rows[r]);
+            stats += self.planner.walk_row(&viewer, faces, kept, |_, list, sight| match sight {
+                FaceSight::Hidden(_) => {}
+                FaceSight::Whole => {
+                    list.for_each(|k| each(r, k, i, element_ids[k], Visibility::Full))
                 }
-            }
+                FaceSight::Part(mut part) => {
+                    for k in list {
+                        let j = element_ids[k];
+                        let vis = part.element(&self.disc.elements[j].in_face());
+                        if !matches!(vis, Visibility::Skip(_)) {
+                            each(r, k, i, j, vis);
+                        }
+                    }
+                }
+            });
         }
         stats
     }

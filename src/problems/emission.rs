@@ -16,7 +16,7 @@ use crate::geometry::{HalfPlane, PlaneFrame, clip_convex};
 use crate::kernels::{Observer, Quadratic2, exact};
 use crate::quadrature::{ImtRule, Tolerance, integrate_triangle};
 use crate::scene::Scene;
-use crate::visibility::{FaceView, PairPlanner, RecentHiders};
+use crate::visibility::{FaceSight, PairPlanner, RecentHiders, Views, Visibility};
 
 /// Accuracy settings for the emissivity integrals.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,15 +58,26 @@ pub fn emission_at(
         .par_iter()
         .map_init(RecentHiders::default, |hiders, node| {
             let (mut integral, mut error) = (0.0, 0.0);
-            for (k, face) in scene.faces.iter().enumerate() {
-                let view = planner.face_view_with(node.position, node.normal, node.face, k, hiders);
-                if matches!(view, FaceView::Skip(_)) {
-                    continue;
-                }
-                let pieces = planner.visible_part_of_face(&view, k);
+            // Each face is one item of the walk: its visible part is found whole.
+            let faces = (0..scene.faces.len()).map(|k| (k, std::iter::once(k)));
+            planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |k, _, sight| {
+                let pieces = match sight {
+                    FaceSight::Hidden(_) => return,
+                    FaceSight::Whole => planner.convex_parts(k),
+                    FaceSight::Part(mut part) => planner
+                        .convex_parts(k)
+                        .into_iter()
+                        .flat_map(|piece| match part.element(&piece) {
+                            Visibility::Skip(_) => vec![],
+                            Visibility::Full => vec![piece],
+                            Visibility::Partial(pieces) => pieces,
+                        })
+                        .collect(),
+                };
                 if pieces.is_empty() {
-                    continue;
+                    return;
                 }
+                let face = &scene.faces[k];
                 let obs = Observer {
                     position: face.frame.to_local(node.position),
                     normal: face.frame.dir_to_local(node.normal),
@@ -75,7 +86,7 @@ pub fn emission_at(
                     face_integral(&obs, &face.frame, &pieces, &u[k], &imt, options);
                 integral += value;
                 error += estimate;
-            }
+            });
             progress(1);
             (u[node.face].eval(node.position) - node.rho / PI * integral, node.rho / PI * error)
         })

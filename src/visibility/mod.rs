@@ -23,12 +23,14 @@
 
 mod bench;
 mod occluders;
+mod row;
 mod solids;
 mod stats;
 
 pub use bench::{PlanBench, bench_plan};
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
+pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views};
 use solids::Solid;
 pub use stats::PairStats;
 
@@ -598,20 +600,24 @@ impl PairPlanner {
         if changed { Visibility::Partial(pieces) } else { Visibility::Full }
     }
 
-    /// The visible part of the whole face `face` under `view` (for the emissivity integrals):
-    /// convex pieces in face coordinates, or an empty list.
-    pub fn visible_part_of_face(&self, view: &FaceView, face: usize) -> Vec<Vec<DVec2>> {
+    /// The face `face` as convex pieces (face coordinates, counter-clockwise): itself when it is
+    /// convex, else its triangles.
+    pub fn convex_parts(&self, face: usize) -> Vec<Vec<DVec2>> {
         let f = &self.faces[face];
-        let convex_parts: Vec<Vec<DVec2>> = if f.hull.len() == f.polygon.len() {
-            vec![f.polygon.clone()]
-        } else {
-            crate::geometry::triangulate(&f.polygon)
-                .expect(crate::scene::TRIANGULABLE)
-                .into_iter()
-                .map(|t| t.map(|k| f.polygon[k]).to_vec())
-                .collect()
-        };
-        convex_parts
+        if f.hull.len() == f.polygon.len() {
+            return vec![f.polygon.clone()];
+        }
+        crate::geometry::triangulate(&f.polygon)
+            .expect(crate::scene::TRIANGULABLE)
+            .into_iter()
+            .map(|t| t.map(|k| f.polygon[k]).to_vec())
+            .collect()
+    }
+
+    /// The visible part of the whole face `face` under `view`: convex pieces in face
+    /// coordinates, or an empty list.
+    pub fn visible_part_of_face(&self, view: &FaceView, face: usize) -> Vec<Vec<DVec2>> {
+        self.convex_parts(face)
             .into_iter()
             .flat_map(|part| match self.visible(view, &part) {
                 Visibility::Skip(_) => vec![],

@@ -1,0 +1,135 @@
+//! One viewer's row of the pair plan: the one walk over the faces a point sees, in which every
+//! (node, element) pair is classified and counted. The CPU assembly, the thin-column
+//! recomputation, the GPU plan, the compressed operator's exact blocks and the emission integrals
+//! all walk their rows here, so that a pair is classified the same way on every backend.
+//!
+//! For one viewer: a point that reflects nothing (rho = 0) has a zero row and sees nothing; else
+//! each face is viewed once ([`PairPlanner::face_view_with`]); a skipped face hides all its
+//! elements, an unobstructed one shows them all whole without per-element work, and otherwise
+//! each element is clipped to its exactly visible part ([`PairPlanner::visible`]).
+
+use glam::{DVec2, DVec3};
+
+use super::{FaceView, PairPlanner, PairStats, RecentHiders, SkipReason, Visibility};
+
+/// A point of S that looks at the scene: a collocation node, or any point of a face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Viewer {
+    /// Position.
+    pub position: DVec3,
+    /// Unit normal of its face.
+    pub normal: DVec3,
+    /// The face it lies on.
+    pub face: usize,
+    /// Reflectivity there: a point with rho = 0 has a zero row of K and views nothing.
+    pub rho: f64,
+}
+
+/// Where a walk finds its views of faces.
+pub enum Views<'a> {
+    /// Each face is viewed anew, trying the thread's recent hiders first.
+    Fresh(&'a mut RecentHiders),
+    /// Views are kept across walks of the same viewer (blocks of the compressed operator that
+    /// share faces): each face is viewed once.
+    Kept(&'a mut KeptViews),
+}
+
+/// One viewer's views of the faces met so far, and its recent hiders.
+#[derive(Debug, Default)]
+pub struct KeptViews {
+    views: Vec<(usize, FaceView)>,
+    hiders: RecentHiders,
+}
+
+impl KeptViews {
+    fn view(&mut self, planner: &PairPlanner, viewer: &Viewer, face: usize) -> &FaceView {
+        let k = match self.views.iter().position(|(f, _)| *f == face) {
+            Some(k) => k,
+            None => {
+                let (p, n) = (viewer.position, viewer.normal);
+                let view = planner.face_view_with(p, n, viewer.face, face, &mut self.hiders);
+                self.views.push((face, view));
+                self.views.len() - 1
+            }
+        };
+        &self.views[k].1
+    }
+}
+
+/// What a viewer sees of the listed elements of one face. The pairs of a hidden or whole face
+/// are already counted; those of a face seen in part are counted as [`PartSight::element`]
+/// classifies them.
+pub enum FaceSight<'a> {
+    /// None of them.
+    Hidden(SkipReason),
+    /// Every one whole.
+    Whole,
+    /// Some in part, some whole, some not at all.
+    Part(PartSight<'a>),
+}
+
+/// A face seen in part: clipped by the viewer's tangent plane or shadowed.
+pub struct PartSight<'a> {
+    planner: &'a PairPlanner,
+    view: &'a FaceView,
+    stats: &'a mut PairStats,
+}
+
+impl PartSight<'_> {
+    /// What the viewer sees of the element `polygon` (convex, counter-clockwise, face
+    /// coordinates), counted.
+    pub fn element(&mut self, polygon: &[DVec2]) -> Visibility {
+        let visibility = self.planner.visible(self.view, polygon);
+        self.stats.record(&visibility, 1);
+        visibility
+    }
+
+    /// The view itself (the clip and the shadows).
+    pub fn view(&self) -> &FaceView {
+        self.view
+    }
+}
+
+impl PairPlanner {
+    /// Walks `viewer`'s row over `faces`, each given with the elements of it to classify, calling
+    /// `visit(face, elements, sight)` for every face (none when the viewer reflects nothing), and
+    /// returns the counts of the pairs by class.
+    pub fn walk_row<E: ExactSizeIterator>(
+        &self,
+        viewer: &Viewer,
+        faces: impl IntoIterator<Item = (usize, E)>,
+        mut views: Views<'_>,
+        mut visit: impl FnMut(usize, E, FaceSight<'_>),
+    ) -> PairStats {
+        let mut stats = PairStats::default();
+        if viewer.rho == 0.0 {
+            let count = faces.into_iter().map(|(_, elements)| elements.len()).sum();
+            return PairStats::not_reflecting_row(count);
+        }
+        for (face, elements) in faces {
+            let count = elements.len() as u64;
+            let fresh;
+            let view = match &mut views {
+                Views::Fresh(hiders) => {
+                    let (p, n) = (viewer.position, viewer.normal);
+                    fresh = self.face_view_with(p, n, viewer.face, face, hiders);
+                    &fresh
+                }
+                Views::Kept(kept) => kept.view(self, viewer, face),
+            };
+            let sight = match view {
+                FaceView::Skip(reason) => {
+                    stats.record(&Visibility::Skip(*reason), count);
+                    FaceSight::Hidden(*reason)
+                }
+                view if view.is_unobstructed() => {
+                    stats.record(&Visibility::Full, count);
+                    FaceSight::Whole
+                }
+                view => FaceSight::Part(PartSight { planner: self, view, stats: &mut stats }),
+            };
+            visit(face, elements, sight);
+        }
+        stats
+    }
+}
