@@ -5,9 +5,11 @@
 mod adaptive;
 mod gauss_legendre;
 mod imt;
+mod tanh_sinh;
 mod triangle;
 
 pub use adaptive::{Tolerance, integrate_adaptive, integrate_triangle};
 pub use gauss_legendre::GaussLegendre;
 pub use imt::{IMT_LANES, ImtRule};
+pub(crate) use tanh_sinh::TanhSinh;
 pub use triangle::{LANES as RULE_LANES, PointLanes, TriangleRule};

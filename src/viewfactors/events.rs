@@ -1,0 +1,291 @@
+//! The planes T_i is cut along so that the integrand is smooth on every piece: where the visible
+//! part of T_j changes shape (occluders' planes, vertex–edge events) and where T_j touches T_i.
+
+use glam::DVec3;
+
+use crate::geometry::{self, PlaneFrame, SmallPolygon, bounding_box_3d};
+use crate::visibility::PairPlanner;
+
+/// Planes (normal, a point) through which the visible part of `target` changes shape as the
+/// viewing point crosses them inside `viewer`: for each occluder, its own plane (seen from it the
+/// occluder is an edge, and its shadow changes side); through a vertex of the target and an edge
+/// of the occluder (EV: the viewer sees the vertex just past the edge), through an edge of the
+/// target and a vertex of the occluder (VE), and between two occluders the same (a shadow's
+/// corner crossing another shadow's edge). A vertex–edge plane counts only where the viewer can
+/// be on it: on the rays through the vertex and the edge on the side the event needs, which cut
+/// the viewing element (most planes do not). Curved (EEE) events between three mutually skew
+/// edges are not among them.
+pub(super) fn event_planes(
+    viewer: &[DVec3; 3],
+    target: &[DVec3; 3],
+    occluders: &[usize],
+    planner: &PairPlanner,
+) -> Vec<(DVec3, DVec3)> {
+    let polygons: Vec<&[DVec3]> =
+        occluders.iter().map(|&o| planner.occluders()[o].polygon.as_slice()).collect();
+    let normals: Vec<DVec3> = occluders.iter().map(|&o| planner.occluders()[o].normal()).collect();
+    let mut planes: Vec<(DVec3, DVec3)> =
+        normals.iter().zip(&polygons).map(|(&n, polygon)| (n, polygon[0])).collect();
+    let twins = EdgeTwins::new(&polygons, &normals);
+    // The vertices of one polygon against the edges of another; `None` is the target.
+    let mut vertex_edge = |vertex_owner: Option<usize>, edge_owner: Option<usize>, side| {
+        let corners = |owner: Option<usize>| owner.map_or(target.as_slice(), |o| polygons[o]);
+        let (vertices, edges) = (corners(vertex_owner), corners(edge_owner));
+        let m = edges.len();
+        for (l, &v) in vertices.iter().enumerate() {
+            for k in 0..m {
+                let (e0, e1) = (edges[k], edges[(k + 1) % m]);
+                let wedge = Wedge { apex: v, d1: e0 - v, d2: e1 - v };
+                if let Some(normal) = wedge.normal()
+                    && edge_owner.is_none_or(|o| twins.edge_may_outline(o, k, v))
+                    && vertex_owner.is_none_or(|o| twins.vertex_may_outline(o, l, e0, e1))
+                    && wedge.meets(viewer, side)
+                    && (!matches!(side, EventSide::Either) || cuts(normal, v, target))
+                {
+                    planes.push((normal, v));
+                }
+            }
+        }
+    };
+    for k in 0..polygons.len() {
+        // The viewer sees a target vertex past an occluder edge: beyond the edge from the vertex.
+        vertex_edge(None, Some(k), EventSide::Beyond);
+        // ... or an occluder vertex in front of a target edge: behind the vertex from the edge.
+        vertex_edge(Some(k), None, EventSide::Behind);
+        // Two shadows' corner and edge meet on T_j only if the plane of the three cuts T_j.
+        for l in k + 1..polygons.len() {
+            vertex_edge(Some(k), Some(l), EventSide::Either);
+            vertex_edge(Some(l), Some(k), EventSide::Either);
+        }
+    }
+    planes
+}
+
+/// For each edge of the occluder polygons, the normal of another polygon among them that shares
+/// it (a solid's neighbouring face, or the other convex piece of a non-convex face).
+struct EdgeTwins<'a> {
+    polygons: &'a [&'a [DVec3]],
+    normals: &'a [DVec3],
+    twins: Vec<Vec<Option<DVec3>>>,
+}
+
+impl<'a> EdgeTwins<'a> {
+    fn new(polygons: &'a [&'a [DVec3]], normals: &'a [DVec3]) -> Self {
+        let edge = |p: &[DVec3], k: usize| (p[k], p[(k + 1) % p.len()]);
+        let twins = polygons
+            .iter()
+            .enumerate()
+            .map(|(a, p)| {
+                (0..p.len())
+                    .map(|k| {
+                        let (u, v) = edge(p, k);
+                        polygons.iter().enumerate().find_map(|(b, q)| {
+                            let shared = (0..q.len()).any(|l| {
+                                let (x, y) = edge(q, l);
+                                (x == v && y == u) || (x == u && y == v)
+                            });
+                            (b != a && shared).then_some(normals[b])
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        Self { polygons, normals, twins }
+    }
+
+    /// Whether edge `k` of polygon `o` can be on the outline of the occluders' shadow for a
+    /// viewer on the plane through it and `apex` (away from the edge's line). The viewer's
+    /// height over either polygon's plane is the apex's times one factor, the same for both,
+    /// so unless the apex is in front of exactly one of the two polygons that share the edge,
+    /// both face every such viewer the same way, the edge lies inside the shadow, and no event
+    /// happens on that plane.
+    fn edge_may_outline(&self, o: usize, k: usize, apex: DVec3) -> bool {
+        let Some(twin) = self.twins[o][k] else { return true };
+        let r = apex - self.polygons[o][k];
+        let rounding = 1e-12 * r.length();
+        let (own, other) = (r.dot(self.normals[o]), r.dot(twin));
+        own.abs() <= rounding || other.abs() <= rounding || (own > 0.0) != (other > 0.0)
+    }
+
+    /// Whether vertex `k` of polygon `o` can be a corner of the shadow's outline for a viewer on
+    /// the plane through it and a segment from `y0` to `y1` (on either side of the vertex). The
+    /// viewer's height over each plane through the vertex is a multiple of some point's of the
+    /// segment, one factor for all planes; so where every edge at the vertex is shared by two
+    /// polygons among the occluders and the whole segment is in front of all of them, or behind
+    /// all of them, every viewer on the plane sees all of them from one side, none of those
+    /// edges is on the outline, and neither is the vertex.
+    fn vertex_may_outline(&self, o: usize, k: usize, y0: DVec3, y1: DVec3) -> bool {
+        let w = self.polygons[o][k];
+        let rounding = 1e-12 * (y0 - w).length().max((y1 - w).length());
+        let mut side = None;
+        for (b, polygon) in self.polygons.iter().enumerate() {
+            let m = polygon.len();
+            let Some(l) = polygon.iter().position(|&x| x == w) else { continue };
+            if self.twins[b][l].is_none() || self.twins[b][(l + m - 1) % m].is_none() {
+                return true; // an edge at the vertex bounds the occluders
+            }
+            for y in [y0, y1] {
+                let h = (y - w).dot(self.normals[b]);
+                if h.abs() <= rounding || *side.get_or_insert(h > 0.0) != (h > 0.0) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Whether the plane through `point` with `normal` has corners of `polygon` strictly on both
+/// sides.
+fn cuts(normal: DVec3, point: DVec3, polygon: &[DVec3]) -> bool {
+    let h = polygon.iter().map(|&x| normal.dot(x - point));
+    h.clone().any(|x| x > 0.0) && h.into_iter().any(|x| x < 0.0)
+}
+
+/// Which rays through a vertex and an edge an event needs the viewer on.
+#[derive(Clone, Copy)]
+enum EventSide {
+    /// Beyond the edge, seen from the vertex: `apex + s (x - apex)`, s >= 1, x on the edge.
+    Beyond,
+    /// Behind the vertex, seen from the edge: `apex + s (apex - x)`, s >= 0.
+    Behind,
+    /// Either (two occluders: whichever is nearer the viewer).
+    Either,
+}
+
+/// The plane through a vertex `apex` and an edge `apex + d1`, `apex + d2`.
+struct Wedge {
+    apex: DVec3,
+    d1: DVec3,
+    d2: DVec3,
+}
+
+impl Wedge {
+    fn normal(&self) -> Option<DVec3> {
+        let n = self.d1.cross(self.d2);
+        (n.length_squared() > 0.0).then(|| n.normalize())
+    }
+
+    /// Whether the region of the plane on `side` cuts the convex polygon `viewer` (which must
+    /// straddle the plane for the plane to split it at all).
+    fn meets(&self, viewer: &[DVec3], side: EventSide) -> bool {
+        let n = self.d1.cross(self.d2);
+        let h: Vec<f64> = viewer.iter().map(|&x| n.dot(x - self.apex)).collect();
+        let m = viewer.len();
+        // The segment where the plane cuts the viewer: the crossings of its edges.
+        let crossings: Vec<DVec3> = (0..m)
+            .filter(|&k| (h[k] < 0.0) != (h[(k + 1) % m] < 0.0))
+            .map(|k| {
+                let (a, b) = (viewer[k], viewer[(k + 1) % m]);
+                a + (b - a) * (h[k] / (h[k] - h[(k + 1) % m]))
+            })
+            .collect();
+        let [x1, x2] = match crossings[..] {
+            [x1, x2] => [x1, x2],
+            _ => return false,
+        };
+        // Coordinates (α, β) of x - apex = α d1 + β d2 along the segment x1 + λ (x2 - x1).
+        let nn = n.length_squared();
+        let coords = |x: DVec3| {
+            let r = x - self.apex;
+            (r.cross(self.d2).dot(n) / nn, self.d1.cross(r).dot(n) / nn)
+        };
+        let ((a1, b1), (a2, b2)) = (coords(x1), coords(x2));
+        // Each constraint c0 + λ (c1 - c0) >= 0 on [0, 1] narrows [lo, hi].
+        let admits = |constraints: &[(f64, f64)]| {
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for &(c0, c1) in constraints {
+                let slope = c1 - c0;
+                if slope == 0.0 {
+                    if c0 < 0.0 {
+                        return false;
+                    }
+                } else if slope > 0.0 {
+                    lo = lo.max(-c0 / slope);
+                } else {
+                    hi = hi.min(-c0 / slope);
+                }
+            }
+            lo <= hi
+        };
+        let beyond = || admits(&[(a1, a2), (b1, b2), (a1 + b1 - 1.0, a2 + b2 - 1.0)]);
+        let behind = || admits(&[(-a1, -a2), (-b1, -b2)]);
+        match side {
+            EventSide::Beyond => beyond(),
+            EventSide::Behind => behind(),
+            EventSide::Either => beyond() || behind(),
+        }
+    }
+}
+
+/// Where T_j touches T_i (frame `frame_i`) at one of its corners, T_i is cut across: the
+/// integrand has a log singularity along the contact and jumps where the contact ends, and the
+/// tanh-sinh rule of a touching triangle resolves such points at its corners, not inside its
+/// sides (a ceiling tile along part of a wall element's top edge: reciprocity 4e-3 without).
+/// Each corner of T_j on T_i gets the plane through it across each edge of T_j that lies in
+/// T_i's plane from it (the contact's end), or across both of T_i's axes where none does (a
+/// point contact). Returns the planes' unit normals and a point of each.
+pub(super) fn contact_cuts(
+    ti: &[DVec3; 3],
+    frame_i: &PlaneFrame,
+    tj: &[DVec3; 3],
+    tol: f64,
+) -> Vec<(DVec3, DVec3)> {
+    let on_plane = |v: DVec3| frame_i.height(v).abs() <= tol;
+    let local = ti.map(|v| frame_i.to_local(v).truncate());
+    let orientation = (local[1] - local[0]).perp_dot(local[2] - local[0]).signum();
+    let on_ti = |v: DVec3| {
+        let p = frame_i.to_local(v).truncate();
+        (0..3).all(|k| {
+            let (a, b) = (local[k], local[(k + 1) % 3]);
+            (b - a).perp_dot(p - a) * orientation >= -tol * (b - a).length()
+        })
+    };
+    let mut cuts = Vec::new();
+    for (k, &v) in tj.iter().enumerate() {
+        if !on_plane(v) || !on_ti(v) {
+            continue;
+        }
+        let before = cuts.len();
+        for w in [tj[(k + 1) % 3], tj[(k + 2) % 3]] {
+            if on_plane(w) {
+                let d = w - v;
+                let along = d - frame_i.normal * d.dot(frame_i.normal);
+                cuts.push((along.normalize(), v));
+            }
+        }
+        if cuts.len() == before {
+            cuts.extend([(frame_i.e1, v), (frame_i.e2, v)]);
+        }
+    }
+    cuts
+}
+
+/// The mean of a polygon's corners (inside it, for a convex one).
+pub(super) fn centroid(poly: &[DVec3]) -> DVec3 {
+    poly.iter().copied().sum::<DVec3>() / poly.len() as f64
+}
+
+/// The parts of the convex planar polygon `poly` on either side of a plane (those with area).
+pub(super) fn split(poly: &[DVec3], normal: DVec3, point: DVec3) -> Vec<Vec<DVec3>> {
+    let offset = -normal.dot(point);
+    // Most planes leave a piece on one side (beyond the tolerance of the clip, which would keep
+    // it whole on that side and drop it on the other).
+    let (lo, hi) = bounding_box_3d(poly);
+    let scale = (hi - lo).length();
+    if geometry::wholly_inside_3d(poly, normal, offset, scale)
+        || geometry::wholly_inside_3d(poly, -normal, -offset, scale)
+    {
+        return vec![poly.to_vec()];
+    }
+    [clip_polygon_3d(poly, normal, offset), clip_polygon_3d(poly, -normal, -offset)]
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// The convex planar polygon clipped to `normal·x + offset >= 0`, if anything with area is left.
+pub(super) fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Option<Vec<DVec3>> {
+    let mut out = SmallPolygon::new();
+    geometry::clip_polygon_3d(poly, normal, offset, &mut out).then(|| out.into_vec())
+}

@@ -1,0 +1,109 @@
+//! What a point of T_i sees of T_j among the occluders of its piece: the whole element, nothing,
+//! or signed convex pieces (inclusion and exclusion of the shadows, which avoids cutting the
+//! window into the pieces that subtracting them leaves).
+
+use glam::{DVec2, DVec3};
+use smallvec::SmallVec;
+
+use super::Context;
+use crate::geometry::{self, SmallPolygon};
+use crate::visibility::{FaceView, Visibility};
+
+/// How the point-to-element integral of a pair is found at each outer point of a piece.
+#[derive(Clone, Copy)]
+pub(super) enum Sight<'a> {
+    /// The whole element is seen from every point of the piece.
+    Whole,
+    /// Per point: the node's view of the face, clipped and shadowed exactly by these occluder
+    /// pieces (those that can come between the piece and the element).
+    PerPoint(&'a [usize]),
+}
+
+impl Context<'_> {
+    /// What the point `p` of element `i` sees of element `j`, shadowed exactly by the occluder
+    /// pieces `among` (those that can come between them).
+    pub(super) fn point_view(&self, i: usize, j: usize, p: DVec3, among: &[usize]) -> PointView {
+        let (ei, el) = (&self.mesh.elements()[i], &self.disc.elements[j]);
+        let normal = self.scene.faces[ei.face].frame.normal;
+        let part = el.in_face();
+        match self.planner.part_view_among(p, normal, ei.face, el.face, &part, among) {
+            FaceView::Skip(_) => PointView::Nothing,
+            FaceView::Visible { clip, shadows } if shadows.len() <= INCLUSION_EXCLUSION => {
+                // The shadows lie in the window, T_j in front of the tangent plane: the
+                // integral over the window less that over their union, by inclusion and
+                // exclusion of their (convex) intersections, without cutting the window into
+                // the pieces that the subtraction makes.
+                let window = match clip {
+                    Some(hp) => match geometry::clip_convex(&part, &hp) {
+                        Some(w) => w,
+                        None => return PointView::Nothing,
+                    },
+                    None => part.to_vec(),
+                };
+                let (added, taken) = inclusion_exclusion(window, shadows);
+                PointView::Signed { added, taken }
+            }
+            view => match self.planner.visible(&view, &part) {
+                Visibility::Skip(_) => PointView::Nothing,
+                Visibility::Full => PointView::Whole,
+                Visibility::Partial(pieces) => {
+                    PointView::Signed { added: pieces, taken: Vec::new() }
+                }
+            },
+        }
+    }
+}
+
+/// What a point of T_i sees of T_j ([`Context::point_view`]).
+pub(super) enum PointView {
+    /// Nothing: T_j is hidden, behind the point or facing away.
+    Nothing,
+    /// The whole of T_j.
+    Whole,
+    /// The convex pieces `added` (face coordinates) less the convex pieces `taken`.
+    Signed { added: Vec<Vec<DVec2>>, taken: Vec<Vec<DVec2>> },
+}
+
+/// The window less the union of the convex `shadows` as signed convex pieces: the window and
+/// the intersections of an even number of shadows added, those of an odd number taken. The
+/// intersections grow one shadow at a time, in index order: one that is empty, or whose box is
+/// apart from the next shadow's, ends that branch (no set holding both meets).
+fn inclusion_exclusion(
+    window: Vec<DVec2>,
+    shadows: Vec<Vec<DVec2>>,
+) -> (Vec<Vec<DVec2>>, Vec<Vec<DVec2>>) {
+    type Boxes = SmallVec<[(DVec2, DVec2); INCLUSION_EXCLUSION]>;
+    let boxes: Boxes = shadows.iter().map(|s| geometry::bounding_box(s)).collect();
+    let apart = |(lo, hi): (DVec2, DVec2), (slo, shi): (DVec2, DVec2)| {
+        hi.x < slo.x || shi.x < lo.x || hi.y < slo.y || shi.y < lo.y
+    };
+    // [added, taken]: a set of an odd number of shadows is taken, the shadows themselves first.
+    let mut signed = [vec![window], Vec::new()];
+    // (last shadow, number of shadows, their intersection) still to extend.
+    let mut sets: SmallVec<[(usize, usize, SmallPolygon<DVec2>); 4]> = SmallVec::new();
+    let extend = |last: usize, members: usize, common: &[DVec2], own, sets: &mut SmallVec<_>| {
+        for b in last + 1..shadows.len() {
+            if !apart(own, boxes[b]) {
+                if let Some(next) = geometry::clip_to_convex(common, &shadows[b]) {
+                    sets.push((b, members + 1, next));
+                }
+            }
+        }
+    };
+    for a in 0..shadows.len() {
+        extend(a, 1, &shadows[a], boxes[a], &mut sets);
+        while let Some((last, members, common)) = sets.pop() {
+            extend(last, members, &common, geometry::bounding_box(&common), &mut sets);
+            signed[members % 2].push(common.into_vec());
+        }
+    }
+    let [added, mut taken] = signed;
+    taken.splice(0..0, shadows);
+    (added, taken)
+}
+
+/// Up to this many shadows on T_j, a point's view is integrated by inclusion and exclusion of the
+/// shadows' intersections (at most 2^k - 1 convex polygons, fewer where shadows are apart)
+/// instead of over the pieces left by subtracting them. On the occluded box (2-core EPYC,
+/// 2026-11-25) 3 took 4.85 s, 4 took 4.75 s, 6 took 4.83 s.
+pub(super) const INCLUSION_EXCLUSION: usize = 4;
