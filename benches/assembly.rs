@@ -28,13 +28,24 @@ fn assembly(c: &mut Criterion) {
         let options = AssemblyOptions::default();
         let n = mesh.len();
         group.bench_function(format!("cpu n = {n}"), |b| {
-            b.iter(|| assemble(&mesh, &disc, &planner, &options, &|_| {}).unwrap())
+            b.iter(|| {
+                assemble(&mesh, &disc, &planner, &options, &radiosity::progress::Silent).unwrap()
+            })
         });
         if let Some(ctx) = ctx {
             let assembler = GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
             group.bench_function(format!("gpu n = {n} ({})", ctx.adapter.name), |b| {
                 b.iter(|| {
-                    assembler.assemble(&scene, &mesh, &disc, &planner, &options, &|_| {}).unwrap()
+                    assembler
+                        .assemble(
+                            &scene,
+                            &mesh,
+                            &disc,
+                            &planner,
+                            &options,
+                            &radiosity::progress::Silent,
+                        )
+                        .unwrap()
                 })
             });
         }

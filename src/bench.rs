@@ -8,13 +8,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::assembly::{AssemblyOptions, CollocationMatrix};
-use crate::discretization::Discretization;
 use crate::error::Result;
 use crate::gpu::GpuTimings;
-use crate::mesh::Mesh;
-use crate::pipeline::{self, Assembler, Backend, RunConfig};
-use crate::scene::Scene;
-use crate::visibility::PairPlanner;
+use crate::pipeline::{self, Assembler, Backend, Problem, RunConfig};
+use crate::progress::Silent;
 
 /// One backend's figures.
 #[derive(Clone, Debug, Serialize)]
@@ -96,15 +93,15 @@ pub fn matrix_differences(a: &CollocationMatrix, b: &CollocationMatrix) -> Matri
     diff
 }
 
-/// Assembles the matrix of `config` (built as `scene`, `mesh`, `disc` by [`pipeline::build`]) on
-/// each of `backends`, `repeats` times each.
+/// Assembles the matrix of `config` for `problem` on each of `backends`, `repeats` times each
+/// (the pair planner built once, outside the timings).
 pub fn run(
     config: &RunConfig,
-    (scene, mesh, disc): &(Scene, Mesh, Discretization),
+    problem: &Problem,
     backends: &[Backend],
     repeats: usize,
 ) -> Result<BenchReport> {
-    let planner = PairPlanner::new(scene);
+    let Problem { scene, mesh, disc, .. } = problem;
     let options: &AssemblyOptions = &config.assembly;
     let repeats = repeats.max(1);
     let mut report = BenchReport {
@@ -138,7 +135,7 @@ pub fn run(
         let mut last = None;
         for _ in 0..repeats {
             let started = Instant::now();
-            let a = assembler.assemble(scene, mesh, disc, &planner, options, &|_| {})?;
+            let a = assembler.assemble(problem, options, &Silent)?;
             let elapsed = started.elapsed().as_secs_f64();
             if elapsed < best {
                 best = elapsed;
@@ -242,11 +239,11 @@ pub const DENSE_BENCH_LIMIT: usize = 12_288;
 /// timings.
 pub fn run_compressed(
     config: &RunConfig,
-    (scene, mesh, disc): &(Scene, Mesh, Discretization),
+    problem: &Problem,
     backends: &[Backend],
     repeats: usize,
 ) -> Result<CompressedBenchReport> {
-    let planner = PairPlanner::new(scene);
+    let Problem { scene, mesh, disc, .. } = problem;
     let repeats = repeats.max(1);
     let mut builds = Vec::new();
     for &backend in backends {
@@ -255,7 +252,7 @@ pub fn run_compressed(
         let mut op = None;
         for _ in 0..repeats {
             let started = Instant::now();
-            op = Some(pipeline::build_compressed(config, &assembler, scene, mesh, disc, &planner)?);
+            op = Some(pipeline::build_compressed(config, &assembler, problem)?);
             best = best.min(started.elapsed().as_secs_f64());
         }
         builds.push((backend, op.expect("at least one repetition"), best));
@@ -276,7 +273,7 @@ pub fn run_compressed(
         let mut dense = None;
         for _ in 0..repeats {
             let started = Instant::now();
-            let a = assembler.assemble(scene, mesh, disc, &planner, &config.assembly, &|_| {})?;
+            let a = assembler.assemble(problem, &config.assembly, &Silent)?;
             dense_best = dense_best.min(started.elapsed().as_secs_f64());
             dense = Some(a.matrix);
         }

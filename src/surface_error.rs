@@ -82,7 +82,7 @@ pub fn surface_errors(
     lattice: usize,
 ) -> Result<SurfaceErrors> {
     let points = sample_points(scene, mesh, lattice);
-    let e = emission_at(scene, &points, planner, truth, emission, &|_| {}).values;
+    let e = emission_at(scene, &points, planner, truth, emission, &crate::progress::Silent).values;
     let ku = assembly::apply_at(&points, mesh, disc, planner, assembly, u)?;
     let (mut interpolant, mut iterated) = (0.0f64, 0.0f64);
     for ((p, e), ku) in points.iter().zip(e).zip(ku) {
@@ -129,8 +129,17 @@ mod tests {
             let truth =
                 TrueSolution::Shadow { beta: 1.0, gamma: 1.5 }.on_faces(&scene, &params).unwrap();
             let emission = EmissionOptions::default();
-            let k = assembly::assemble(&mesh, &disc, &planner, &options, &|_| {}).unwrap();
-            let e = emission_at(&scene, &disc.nodes, &planner, &truth, &emission, &|_| {}).values;
+            let k = assembly::assemble(&mesh, &disc, &planner, &options, &crate::progress::Silent)
+                .unwrap();
+            let e = emission_at(
+                &scene,
+                &disc.nodes,
+                &planner,
+                &truth,
+                &emission,
+                &crate::progress::Silent,
+            )
+            .values;
             let u = solve(&k.matrix, &e, SolverOptions::with(SolverChoice::Lu)).unwrap().u;
             let ku = assembly::apply_at(&disc.nodes, &mesh, &disc, &planner, &options, &u).unwrap();
             let scale = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -83,9 +83,11 @@ fn gpu_and_cpu_matrices_agree_to_1e_12_in_f64() {
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
         let planner = PairPlanner::new(&scene);
         let opts = AssemblyOptions::default();
-        let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+        let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
         let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
-        let gpu = assembler.assemble(&scene, &mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+        let gpu = assembler
+            .assemble(&scene, &mesh, &disc, &planner, &opts, &radiosity::progress::Silent)
+            .unwrap();
         assert_eq!(cpu.stats, gpu.stats);
         let (d, i, j) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
         println!("{which} discontinuity={discontinuity} {method}: max row-relative diff {d:.2e}");
@@ -108,9 +110,11 @@ fn f32_kernels_are_within_single_precision_error_of_the_f64_cpu_matrix() {
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
         let planner = PairPlanner::new(&scene);
         let opts = AssemblyOptions::default();
-        let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+        let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
         let assembler = gpu::GpuAssembler::new(ctx, Precision::F32, method).unwrap();
-        let f32 = assembler.assemble(&scene, &mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+        let f32 = assembler
+            .assemble(&scene, &mesh, &disc, &planner, &opts, &radiosity::progress::Silent)
+            .unwrap();
         let (d, i, j) = max_row_relative_diff(&cpu.matrix, &f32.matrix);
         println!("{method}: f32 max row-relative diff {d:.2e}");
         // f32 rounding is 6e-8; near the node the closed forms amplify it where their edge terms
@@ -137,12 +141,12 @@ fn the_gpu_column_of_table_4_1_agrees_with_the_exact_cpu_column() {
         progress: Default::default(),
     };
     let result = run_study("table-4.1", &options).unwrap();
-    let gpu_rows: Vec<_> = result.rows.iter().filter(|r| r.backend == "gpu").collect();
+    let gpu_rows: Vec<_> = result.rows.iter().filter(|r| r.label.backend == "gpu").collect();
     assert_eq!(gpu_rows.len(), 3, "n = 10, 40, 160");
     for r in gpu_rows {
-        assert_eq!(r.quadrature.name(), "exact");
+        assert_eq!(r.label.quadrature.name(), "exact");
         let difference = r.integration_error.expect("compared with the exact CPU run");
-        assert!(difference < 1e-13, "n = {}: {difference:e}", r.n);
+        assert!(difference < 1e-13, "n = {}: {difference:e}", r.label.n);
     }
 }
 
@@ -156,11 +160,11 @@ fn studies_on_the_gpu_print_the_cpu_errors() {
         let gpu = run_study(id, &options(StudyDevice::Gpu(Precision::F64))).unwrap();
         assert_eq!(cpu.rows.len(), gpu.rows.len());
         for (c, g) in cpu.rows.iter().zip(&gpu.rows) {
-            assert_eq!(g.backend, "gpu");
+            assert_eq!(g.label.backend, "gpu");
             assert!(
                 (c.error - g.error).abs() <= 1e-10 * c.error,
                 "{id} n = {}: {} vs {}",
-                c.n,
+                c.label.n,
                 c.error,
                 g.error
             );
@@ -183,10 +187,18 @@ fn tiles_and_a_full_near_list_give_the_same_matrix() {
     let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
     let limits = gpu::TileLimits { rows: 97, near_pairs: 100, ..Default::default() };
     let gpu = assembler
-        .assemble_with_limits(&scene, &mesh, &disc, &planner, &opts, limits, &|_| {})
+        .assemble_with_limits(
+            &scene,
+            &mesh,
+            &disc,
+            &planner,
+            &opts,
+            limits,
+            &radiosity::progress::Silent,
+        )
         .unwrap();
     assert!(assembler.last_timings().tiles > 1);
-    let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+    let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
     // Closed box: rows of K/rho sum to 1.
@@ -210,10 +222,18 @@ fn tiles_are_sized_by_the_views_of_a_scene_of_many_faces() {
     let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
     let limits = gpu::TileLimits { binding_bytes: 64 << 10, ..Default::default() };
     let gpu = assembler
-        .assemble_with_limits(&scene, &mesh, &disc, &planner, &opts, limits, &|_| {})
+        .assemble_with_limits(
+            &scene,
+            &mesh,
+            &disc,
+            &planner,
+            &opts,
+            limits,
+            &radiosity::progress::Silent,
+        )
         .unwrap();
     assert!(assembler.last_timings().tiles > 10, "{} tiles", assembler.last_timings().tiles);
-    let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+    let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
 }
@@ -233,13 +253,21 @@ fn tiles_whose_visible_pieces_outgrow_a_binding_are_split() {
     let binding: u64 = 24 << 10;
     let limits = gpu::TileLimits { binding_bytes: binding, ..Default::default() };
     let gpu = assembler
-        .assemble_with_limits(&scene, &mesh, &disc, &planner, &opts, limits, &|_| {})
+        .assemble_with_limits(
+            &scene,
+            &mesh,
+            &disc,
+            &planner,
+            &opts,
+            limits,
+            &radiosity::progress::Silent,
+        )
         .unwrap();
     // Tiles sized by their output alone: 5 rows of 576 entries each.
     let by_output = disc.dof().div_ceil((binding / (8 * disc.dof() as u64)) as usize);
     let tiles = assembler.last_timings().tiles;
     assert!(tiles > by_output, "{tiles} tiles, as many as the output alone needs ({by_output})");
-    let cpu = assemble(&mesh, &disc, &planner, &opts, &|_| {}).unwrap();
+    let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
 }

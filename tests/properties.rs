@@ -114,7 +114,7 @@ proptest! {
         let method = if linear { Method::Linear { alpha: 1.0 / 6.0 } } else { Method::Centroid };
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
         let planner = PairPlanner::new(&scene);
-        let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &|_| {}).unwrap();
+        let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &radiosity::progress::Silent).unwrap();
         for i in 0..disc.dof() {
             let row = a.matrix.row(i);
             prop_assert!(row.iter().all(|v| v.is_finite()));
@@ -144,7 +144,7 @@ proptest! {
             let method = if linear { Method::Linear { alpha: 1.0 / 6.0 } } else { Method::Centroid };
             let disc = Discretization::new(&scene, &mesh, method).unwrap();
             let planner = PairPlanner::new(&scene);
-            assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &|_| {}).unwrap().matrix
+            assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &radiosity::progress::Silent).unwrap().matrix
         };
         let (one, scaled) = (matrix(1.0), matrix(10f64.powi(exponent)));
         for (a, b) in one.as_slice().iter().zip(scaled.as_slice()) {

@@ -23,6 +23,7 @@ use crate::kernels::far_field::FarFieldRule;
 use crate::kernels::graded::GradedRule;
 use crate::kernels::{Affine2, Observer, exact, lanes};
 use crate::mesh::Mesh;
+use crate::progress::Progress;
 use crate::quadrature::ImtRule;
 use crate::visibility::{FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility};
 
@@ -226,14 +227,14 @@ pub struct Assembly {
     pub stats: PairStats,
 }
 
-/// Assembles K on the CPU. `progress` is called with the number of rows finished (from worker
+/// Assembles K on the CPU. `progress` advances by the rows finished (from worker
 /// threads).
 pub fn assemble(
     mesh: &Mesh,
     disc: &Discretization,
     planner: &PairPlanner,
     options: &AssemblyOptions,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn Progress,
 ) -> Result<Assembly> {
     options.quadrature.validate()?;
     let dof = disc.dof();
@@ -244,7 +245,7 @@ pub fn assemble(
         .enumerate()
         .map_init(RecentHiders::default, |hiders, (i, row)| {
             let s = assemble_row(&disc.nodes[i], row, mesh, disc, planner, &integrator, hiders);
-            progress(1);
+            progress.advance(1);
             s
         })
         .reduce(PairStats::default, |mut a, b| {

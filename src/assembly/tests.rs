@@ -11,7 +11,8 @@ fn row_sum_range(scene: &Scene, method: Method, refine: u32) -> (f64, f64, PairS
     let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();
     let disc = Discretization::new(scene, &mesh, method).unwrap();
     let planner = PairPlanner::new(scene);
-    let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &|_| {}).unwrap();
+    let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &crate::progress::Silent)
+        .unwrap();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, node) in disc.nodes.iter().enumerate() {
         let s: f64 = a.matrix.row(i).iter().sum::<f64>() / node.rho;
@@ -74,7 +75,7 @@ fn accelerated_plan_assembles_the_core_solvers_matrix() {
         let options = AssemblyOptions::default();
         let assembled = |acceleration| {
             let planner = PairPlanner::with_acceleration(&scene, acceleration);
-            assemble(&mesh, &disc, &planner, &options, &|_| {}).unwrap()
+            assemble(&mesh, &disc, &planner, &options, &crate::progress::Silent).unwrap()
         };
         let (fast, core) = (assembled(Acceleration::Tree), assembled(Acceleration::BoxScan));
         assert!(fast.stats.hidden > 0 && fast.stats.partial > 0, "{:?}", fast.stats);
@@ -95,7 +96,7 @@ fn lanes_assemble_the_scalar_matrix() {
         let planner = PairPlanner::new(&scene);
         let assembled = |lanes| {
             let options = AssemblyOptions { lanes, ..Default::default() };
-            assemble(&mesh, &disc, &planner, &options, &|_| {}).unwrap()
+            assemble(&mesh, &disc, &planner, &options, &crate::progress::Silent).unwrap()
         };
         let (vector, scalar) = (assembled(true), assembled(false));
         assert_eq!(vector.stats, scalar.stats);
@@ -149,7 +150,9 @@ fn the_row_walk_keeps_every_matrix_bit_for_bit() {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
         let planner = PairPlanner::new(&scene);
-        let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &|_| {}).unwrap();
+        let a =
+            assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &crate::progress::Silent)
+                .unwrap();
         let found = fingerprint(&a.matrix);
         assert_eq!(found, expected, "{name}: fingerprint {found:#x}, expected {expected:#x}");
     }

@@ -1,12 +1,9 @@
 //! `radiosity bench`: the same matrix on each backend, timed and compared.
 
-use radiosity::discretization::Discretization;
 use radiosity::error::{Error, Result};
-use radiosity::mesh::Mesh;
 use radiosity::operator::OperatorChoice;
 use radiosity::pipeline::{self, Backend};
 use radiosity::report;
-use radiosity::scene::Scene;
 
 use super::*;
 
@@ -39,13 +36,13 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
         backends.push(b);
     }
     args.operator.apply(&mut config)?;
-    let built = pipeline::build(&config)?;
+    let built = pipeline::Problem::new(&config)?;
     // Under auto only a CPU-only bench of a large system switches to the compressed operator;
     // asked for, it is built on each named backend and benched against the dense CPU assembly.
     let gpu_named = backends.iter().any(|b| *b != Backend::Cpu);
     let compressed_bench = match config.operator {
         OperatorChoice::Compressed => true,
-        OperatorChoice::Auto => !gpu_named && pipeline::compresses(&config, built.2.dof()),
+        OperatorChoice::Auto => !gpu_named && pipeline::compresses(&config, built.disc.dof()),
         OperatorChoice::Dense => false,
     };
     if compressed_bench {
@@ -90,7 +87,7 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
 /// `bench` of the compressed operator against the dense CPU assembly.
 fn compressed(
     config: &radiosity::pipeline::RunConfig,
-    built: &(Scene, Mesh, Discretization),
+    built: &pipeline::Problem,
     backends: &[Backend],
     args: &BenchArgs,
 ) -> Result<()> {

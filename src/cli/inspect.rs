@@ -3,9 +3,8 @@
 use serde::Serialize;
 
 use radiosity::error::{Error, Result};
-use radiosity::pipeline::{self};
+use radiosity::pipeline::{self, Problem};
 use radiosity::report;
-use radiosity::visibility::PairPlanner;
 
 use super::assemble::assemble_without_progress;
 use super::*;
@@ -56,22 +55,22 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         });
     }
     let config = args.config()?;
-    let (scene, mesh, disc) = pipeline::build(&config)?;
-    super::output::print_notes(&scene);
+    let problem = Problem::new(&config)?;
+    let Problem { scene, mesh, disc, planner, .. } = &problem;
+    super::output::print_notes(scene);
     let started = std::time::Instant::now();
-    let planner = PairPlanner::new(&scene);
     let dof = disc.dof();
     let (row_sums, p, blocks) = if pipeline::compresses(&config, dof) {
         let assembler =
             pipeline::Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
-        let op = pipeline::build_compressed(&config, &assembler, &scene, &mesh, &disc, &planner)?;
+        let op = pipeline::build_compressed(&config, &assembler, &problem)?;
         (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats))
     } else {
-        let assembled = assemble_without_progress(&config, &scene, &mesh, &disc, &planner)?;
+        let assembled = assemble_without_progress(&config, &problem)?;
         let sums = (0..dof).map(|i| assembled.matrix.row(i).iter().sum::<f64>()).collect();
         (sums, assembled.stats, None)
     };
-    let setup_seconds = started.elapsed().as_secs_f64();
+    let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (node, sum) in disc.nodes.iter().zip(&row_sums) {
         if node.rho > 0.0 {

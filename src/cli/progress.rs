@@ -6,7 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use radiosity::progress::{Progress, ProgressSink};
 
 /// A bar per stage of `len` steps, on stderr.
-pub(crate) fn bar(stage: &str, len: usize) -> ProgressBar {
+fn bar(stage: &str, len: usize) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     bar.set_style(
         ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({elapsed}, eta {eta})")

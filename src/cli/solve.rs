@@ -54,22 +54,22 @@ pub(crate) fn write_outputs(
             camera.eye = parse_point("eye", e)? - origin;
         }
         let r = &run.report;
-        let title = format!("{}: u, {} method, n = {}", r.surface, r.method, r.n);
+        let title = format!("{}: u, {} method, n = {}", r.label.surface, r.label.method, r.label.n);
         report::render_png(&field, &camera, size, &title, picture.1, std::path::Path::new(path))?;
     }
     Ok(())
 }
 
 pub(crate) fn print_run(r: &RunReport) {
-    let alpha = r.alpha.map(|a| format!(", alpha = {a}")).unwrap_or_default();
+    let alpha = r.label.alpha.map(|a| format!(", alpha = {a}")).unwrap_or_default();
     println!(
         "{} ({} mesh, {} method{alpha}): n = {}, dof = {}",
-        r.surface, r.mesh, r.method, r.n, r.dof
+        r.label.surface, r.label.mesh, r.label.method, r.label.n, r.label.dof
     );
     if let Some(device) = &r.device {
         println!(
             "assembled on {device} in {} (kernels compiled in {:.3} s, not in the setup time)",
-            r.precision, r.preparation_seconds
+            r.label.precision, r.preparation_seconds
         );
     }
     if let Some(e) = r.error {

@@ -2,13 +2,12 @@
 
 use radiosity::error::{Error, Result};
 use radiosity::mesh::Mesh;
-use radiosity::pipeline::{self};
+use radiosity::pipeline::Problem;
 use radiosity::report;
 use radiosity::scene::Scene;
 use radiosity::viewfactors::{
     MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors,
 };
-use radiosity::visibility::PairPlanner;
 
 use super::*;
 
@@ -21,10 +20,10 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         });
     }
     let config = args.geometry.config()?;
-    let (scene, mesh, _) = pipeline::build(&config)?;
-    super::output::print_notes(&scene);
+    let problem = Problem::new(&config)?;
+    let Problem { scene, mesh, planner, .. } = &problem;
+    super::output::print_notes(scene);
     let started = std::time::Instant::now();
-    let planner = PairPlanner::new(&scene);
     if args.max_depth > 6 {
         return Err(Error::InvalidParameter {
             name: "max-depth",
@@ -37,9 +36,10 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         max_depth: args.max_depth,
         ..Default::default()
     };
-    let bar = super::progress::bar("viewfactors", mesh.len());
-    let f = view_factors(&scene, &mesh, &planner, &options, &|k| bar.inc(k as u64))?;
-    bar.finish_and_clear();
+    let progress = super::progress::on_stderr();
+    progress.start("viewfactors", mesh.len());
+    let f = view_factors(scene, mesh, planner, &options, &*progress)?;
+    progress.finish();
     let (row_sum_min, row_sum_max) = f.row_sum_range();
     let summary = ViewFactorSummary {
         surface: scene.name.clone(),
@@ -49,7 +49,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         reciprocity_error: f.reciprocity_error(),
         error_estimate: f.error_estimate,
         evaluations: f.evaluations,
-        seconds: started.elapsed().as_secs_f64(),
+        seconds: problem.plan_seconds + started.elapsed().as_secs_f64(),
     };
     if summary.error_estimate > args.tolerance {
         // Cells deeper than the split limit are settled with the error they have.
@@ -66,7 +66,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     if let Some(target) = &args.json {
         return report::write_json(&summary, target);
     }
-    print_summary(&summary, &f, &scene, &mesh);
+    print_summary(&summary, &f, scene, mesh);
     Ok(())
 }
 

@@ -22,6 +22,7 @@ use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
 use crate::kernels::far_field::FarFieldRule;
 use crate::mesh::Mesh;
+use crate::progress::Progress;
 use crate::quadrature::ImtRule;
 use crate::scene::Scene;
 use crate::visibility::{FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility};
@@ -347,7 +348,7 @@ impl<'a> GpuAssembler<'a> {
         limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
     }
 
-    /// Assembles K like [`crate::assembly::assemble`]. `progress` receives rows finished.
+    /// Assembles K like [`crate::assembly::assemble`]. `progress` advances by the rows finished.
     pub fn assemble(
         &self,
         scene: &Scene,
@@ -355,7 +356,7 @@ impl<'a> GpuAssembler<'a> {
         disc: &Discretization,
         planner: &PairPlanner,
         options: &AssemblyOptions,
-        progress: &(dyn Fn(usize) + Sync),
+        progress: &dyn Progress,
     ) -> Result<Assembly> {
         self.assemble_with_limits(
             scene,
@@ -378,7 +379,7 @@ impl<'a> GpuAssembler<'a> {
         planner: &PairPlanner,
         options: &AssemblyOptions,
         limits: TileLimits,
-        progress: &(dyn Fn(usize) + Sync),
+        progress: &dyn Progress,
     ) -> Result<Assembly> {
         if disc.method.nodes_per_element() != self.method.nodes_per_element() {
             return Err(Error::Gpu(format!(
@@ -594,7 +595,7 @@ impl<'a> GpuAssembler<'a> {
         &self,
         done: InFlight,
         matrix: &mut CollocationMatrix,
-        progress: &(dyn Fn(usize) + Sync),
+        progress: &dyn Progress,
     ) -> Result<()> {
         let started = std::time::Instant::now();
         compute::wait(self.ctx, &done.staging, done.size)?;
@@ -612,7 +613,7 @@ impl<'a> GpuAssembler<'a> {
         t.readback_seconds += started.elapsed().as_secs_f64();
         drop(t);
         debug_assert_eq!(done.size as usize, done.rows.len() * dof * self.precision.bytes());
-        progress(done.rows.len());
+        progress.advance(done.rows.len());
         Ok(())
     }
 }

@@ -58,7 +58,9 @@ fn compressed_in_batches(c: &Case, tolerance: f64, leaf_size: usize) -> Compress
 }
 
 fn dense(c: &Case) -> CollocationMatrix {
-    assemble(&c.mesh, &c.disc, &c.planner, &AssemblyOptions::default(), &|_| {}).unwrap().matrix
+    assemble(&c.mesh, &c.disc, &c.planner, &AssemblyOptions::default(), &crate::progress::Silent)
+        .unwrap()
+        .matrix
 }
 
 #[test]

@@ -14,6 +14,7 @@ use super::FaceFunction;
 use crate::discretization::Node;
 use crate::geometry::{HalfPlane, PlaneFrame, clip_convex};
 use crate::kernels::{Observer, Quadratic2, exact};
+use crate::progress::Progress;
 use crate::quadrature::{ImtRule, Tolerance, integrate_triangle};
 use crate::scene::Scene;
 use crate::visibility::{FaceSight, PairPlanner, RecentHiders, Views, Visibility};
@@ -51,7 +52,7 @@ pub fn emission_at(
     planner: &PairPlanner,
     u: &[FaceFunction],
     options: &EmissionOptions,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn Progress,
 ) -> Emission {
     let imt = ImtRule::new(options.imt_nodes.max(2));
     let per_point: Vec<(f64, f64)> = points
@@ -87,7 +88,7 @@ pub fn emission_at(
                 integral += value;
                 error += estimate;
             });
-            progress(1);
+            progress.advance(1);
             (u[node.face].eval(node.position) - node.rho / PI * integral, node.rho / PI * error)
         })
         .collect();
@@ -198,8 +199,22 @@ mod tests {
                 })
                 .collect();
             let opts = EmissionOptions::default();
-            let e1 = emission_at(&scene, &disc.nodes, &planner, &exact_u, &opts, &|_| {});
-            let e2 = emission_at(&scene, &disc.nodes, &planner, &general_u, &opts, &|_| {});
+            let e1 = emission_at(
+                &scene,
+                &disc.nodes,
+                &planner,
+                &exact_u,
+                &opts,
+                &crate::progress::Silent,
+            );
+            let e2 = emission_at(
+                &scene,
+                &disc.nodes,
+                &planner,
+                &general_u,
+                &opts,
+                &crate::progress::Silent,
+            );
             for (i, (a, b)) in e1.values.iter().zip(&e2.values).enumerate() {
                 let scale = disc.nodes[i].position.truncate().length_squared().max(1.0);
                 assert!((a - b).abs() < 1e-10 * scale, "{} node {i}: {a} vs {b}", scene.name);
@@ -218,8 +233,10 @@ mod tests {
             let u = sol.on_faces(&scene, &p).unwrap();
             let loose = EmissionOptions { relative_tolerance: 1e-10, ..Default::default() };
             let tight = EmissionOptions { relative_tolerance: 1e-13, ..Default::default() };
-            let a = emission_at(&scene, &disc.nodes, &planner, &u, &loose, &|_| {});
-            let b = emission_at(&scene, &disc.nodes, &planner, &u, &tight, &|_| {});
+            let a =
+                emission_at(&scene, &disc.nodes, &planner, &u, &loose, &crate::progress::Silent);
+            let b =
+                emission_at(&scene, &disc.nodes, &planner, &u, &tight, &crate::progress::Silent);
             for (i, (x, y)) in a.values.iter().zip(&b.values).enumerate() {
                 assert!((x - y).abs() < 1e-10 * y.abs().max(1.0), "{sol}: node {i}: {x} vs {y}");
             }

@@ -49,8 +49,8 @@ fn seconds(t: f64) -> String {
 type Column = (&'static str, fn(&StudyRow) -> Option<String>);
 
 const COLUMNS: [Column; 14] = [
-    ("n", |r| Some(r.n.to_string())),
-    ("dof", |r| Some(r.dof.to_string())),
+    ("n", |r| Some(r.label.n.to_string())),
+    ("dof", |r| Some(r.label.dof.to_string())),
     ("E_n", |r| Some(sci(r.error))),
     ("ratio", |r| r.ratio.map(|x| format!("{x:.2}"))),
     ("paper E_n", |r| r.paper_error.map(sci)),

@@ -36,8 +36,8 @@ fn rate_text(rate: Option<f64>) -> String {
 fn convergence(result: &StudyResult) -> Figure {
     let mut surfaces: Vec<&str> = Vec::new();
     for r in &result.rows {
-        if !surfaces.contains(&r.surface.as_str()) {
-            surfaces.push(&r.surface);
+        if !surfaces.contains(&r.label.surface.as_str()) {
+            surfaces.push(&r.label.surface);
         }
     }
     let panels = surfaces
@@ -48,20 +48,22 @@ fn convergence(result: &StudyResult) -> Figure {
                 .series
                 .iter()
                 .filter(|s| {
-                    rows_of(result, &s.series).first().is_some_and(|r| r.surface == surface)
+                    rows_of(result, &s.series).first().is_some_and(|r| r.label.surface == surface)
                 })
                 .collect();
             for (k, summary) in summaries.iter().enumerate() {
                 let rows = rows_of(result, &summary.series);
-                let mesh = rows[0].mesh;
+                let mesh = rows[0].label.mesh;
                 let kinds: [ErrorKind; 3] = [
                     ("nodes", summary.rate, |r| Some(r.error), false),
                     ("u_n over S", summary.surface_rate, |r| r.surface_error, true),
                     ("E + K u_n over S", summary.iterated_rate, |r| r.iterated_error, true),
                 ];
                 for (j, (what, rate, value, dashed)) in kinds.into_iter().enumerate() {
-                    let points: Vec<(f64, f64)> =
-                        rows.iter().filter_map(|r| value(r).map(|e| (r.n as f64, e))).collect();
+                    let points: Vec<(f64, f64)> = rows
+                        .iter()
+                        .filter_map(|r| value(r).map(|e| (r.label.n as f64, e)))
+                        .collect();
                     if points.is_empty() {
                         continue;
                     }
@@ -79,7 +81,7 @@ fn convergence(result: &StudyResult) -> Figure {
                 }
             }
             Panel {
-                caption: format!("{} surface, {} method", surface, result.rows[0].method),
+                caption: format!("{} surface, {} method", surface, result.rows[0].label.method),
                 x_label: "n (triangles)".into(),
                 y_label: "maximum error".into(),
                 lines,
@@ -98,7 +100,9 @@ fn error_vs_time(result: &StudyResult) -> Figure {
         let ran: Vec<&SeriesSummary> = result
             .series
             .iter()
-            .filter(|s| rows_of(result, &s.series).first().is_some_and(|r| r.method == method))
+            .filter(|s| {
+                rows_of(result, &s.series).first().is_some_and(|r| r.label.method == method)
+            })
             .collect();
         if ran.is_empty() {
             continue;
@@ -117,7 +121,7 @@ fn error_vs_time(result: &StudyResult) -> Figure {
         let front = result
             .rows
             .iter()
-            .filter(|r| r.method == method && r.pareto == Some(true))
+            .filter(|r| r.label.method == method && r.pareto == Some(true))
             .map(|r| (r.setup_seconds, r.error))
             .collect();
         panels.push(Panel {

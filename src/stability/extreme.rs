@@ -18,10 +18,10 @@ use crate::gpu::Precision;
 use crate::kernels::reference::{integral, polar_integral};
 use crate::kernels::{Affine2, Observer};
 use crate::mesh::{Mesh, MeshKind};
-use crate::pipeline::{Backend, assemble_on};
+use crate::pipeline::{Backend, Problem, assemble_on};
+use crate::progress::Silent;
 use crate::quadrature::Tolerance;
 use crate::scene::{Face, Scene};
-use crate::visibility::PairPlanner;
 
 /// One (node, element) configuration.
 #[derive(Clone, Debug)]
@@ -388,14 +388,14 @@ pub fn run(backends: &[Backend]) -> Result<Vec<ExtremeRow>> {
         } else {
             geometric_condition(case.node, case.normal, &case.element)
         };
-        let planner = PairPlanner::new(&scene);
+        let problem = Problem::from_parts(scene, mesh, disc);
         let columns: Vec<usize> = match case.method {
             Method::Centroid => vec![1],
             Method::Linear { .. } => vec![3, 4, 5],
         };
         let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let error_with = |backend: Backend, options: &AssemblyOptions| -> Result<f64> {
-            let (a, _) = assemble_on(backend, &scene, &mesh, &disc, &planner, options, &|_| {})?;
+            let (a, _) = assemble_on(backend, &problem, options, &Silent)?;
             let got: Vec<f64> = columns.iter().map(|&j| a.matrix.get(0, j)).collect();
             let diff = got.iter().zip(&reference).fold(0.0f64, |m, (g, r)| m.max((g - r).abs()));
             Ok(match got.iter().all(|g| g.is_finite()) {

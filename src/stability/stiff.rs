@@ -16,10 +16,10 @@ use crate::assembly::{AssemblyOptions, CollocationMatrix};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
 use crate::mesh::{Mesh, MeshKind};
-use crate::pipeline::{Backend, assemble_on};
+use crate::pipeline::{Backend, Problem, assemble_on};
+use crate::progress::Silent;
 use crate::scene::{Face, Scene, baffled_box, cube};
 use crate::solve::{LuSolution, SolverChoice, SolverOptions, compensated_residual, solve};
-use crate::visibility::PairPlanner;
 
 /// The reflectivities of the study.
 pub const RHOS: [f64; 7] = [0.9, 0.99, 0.999, 0.9999, 0.999999, 0.99999999, 1.0];
@@ -100,14 +100,14 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
         };
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine)?;
         let disc = Discretization::new(&scene, &mesh, method)?;
-        let planner = PairPlanner::new(&scene);
-        let options = AssemblyOptions::default();
-        let (k1, _) = assemble_on(backend, &scene, &mesh, &disc, &planner, &options, &|_| {})?;
+        let problem = Problem::from_parts(scene, mesh, disc);
+        let (k1, _) = assemble_on(backend, &problem, &AssemblyOptions::default(), &Silent)?;
+        let disc = &problem.disc;
         let exact: Vec<f64> =
             disc.nodes.iter().map(|n| 1.0 + n.position.dot(DVec3::new(0.5, 0.25, 0.125))).collect();
         let dof = disc.dof();
         for rho in RHOS {
-            let scales = row_rhos(&disc, black, rho);
+            let scales = row_rhos(disc, black, rho);
             let data = k1
                 .matrix
                 .as_slice()

@@ -152,11 +152,11 @@ fn row_of(
     difference: Option<f64>,
 ) -> CompressionRow {
     CompressionRow {
-        method: r.method,
-        n: r.n,
-        dof: r.dof,
+        method: r.label.method,
+        n: r.label.n,
+        dof: r.label.dof,
         operator: r.operator,
-        backend: r.backend,
+        backend: r.label.backend,
         compression_tolerance: tolerance,
         error: r.error.unwrap_or(f64::NAN),
         difference_from_dense: difference,

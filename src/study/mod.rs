@@ -15,7 +15,7 @@ use serde::Serialize;
 use crate::assembly::Quadrature;
 use crate::error::{Error, Result};
 use crate::gpu;
-use crate::pipeline::{self, Backend, RunConfig};
+use crate::pipeline::{self, Backend, RunConfig, RunLabel};
 use crate::progress::ProgressSink;
 use crate::quadrature::ImtRule;
 
@@ -37,25 +37,9 @@ pub struct StudyOptions {
 pub struct StudyRow {
     /// The series' label.
     pub series: String,
-    /// Scene name (`four-piece`, `five-piece`).
-    pub surface: String,
-    /// `uniform` or `discontinuity`.
-    pub mesh: &'static str,
-    /// `centroid` or `linear`.
-    pub method: &'static str,
-    /// α of the linear method.
-    pub alpha: Option<f64>,
-    /// How the collocation integrals were evaluated (`quadrature` and its parameters).
+    /// What was run: scene, mesh, method, quadrature, backend, precision, n and dof.
     #[serde(flatten)]
-    pub quadrature: Quadrature,
-    /// `cpu` or `gpu`.
-    pub backend: &'static str,
-    /// `f64` or `f32`.
-    pub precision: &'static str,
-    /// Elements.
-    pub n: usize,
-    /// Unknowns.
-    pub dof: usize,
+    pub label: RunLabel,
     /// Max error at the nodes E_n.
     pub error: f64,
     /// E_{n/4} / E_n.
@@ -206,12 +190,12 @@ impl SeriesRun<'_> {
             self.options.progress.note(&format!("{}: {label}: n = {}", spec.id, mesh.len()));
             let report = pipeline::run(&config)?;
             let error = report.error.expect("a true solution is set");
-            let paper_error = lookup(series.paper, report.n);
+            let paper_error = lookup(series.paper, report.label.n);
             let paper_ratio = match (previous, paper_error) {
                 (Some((_, Some(p))), Some(q)) => Some(p / q),
                 _ => None,
             };
-            let key = (report.method, report.n);
+            let key = (report.label.method, report.label.n);
             let integration_error = if !timing {
                 None
             } else if series.quadrature == Quadrature::Exact
@@ -225,15 +209,7 @@ impl SeriesRun<'_> {
             };
             rows.push(StudyRow {
                 series: label.clone(),
-                surface: report.surface,
-                mesh: report.mesh,
-                method: report.method,
-                alpha: report.alpha,
-                quadrature: report.quadrature,
-                backend: report.backend,
-                precision: report.precision,
-                n: report.n,
-                dof: report.dof,
+                label: report.label.clone(),
                 error,
                 ratio: previous.map(|(e, _)| e / error),
                 setup_seconds: report.setup_seconds,
@@ -242,7 +218,7 @@ impl SeriesRun<'_> {
                 paper_error,
                 paper_ratio,
                 relative_to_paper: paper_error.map(|p| (error - p) / p),
-                paper_setup_seconds: lookup(series.paper_seconds, report.n),
+                paper_setup_seconds: lookup(series.paper_seconds, report.label.n),
                 integration_error,
                 surface_error: report.over_surface.map(|s| s.interpolant),
                 iterated_error: report.over_surface.map(|s| s.iterated),
@@ -280,7 +256,7 @@ fn series_config(
 fn summary(label: String, done: &[StudyRow]) -> SeriesSummary {
     let rate_of = |f: &dyn Fn(&StudyRow) -> Option<f64>| {
         let points: Option<Vec<(usize, f64)>> =
-            done.iter().map(|r| f(r).map(|e| (r.n, e))).collect();
+            done.iter().map(|r| f(r).map(|e| (r.label.n, e))).collect();
         points.and_then(|p| fit_rate(&p))
     };
     SeriesSummary {
@@ -298,11 +274,11 @@ fn mark_pareto_fronts(rows: &mut [StudyRow]) {
     for method in ["centroid", "linear"] {
         let points: Vec<(f64, f64)> = rows
             .iter()
-            .filter(|r| r.method == method)
+            .filter(|r| r.label.method == method)
             .map(|r| (r.setup_seconds, r.error))
             .collect();
         let front = pareto_front(&points);
-        for (row, on_front) in rows.iter_mut().filter(|r| r.method == method).zip(front) {
+        for (row, on_front) in rows.iter_mut().filter(|r| r.label.method == method).zip(front) {
             row.pareto = Some(on_front);
         }
     }

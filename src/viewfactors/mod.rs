@@ -41,6 +41,7 @@ use crate::assembly::{AssemblyOptions, PairIntegrator};
 use crate::discretization::{Discretization, Method};
 use crate::error::Result;
 use crate::mesh::{Element, Mesh};
+use crate::progress::Progress;
 use crate::scene::Scene;
 use crate::visibility::PairPlanner;
 
@@ -178,7 +179,7 @@ pub fn view_factors(
     mesh: &Mesh,
     planner: &PairPlanner,
     options: &ViewFactorOptions,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn Progress,
 ) -> Result<ViewFactors> {
     let disc = Discretization::new(scene, mesh, Method::Centroid)?;
     let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
@@ -200,7 +201,7 @@ pub fn view_factors(
                     .get_or_insert_with(|| !planner.candidates(face, other).is_empty());
                 *entry = context.pair(i, j, occluded, &rules, &mut tally);
             }
-            progress(1);
+            progress.advance(1);
             (row, tally.error, tally.evaluations)
         })
         .collect();

@@ -28,7 +28,13 @@ fn square(name: &str, z: f64, up: bool, x0: f64) -> Face {
 fn compute(scene: &Scene, refine: u32) -> (Mesh, ViewFactors) {
     let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();
     let planner = PairPlanner::new(scene);
-    let f = view_factors(scene, &mesh, &planner, &ViewFactorOptions::default(), &|_| {});
+    let f = view_factors(
+        scene,
+        &mesh,
+        &planner,
+        &ViewFactorOptions::default(),
+        &crate::progress::Silent,
+    );
     (mesh, f.unwrap())
 }
 

@@ -1,0 +1,88 @@
+//! The backend that assembles K: the CPU's threads, or the GPU's kernels compiled once.
+
+use super::{Backend, Problem};
+use crate::assembly::{self, Assembly, AssemblyOptions, Quadrature};
+use crate::discretization::Method;
+use crate::error::{Error, Result};
+use crate::gpu::{self, GpuAssembler, GpuTimings};
+use crate::progress::Progress;
+
+/// A backend ready to assemble K: on the GPU, the kernels compiled once (the one-time cost that
+/// timings of the assembly leave out). Every command that assembles goes through it, so `bench`
+/// times the very matrix `solve` uses.
+pub enum Assembler {
+    /// Plain Rust on all cores.
+    Cpu,
+    /// The GPU's compiled kernels.
+    Gpu(GpuAssembler<'static>),
+}
+
+impl Assembler {
+    /// Prepares `backend` for `method` and `quadrature` (the GPU evaluates the exact method only).
+    pub fn new(backend: Backend, method: Method, quadrature: Quadrature) -> Result<Self> {
+        match backend {
+            Backend::Cpu => Ok(Self::Cpu),
+            Backend::Gpu(_) if quadrature != Quadrature::Exact => Err(Error::InvalidParameter {
+                name: "quadrature",
+                value: quadrature.name().into(),
+                reason: "the GPU backend evaluates the exact method only; use the CPU backend"
+                    .into(),
+            }),
+            Backend::Gpu(precision) => {
+                let ctx = gpu::context_for(precision)?;
+                Ok(Self::Gpu(GpuAssembler::new(ctx, precision, method)?))
+            }
+        }
+    }
+
+    /// The GPU adapter's name and backend, for reports.
+    pub fn device(&self) -> Option<String> {
+        match self {
+            Self::Cpu => None,
+            Self::Gpu(g) => {
+                let a = &g.context().adapter;
+                Some(format!("{} ({})", a.name, a.backend))
+            }
+        }
+    }
+
+    /// Where the GPU's last assembly spent its time.
+    pub fn last_timings(&self) -> Option<GpuTimings> {
+        match self {
+            Self::Cpu => None,
+            Self::Gpu(g) => Some(g.last_timings()),
+        }
+    }
+
+    /// Assembles K for `problem`. On the GPU the columns of thin elements, where the closed
+    /// forms cancel, are recomputed on the CPU ([`assembly::recompute_thin_columns`]).
+    pub fn assemble(
+        &self,
+        problem: &Problem,
+        options: &AssemblyOptions,
+        progress: &dyn Progress,
+    ) -> Result<Assembly> {
+        let Problem { scene, mesh, disc, planner, .. } = problem;
+        match self {
+            Self::Cpu => assembly::assemble(mesh, disc, planner, options, progress),
+            Self::Gpu(g) => {
+                let mut a = g.assemble(scene, mesh, disc, planner, options, progress)?;
+                assembly::recompute_thin_columns(&mut a, disc, planner, options);
+                Ok(a)
+            }
+        }
+    }
+}
+
+/// Assembles K for `problem` on `backend` once (kernels compiled for it); returns the device's
+/// name for the GPU.
+pub fn assemble_on(
+    backend: Backend,
+    problem: &Problem,
+    options: &AssemblyOptions,
+    progress: &dyn Progress,
+) -> Result<(Assembly, Option<String>)> {
+    let assembler = Assembler::new(backend, problem.disc.method, options.quadrature)?;
+    let a = assembler.assemble(problem, options, progress)?;
+    Ok((a, assembler.device()))
+}

@@ -1,0 +1,85 @@
+//! Colour bands on one assembled operator: each band's K is the grey K with its rows scaled by
+//! the band's reflectivity, solved in turn, and the bands' solves are reported as one.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::BandReport;
+use super::report::range;
+use crate::assembly::CollocationMatrix;
+use crate::discretization::Discretization;
+use crate::error::Result;
+use crate::scene::{CHANNELS, Scene};
+use crate::solution::BandValues;
+use crate::solve::{self, SolveOutcome, SolverOptions};
+
+/// K for colour channel `channel` from the grey K: node i's row scaled by rho_channel / rho
+/// (K includes rho/π per row, and rho = 0 only where every channel is 0).
+fn band_matrix(
+    grey: &CollocationMatrix,
+    scene: &Scene,
+    disc: &Discretization,
+    channel: usize,
+) -> CollocationMatrix {
+    let mut k = grey.clone();
+    k.rows_mut().zip(disc.nodes.par_iter()).for_each(|(row, node)| {
+        let face = &scene.faces[node.face];
+        let scale = if face.rho == 0.0 { 0.0 } else { face.channel(channel).0 / face.rho };
+        if scale != 1.0 {
+            row.iter_mut().for_each(|x| *x *= scale);
+        }
+    });
+    k
+}
+
+/// Solves each band in `channels` on the grey K: one scaled copy of K at a time.
+pub(super) fn solve_bands(
+    grey: &CollocationMatrix,
+    scene: &Scene,
+    disc: &Discretization,
+    channels: &[usize],
+    options: SolverOptions,
+) -> Result<Vec<(BandValues, BandReport, SolveOutcome)>> {
+    channels
+        .iter()
+        .map(|&channel| {
+            let emission: Vec<f64> =
+                disc.nodes.iter().map(|n| scene.faces[n.face].channel(channel).1).collect();
+            let k = band_matrix(grey, scene, disc, channel);
+            let started = Instant::now();
+            let outcome = solve::solve(&k, &emission, options)?;
+            let report = BandReport {
+                band: CHANNELS[channel],
+                solver: outcome.solver,
+                iterations: outcome.iterations,
+                residual: outcome.residual,
+                condition_estimate: outcome.condition_estimate,
+                solve_seconds: started.elapsed().as_secs_f64(),
+                solution_range: range(&outcome.u),
+            };
+            let values = BandValues { channel, u: outcome.u.clone(), emission };
+            Ok((values, report, outcome))
+        })
+        .collect()
+}
+
+/// The bands' solves as one: u their mean, iterations summed, the worst residual, condition
+/// and refinement.
+pub(super) fn mean_outcome(outcomes: Vec<SolveOutcome>) -> SolveOutcome {
+    let count = outcomes.len() as f64;
+    let mut mean = outcomes[0].clone();
+    mean.u.iter_mut().for_each(|x| *x = 0.0);
+    mean.iterations = 0;
+    for o in &outcomes {
+        mean.u.iter_mut().zip(&o.u).for_each(|(m, x)| *m += x / count);
+        mean.iterations += o.iterations;
+        mean.residual = mean.residual.max(o.residual);
+        mean.refinement_steps = mean.refinement_steps.max(o.refinement_steps);
+        mean.condition_estimate = match (mean.condition_estimate, o.condition_estimate) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+    }
+    mean
+}

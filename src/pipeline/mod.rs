@@ -1,0 +1,289 @@
+//! One solve from end to end (ARCHITECTURE.md): scene -> mesh -> discretization -> pair plan ->
+//! assembly -> emissivity -> solve -> errors, with the time of each stage.
+//!
+//! [`RunConfig`] says what to run; [`Problem`] holds what is built once from it (the scene, its
+//! mesh, the discretization and the pair plan), which every later stage and every command works
+//! on; [`run`] takes a configuration through all stages to a [`RunReport`].
+
+mod backend;
+mod bands;
+mod config;
+mod operator;
+mod report;
+
+pub use backend::{Assembler, assemble_on};
+pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
+pub use operator::{build_compressed, compresses};
+pub use report::{BandReport, RunLabel, RunReport, peak_rss_bytes};
+
+use std::time::Instant;
+
+use crate::discretization::Discretization;
+use crate::error::{Error, Result};
+use crate::mesh::{Grading, Mesh, MeshKind, Sources, paper_discontinuity_cuts, shadow_lines};
+use crate::problems::emission_at;
+use crate::scene::{CHANNELS, Scene};
+use crate::solution::BandValues;
+use crate::solve;
+use crate::surface_error::surface_errors;
+use crate::visibility::PairPlanner;
+use bands::{mean_outcome, solve_bands};
+use operator::{BuiltOperator, build_operator};
+use report::range;
+
+/// Relative error estimate of E above which `solve` warns: 1e3 times the quadrature's relative
+/// tolerance (1e-12): the sum of per-triangle estimates is pessimistic by about that much.
+const EMISSION_WARNING: f64 = 1e-9;
+
+/// The scene, mesh and discretization of a configuration.
+pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
+    let scene = config.scene.build(config.params)?;
+    let kind = match config.mesh {
+        MeshChoice::Uniform => MeshKind::Uniform,
+        MeshChoice::Discontinuity(s5) => {
+            MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &config.params, s5)?)
+        }
+        MeshChoice::AutoDiscontinuity(extent) => {
+            // With a true solution every face carries light (E is computed from it everywhere).
+            let sources = if config.solution.is_some() { Sources::All } else { Sources::Emitting };
+            MeshKind::Constrained(shadow_lines(&scene, sources, extent))
+        }
+    };
+    let mut mesh = Mesh::new(&scene, &kind, config.refine)?;
+    if !config.grade.is_empty() {
+        mesh.grade(&scene, &Grading::parse(&scene, &config.grade, config.grading_exponent)?)?;
+    }
+    let disc = Discretization::new(&scene, &mesh, config.method)?;
+    Ok((scene, mesh, disc))
+}
+
+/// What every stage after the scene works on, each part built once: the scene, its mesh, the
+/// discretization and the pair planner.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    /// The scene.
+    pub scene: Scene,
+    /// Its mesh.
+    pub mesh: Mesh,
+    /// Nodes, elements and method.
+    pub disc: Discretization,
+    /// The scene's occluders and their index, for every pair plan.
+    pub planner: PairPlanner,
+    /// Time to build the planner: part of the setup time, as the assembly is.
+    pub plan_seconds: f64,
+}
+
+impl Problem {
+    /// The problem of `config` ([`build`], then the pair planner).
+    pub fn new(config: &RunConfig) -> Result<Self> {
+        let (scene, mesh, disc) = build(config)?;
+        Ok(Self::from_parts(scene, mesh, disc))
+    }
+
+    /// The problem of a scene, mesh and discretization built otherwise.
+    pub fn from_parts(scene: Scene, mesh: Mesh, disc: Discretization) -> Self {
+        let started = Instant::now();
+        let planner = PairPlanner::new(&scene);
+        let plan_seconds = started.elapsed().as_secs_f64();
+        Self { scene, mesh, disc, planner, plan_seconds }
+    }
+}
+
+/// A finished run with what it was computed on (for outputs such as VTK files and pictures).
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// The report.
+    pub report: RunReport,
+    /// The scene.
+    pub scene: Scene,
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Nodes and method.
+    pub disc: Discretization,
+    /// E at the nodes.
+    pub emission: Vec<f64>,
+    /// The colour bands' solutions (empty for a grey run).
+    pub bands: Vec<BandValues>,
+}
+
+impl Run {
+    /// The solution as the outputs see it.
+    pub fn field(&self) -> crate::solution::SolutionField<'_> {
+        crate::solution::SolutionField {
+            scene: &self.scene,
+            mesh: &self.mesh,
+            disc: &self.disc,
+            u: &self.report.u,
+            emission: &self.emission,
+            bands: &self.bands,
+        }
+    }
+}
+
+/// What the user should be told about a scene before trusting its solution.
+fn run_warnings(scene: &Scene, emission: &[f64]) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if emission.iter().all(|&e| e == 0.0) {
+        warnings.push(format!(
+            "no face of '{}' emits (E = 0 everywhere), so the solution is zero: give a light \
+             source `emission = ...` in the scene file (per face, group or material; OBJ: Ke)",
+            scene.name
+        ));
+    }
+    for (a, b, area) in scene.faces_in_contact() {
+        warnings.push(format!(
+            "faces '{a}' and '{b}' lie on one another facing each other (shared area {area:.3e}) \
+             without covering each other as the two sides of a plate do: no light passes between \
+             them, and the part of the larger one under the smaller stays dark; lift one off the \
+             other if they should exchange light"
+        ));
+    }
+    warnings
+}
+
+/// Runs one configuration.
+pub fn run(config: &RunConfig) -> Result<RunReport> {
+    Ok(run_keeping_mesh(config)?.report)
+}
+
+/// Runs one configuration and keeps the scene, mesh and emissivity.
+pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
+    if !config.bands.is_empty() && config.solution.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "bands",
+            value: config.bands.iter().map(|&c| CHANNELS[c]).collect::<Vec<_>>().join(","),
+            reason: "colour bands are lit by the scene's own emission: use --solution none".into(),
+        });
+    }
+    let problem = Problem::new(config)?;
+    let u_faces = match &config.solution {
+        Some(sol) => Some(sol.on_faces(&problem.scene, &config.params)?),
+        None => None,
+    };
+    let built = build_operator(config, &problem)?;
+
+    let started = Instant::now();
+    let (rhs, emission_error_estimate) = emission(config, &problem, u_faces.as_deref());
+    let emission_seconds = started.elapsed().as_secs_f64();
+    let mut warnings = run_warnings(&problem.scene, &rhs);
+    if let Some(estimate) = emission_error_estimate.filter(|&e| e > EMISSION_WARNING) {
+        warnings.push(format!(
+            "the emissivity of the true solution is uncertain to {estimate:.1e} (relative), above \
+             {EMISSION_WARNING:.0e}: the adaptive quadrature ran out of subdivisions; E_n below \
+             that level is not meaningful"
+        ));
+    }
+
+    let started = Instant::now();
+    let (outcome, bands, band_reports) = solve_built(config, &problem, &built, &rhs)?;
+    let solve_seconds = started.elapsed().as_secs_f64();
+    let u = outcome.u;
+    let summary = built.summary(config, problem.disc.dof());
+
+    let Problem { scene, mesh, disc, planner, .. } = &problem;
+    let error = u_faces.as_ref().map(|uf| {
+        disc.nodes
+            .iter()
+            .zip(&u)
+            .map(|(node, value)| (uf[node.face].eval(node.position) - value).abs())
+            .fold(0.0, f64::max)
+    });
+    let over_surface = match (&u_faces, config.surface_lattice) {
+        (Some(truth), Some(lattice)) => Some(surface_errors(
+            scene,
+            mesh,
+            disc,
+            planner,
+            truth,
+            &u,
+            &config.assembly,
+            &config.emission,
+            lattice,
+        )?),
+        _ => None,
+    };
+    let report = RunReport {
+        label: RunLabel::new(config, &problem),
+        grading: (!config.grade.is_empty()).then_some(config.grading_exponent),
+        device: summary.device,
+        solver: outcome.solver,
+        iterations: outcome.iterations,
+        condition_estimate: outcome.condition_estimate,
+        refinement_steps: outcome.refinement_steps,
+        rows_eliminated: outcome.rows_eliminated,
+        warnings,
+        notes: scene.notes.clone(),
+        bands: band_reports,
+        error,
+        setup_seconds: summary.setup_seconds,
+        preparation_seconds: summary.preparation_seconds,
+        emission_error_estimate,
+        emission_seconds,
+        solve_seconds,
+        residual: outcome.residual,
+        pairs: summary.pairs,
+        operator: summary.operator,
+        compression_tolerance: summary.compression_tolerance,
+        operator_bytes: summary.operator_bytes,
+        blocks: summary.blocks,
+        peak_rss_bytes: peak_rss_bytes(),
+        solution_range: range(&u),
+        over_surface,
+        u,
+    };
+    let Problem { scene, mesh, disc, .. } = problem;
+    Ok(Run { report, scene, mesh, disc, emission: rhs, bands })
+}
+
+/// E at the nodes, from the true solution `u_faces` when there is one (with the estimate of its
+/// relative error), else the faces' emissivities.
+fn emission(
+    config: &RunConfig,
+    problem: &Problem,
+    u_faces: Option<&[crate::problems::FaceFunction]>,
+) -> (Vec<f64>, Option<f64>) {
+    let Problem { scene, disc, planner, .. } = problem;
+    match u_faces {
+        Some(u) => {
+            let progress = &*config.progress;
+            progress.start("emission", disc.dof());
+            let e = emission_at(scene, &disc.nodes, planner, u, &config.emission, progress);
+            progress.finish();
+            (e.values, Some(e.error_estimate))
+        }
+        None => (disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(), None),
+    }
+}
+
+/// Solves with the built operator for `rhs`, or for each colour band of `config` (then the
+/// outcome is the bands' mean, with each band's values and report).
+fn solve_built(
+    config: &RunConfig,
+    problem: &Problem,
+    built: &BuiltOperator,
+    rhs: &[f64],
+) -> Result<(solve::SolveOutcome, Vec<BandValues>, Vec<BandReport>)> {
+    let (scene, disc) = (&problem.scene, &problem.disc);
+    Ok(match built {
+        BuiltOperator::Dense(timed) if !config.bands.is_empty() => {
+            let (mut values, mut reports, mut outcomes) = (Vec::new(), Vec::new(), Vec::new());
+            for (v, r, o) in
+                solve_bands(&timed.assembled.matrix, scene, disc, &config.bands, config.solver)?
+            {
+                values.push(v);
+                reports.push(r);
+                outcomes.push(o);
+            }
+            (mean_outcome(outcomes), values, reports)
+        }
+        BuiltOperator::Dense(timed) => {
+            (solve::solve(&timed.assembled.matrix, rhs, config.solver)?, Vec::new(), Vec::new())
+        }
+        BuiltOperator::Compressed { op, .. } => {
+            let rho: Vec<f64> = disc.nodes.iter().map(|n| n.rho).collect();
+            let tolerance = config.compression.tolerance;
+            let outcome = solve::solve_compressed(op, rhs, &rho, config.solver, tolerance)?;
+            (outcome, Vec::new(), Vec::new())
+        }
+    })
+}

@@ -1,0 +1,170 @@
+//! The operator a run solves with: the dense matrix, timed over repeated assemblies, or the
+//! compressed operator where the configuration asks for it at this size.
+
+use std::time::Instant;
+
+use super::{Assembler, Problem, REPEAT_BELOW_SECONDS, RunConfig};
+use crate::assembly::{Assembly, PairEvaluation};
+use crate::error::{Error, Result};
+use crate::gpu;
+use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats};
+use crate::solve;
+use crate::visibility::PairStats;
+
+/// Assembles K for `config` up to `config.setup_repeats` times (fewer once one assembly takes over
+/// [`REPEAT_BELOW_SECONDS`]) with one prepared backend; the setup time is the pair planner's
+/// plus the fastest assembly's.
+fn assemble_timed(config: &RunConfig, problem: &Problem) -> Result<TimedAssembly> {
+    let started = Instant::now();
+    let assembler =
+        Assembler::new(config.backend, problem.disc.method, config.assembly.quadrature)?;
+    let preparation_seconds = started.elapsed().as_secs_f64();
+    let progress = &*config.progress;
+    let mut timed = None;
+    let mut fastest = f64::INFINITY;
+    for _ in 0..config.setup_repeats.max(1) {
+        progress.start("assembly", problem.disc.dof());
+        let started = Instant::now();
+        let assembled = assembler.assemble(problem, &config.assembly, progress)?;
+        let seconds = started.elapsed().as_secs_f64();
+        fastest = fastest.min(seconds);
+        timed = Some(assembled);
+        progress.finish();
+        if seconds > REPEAT_BELOW_SECONDS {
+            break;
+        }
+    }
+    let assembled = timed.expect("at least one assembly");
+    let setup_seconds = problem.plan_seconds + fastest;
+    Ok(TimedAssembly { assembled, device: assembler.device(), setup_seconds, preparation_seconds })
+}
+
+/// An assembly with its timings.
+pub(super) struct TimedAssembly {
+    pub(super) assembled: Assembly,
+    device: Option<String>,
+    /// The fastest assembly (pair plan included).
+    setup_seconds: f64,
+    /// One-time preparation (GPU: compiling the kernels), not part of `setup_seconds`.
+    preparation_seconds: f64,
+}
+
+/// The operator a run solves with.
+pub(super) enum BuiltOperator {
+    Dense(TimedAssembly),
+    Compressed { op: CompressedOperator, setup_seconds: f64, preparation_seconds: f64 },
+}
+
+/// What a report says of the operator.
+pub(super) struct OperatorSummary {
+    pub(super) operator: &'static str,
+    pub(super) device: Option<String>,
+    pub(super) setup_seconds: f64,
+    pub(super) preparation_seconds: f64,
+    pub(super) pairs: PairStats,
+    pub(super) compression_tolerance: Option<f64>,
+    pub(super) operator_bytes: u64,
+    pub(super) blocks: Option<OperatorStats>,
+}
+
+impl BuiltOperator {
+    pub(super) fn summary(&self, config: &RunConfig, dof: usize) -> OperatorSummary {
+        match self {
+            Self::Dense(t) => OperatorSummary {
+                operator: "dense",
+                device: t.device.clone(),
+                setup_seconds: t.setup_seconds,
+                preparation_seconds: t.preparation_seconds,
+                pairs: t.assembled.stats,
+                compression_tolerance: None,
+                operator_bytes: 8 * (dof as u64) * (dof as u64),
+                blocks: None,
+            },
+            Self::Compressed { op, setup_seconds, preparation_seconds } => OperatorSummary {
+                operator: "compressed",
+                device: op.device.clone(),
+                setup_seconds: *setup_seconds,
+                preparation_seconds: *preparation_seconds,
+                pairs: op.pairs,
+                compression_tolerance: Some(config.compression.tolerance),
+                operator_bytes: op.stats.operator_bytes,
+                blocks: Some(op.stats),
+            },
+        }
+    }
+}
+
+/// The compressed operator of `config` for `problem`, its entries evaluated by `assembler` (the
+/// CPU, or the GPU's pair kernel in batches); refused where the configuration needs the dense
+/// matrix (LU, colour bands).
+pub fn build_compressed(
+    config: &RunConfig,
+    assembler: &Assembler,
+    problem: &Problem,
+) -> Result<CompressedOperator> {
+    if !config.bands.is_empty() {
+        return Err(Error::InvalidParameter {
+            name: "bands",
+            value: format!("{} bands", config.bands.len()),
+            reason: "colour bands scale the rows of the dense matrix; choose the dense operator"
+                .into(),
+        });
+    }
+    if config.solver.choice == solve::SolverChoice::Lu {
+        return Err(Error::InvalidParameter {
+            name: "solver",
+            value: "lu".into(),
+            reason: "LU needs the dense matrix; the compressed operator is solved by GMRES \
+                     (the iterative solver), or choose the dense operator"
+                .into(),
+        });
+    }
+    let Problem { scene, mesh, disc, planner, .. } = problem;
+    let device = match assembler {
+        Assembler::Cpu => None,
+        Assembler::Gpu(g) => Some(gpu::PairEvaluator::new(g, scene, disc, &config.assembly)?),
+    };
+    let mut op = CompressedOperator::build(
+        scene,
+        mesh,
+        disc,
+        planner,
+        &config.assembly,
+        &config.compression,
+        device.as_ref().map(|d| d as &dyn PairEvaluation),
+        &*config.progress,
+    )?;
+    op.device = assembler.device();
+    Ok(op)
+}
+
+/// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
+/// size, the compressed operator (built once; its setup time includes the pair planner's, as
+/// the dense assembly's does).
+pub(super) fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
+    let disc = &problem.disc;
+    if !compresses(config, disc.dof()) {
+        return Ok(BuiltOperator::Dense(assemble_timed(config, problem)?));
+    }
+    let started = Instant::now();
+    let assembler = Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
+    let preparation_seconds = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let op = build_compressed(config, &assembler, problem)?;
+    let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
+    Ok(BuiltOperator::Compressed { op, setup_seconds, preparation_seconds })
+}
+
+/// Whether `config` stores the compressed operator for `dof` unknowns: when asked for, or under
+/// [`OperatorChoice::Auto`] above its size unless LU or colour bands (which need the dense
+/// matrix) are asked for.
+pub fn compresses(config: &RunConfig, dof: usize) -> bool {
+    match config.operator {
+        OperatorChoice::Auto => {
+            config.operator.compresses(dof)
+                && config.solver.choice != solve::SolverChoice::Lu
+                && config.bands.is_empty()
+        }
+        choice => choice.compresses(dof),
+    }
+}
