@@ -1,4 +1,4 @@
-//! The pair plan (DESIGN.md sec. 2): for every (collocation node, element) pair, decide once what the
+//! The pair plan (ARCHITECTURE.md): for every (collocation node, element) pair, decide once what the
 //! collocation integral (4.1) needs: nothing, the whole element, or the exactly visible part.
 //!
 //! Work is organised per (node, face): the node's [`FaceView`] of a face holds the half-plane left
@@ -22,16 +22,22 @@
 //! pair ([`Acceleration`]).
 
 mod bench;
+mod hiders;
 mod occluders;
+mod projection;
 mod row;
+mod shaft;
 mod solids;
 mod stats;
 
 pub use bench::{PlanBench, bench_plan};
+use hiders::Hider;
+pub use hiders::RecentHiders;
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
+use projection::{Pyramid, ShadowSet, convex_hull, polygon_scale, pyramid_sides, shadow};
 pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views};
-use solids::Solid;
+pub use shaft::Shaft;
 pub use stats::PairStats;
 
 use std::borrow::Cow;
@@ -39,10 +45,7 @@ use std::borrow::Cow;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use crate::geometry::{
-    HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_polygon_3d,
-    clip_to_convex, convex_contains, signed_area, subtract_convex, wholly_inside_3d,
-};
+use crate::geometry::{HalfPlane, bounding_box, clip_convex, convex_contains, subtract_convex};
 use crate::scene::{COPLANAR_DISTANCE, Scene};
 
 /// Why a pair contributes nothing.
@@ -211,107 +214,6 @@ impl PairPlanner {
         let mut found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
         found.sort_unstable();
         found
-    }
-
-    /// What segments between a point of the box `nodes` on face `a` and a point of the box
-    /// `elements` on face `b` (a block of the compressed operator, each box in front of the other
-    /// face's plane) meet: nothing, when no occluder piece other than `a`'s and `b`'s reaches into
-    /// the shaft (Haines and Wallace 1994), the convex hull of the two boxes in front of both
-    /// planes; one piece that every such segment crosses (the block is hidden); or something in
-    /// between. The shaft is bounded by supporting planes of the two boxes (their faces, and
-    /// planes along each axis through corresponding corners), so the test only errs towards
-    /// [`Shaft::Partial`].
-    pub fn shaft(
-        &self,
-        a: usize,
-        b: usize,
-        nodes: (DVec3, DVec3),
-        elements: (DVec3, DVec3),
-    ) -> Shaft {
-        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let mut found = self.occluders.inside(a, b, &volume).peekable();
-        if found.peek().is_none() {
-            return Shaft::Clear;
-        }
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        if found.any(|o| self.hides_shaft(o, &from, &to, tol)) {
-            Shaft::Hidden
-        } else {
-            Shaft::Partial
-        }
-    }
-
-    /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether one
-    /// of them crosses every segment (hides the boxes from each other).
-    pub fn shaft_occluders(
-        &self,
-        a: usize,
-        b: usize,
-        nodes: (DVec3, DVec3),
-        elements: (DVec3, DVec3),
-    ) -> (Vec<usize>, bool) {
-        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        let hidden = found.iter().any(|&o| self.hides_shaft(o, &from, &to, tol));
-        (found, hidden)
-    }
-
-    /// Those of `candidates` (occluder pieces, none of faces `a` and `b`) that may meet a
-    /// segment from the convex polygon `from` on face `a` to the convex polygon `to` on face
-    /// `b`, and whether one of them crosses every such segment (exactly: the crossings of the
-    /// corner segments span those of all). A piece is left out when a plane separates it from
-    /// the segments: one of [`PairPlanner::shaft`]'s, or its own plane with both polygons on
-    /// one side of it.
-    pub fn polygon_shaft(
-        &self,
-        a: usize,
-        b: usize,
-        from: &[DVec3],
-        to: &[DVec3],
-        candidates: &[usize],
-    ) -> (Vec<usize>, bool) {
-        let (volume, tol) = self.shaft_volume(a, b, bounding_box_3d(from), bounding_box_3d(to));
-        let mut found = Vec::new();
-        for &o in candidates {
-            let piece = &self.occluders.pieces[o];
-            if !volume.may_hold(piece) || piece.plane_separates(from, to, tol) {
-                continue;
-            }
-            if piece.crosses_every_segment(from, to, tol, tol) {
-                return (vec![o], true);
-            }
-            found.push(o);
-        }
-        (found, false)
-    }
-
-    /// The shaft between two boxes on faces `a` and `b`, and the tolerance of its planes.
-    fn shaft_volume(
-        &self,
-        a: usize,
-        b: usize,
-        nodes: (DVec3, DVec3),
-        elements: (DVec3, DVec3),
-    ) -> (ViewVolume, f64) {
-        let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        let tol = 1e-12 * fa.size.max(fb.size);
-        let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
-        let corners: Vec<DVec3> =
-            box_corners(nodes).into_iter().chain(box_corners(elements)).collect();
-        for n in shaft_normals(nodes, elements) {
-            let reach = corners.iter().map(|c| n.dot(*c)).fold(f64::NEG_INFINITY, f64::max);
-            // Inside: n·x <= reach, shrunk by the tolerance: a piece that only touches the shaft
-            // from outside (a plate level with the top of a wall) blocks no segment inside it.
-            volume.push(-n, reach, tol);
-        }
-        (volume, tol)
-    }
-
-    /// Whether piece `occluder` crosses every segment between the boxes with corners `from` and
-    /// `to`.
-    fn hides_shaft(&self, occluder: usize, from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
-        self.occluders.pieces[occluder].crosses_every_segment(from, to, tol, tol)
     }
 
     /// The convex occluder pieces of the scene.
@@ -628,36 +530,6 @@ impl PairPlanner {
     }
 }
 
-/// The occluders that last hid a whole face from a point, most recent first: a building that
-/// hides one face of another from a node usually hides its neighbours too, and hides them from
-/// the next node of the same face as well, so they are tried before any search
-/// ([`PairPlanner::face_view_with`]). One per thread, kept across the points it treats in turn.
-#[derive(Clone, Debug, Default)]
-pub struct RecentHiders {
-    list: Vec<Hider>,
-}
-
-/// An occluder piece that hid a face, and its bounding box.
-#[derive(Clone, Debug)]
-struct Hider {
-    occluder: usize,
-    lo: DVec3,
-    hi: DVec3,
-}
-
-/// How many occluders [`RecentHiders`] keeps: in a city of 3 281 faces, 32 catch most of the
-/// views that 8 sent to the search (setup 0.76 of it; 64 was slower again).
-const RECENT_HIDERS: usize = 32;
-
-impl RecentHiders {
-    fn remember(&mut self, occluder: usize, piece: &Occluder) {
-        self.list.retain(|h| h.occluder != occluder);
-        let (lo, hi) = piece.bounding_box();
-        self.list.insert(0, Hider { occluder, lo, hi });
-        self.list.truncate(RECENT_HIDERS);
-    }
-}
-
 /// A point's height over a face's plane ([`PairPlanner::height`]).
 #[derive(Clone, Copy)]
 struct Height {
@@ -677,360 +549,6 @@ struct Window<'a> {
     polygon: Cow<'a, [DVec2]>,
     /// The same in space.
     corners: SmallVec<[DVec3; 8]>,
-}
-
-/// The segments from a point to the window of a face it sees ([`PairPlanner::face_view`]).
-struct Pyramid<'a> {
-    apex: DVec3,
-    /// The apex's height over the face's plane.
-    z: f64,
-    face: &'a PlannerFace,
-    /// The window in face coordinates and in space, and the inward normals of the sides.
-    window: &'a [DVec2],
-    corners: &'a [DVec3],
-    sides: &'a [DVec3],
-}
-
-impl Pyramid<'_> {
-    /// Adds the shadow of `piece` on the window to `shadows`, unless a shadow there already
-    /// holds it; returns whether the piece hides the whole window. `crosses_all` says whether it
-    /// crosses every segment (asked only of a piece that reaches into the pyramid).
-    fn cast(
-        &self,
-        piece: &Occluder,
-        crosses_all: impl FnOnce() -> bool,
-        shadows: &mut ShadowSet,
-    ) -> bool {
-        // Most candidates found by boxes miss the pyramid, and a separating plane shows it;
-        // the crossing test is cheaper than the shadow, which also catches an occluder whose
-        // outline meets the window's.
-        if !piece.may_shadow(self.apex, self.corners) {
-            return false;
-        }
-        let outline = self.projection(piece);
-        if outline.as_deref().is_some_and(|o| shadows.holds(o)) {
-            return false;
-        }
-        if crosses_all() {
-            return true;
-        }
-        // The shadow is the projection's part in the window, where the projection is known: a
-        // clip in the plane instead of the piece's clips in space.
-        let shadow = match &outline {
-            Some(outline) => in_window(outline, self.window),
-            None => shadow(self.apex, self.z, self.face, self.window, self.sides, piece),
-        };
-        match shadow {
-            Some(s) if covers(&s, self.window) => true,
-            Some(s) => {
-                shadows.add(outline, s);
-                false
-            }
-            None => false,
-        }
-    }
-
-    /// As [`Pyramid::cast`], for a piece that bounds the convex solid `solid` (an index
-    /// into `solids`), if any: the first of the solid's pieces that may shadow the window casts
-    /// the solid's whole shadow ([`Pyramid::cast_solid`]), and its other pieces cast nothing
-    /// more; where the solid cannot be projected whole, each piece casts its own.
-    fn cast_part(
-        &self,
-        piece: &Occluder,
-        solid: Option<usize>,
-        solids: &[Solid],
-        crosses_all: impl FnOnce() -> bool,
-        shadows: &mut ShadowSet,
-    ) -> bool {
-        let Some(s) = solid else { return self.cast(piece, crosses_all, shadows) };
-        match shadows.solids.iter().find(|&&(t, _)| t == s) {
-            Some(&(_, true)) => return false,
-            Some(&(_, false)) => return self.cast(piece, crosses_all, shadows),
-            None => {}
-        }
-        if !piece.may_shadow(self.apex, self.corners) {
-            return false;
-        }
-        match self.cast_solid(&solids[s], shadows) {
-            Some(hidden) => {
-                shadows.solids.push((s, true));
-                hidden
-            }
-            None => {
-                shadows.solids.push((s, false));
-                self.cast(piece, crosses_all, shadows)
-            }
-        }
-    }
-
-    /// Adds the shadow of a whole convex solid to `shadows`, as [`Pyramid::cast`] adds a
-    /// piece's, and returns whether it hides the whole window: the solid's central projection,
-    /// the convex hull of its vertices' projections. `None` where a vertex is not between the
-    /// face's plane and the apex (as [`Pyramid::projection`] asks), or the hull has no area.
-    fn cast_solid(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
-        let projected: SmallVec<[DVec2; 16]> = self.project(&solid.vertices)?;
-        let outline: SmallPolygon<DVec2> = convex_hull(&projected).into_iter().collect();
-        if outline.len() < 3 || is_sliver(signed_area(&outline), polygon_scale(&outline)) {
-            return None;
-        }
-        if shadows.holds(&outline) {
-            return Some(false);
-        }
-        Some(match in_window(&outline, self.window) {
-            Some(s) if covers(&s, self.window) => true,
-            Some(s) => {
-                shadows.add(Some(outline), s);
-                false
-            }
-            None => false,
-        })
-    }
-
-    /// The central projection of the whole of `piece` onto the face's plane (counter-clockwise,
-    /// face coordinates), when every vertex lies between that plane and the apex, no more than
-    /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than ten
-    /// times as far out as the piece); its part in the window is the piece's shadow.
-    fn projection(&self, piece: &Occluder) -> Option<SmallPolygon<DVec2>> {
-        let mut projected: SmallPolygon<DVec2> = self.project(&piece.polygon)?;
-        let area = signed_area(&projected);
-        let scale = polygon_scale(&projected);
-        if is_sliver(area, scale) {
-            return None;
-        }
-        if area < 0.0 {
-            projected.reverse();
-        }
-        Some(projected)
-    }
-
-    /// The central projections of `points` onto the face's plane (face coordinates), when each
-    /// lies between that plane and the apex, no more than [`PROJECTION_REACH`] of the way up.
-    fn project<C: FromIterator<DVec2>>(&self, points: &[DVec3]) -> Option<C> {
-        let frame = &self.face.face.frame;
-        points
-            .iter()
-            .map(|&x| {
-                let h = frame.height(x);
-                (0.0..=PROJECTION_REACH * self.z).contains(&h).then(|| {
-                    let t = self.z / (self.z - h);
-                    frame.to_plane(self.apex + (x - self.apex) * t)
-                })
-            })
-            .collect()
-    }
-}
-
-/// How far up from the face's plane towards the apex (as a fraction of the apex's height) an
-/// occluder's vertices may lie for [`Pyramid::projection`].
-const PROJECTION_REACH: f64 = 0.9;
-
-/// The shadows of one view, each kept only while no other holds it: subtracting a shadow that
-/// lies in another changes no visible part (in a city, most shadows on a face are those of a
-/// building's far side, inside those of its near side).
-#[derive(Default)]
-struct ShadowSet {
-    /// Each shadow with an outline that holds it: the whole projection of its occluder when
-    /// known (whose part in the window is the shadow), else the shadow itself.
-    casts: Vec<(SmallPolygon<DVec2>, Vec<DVec2>)>,
-    /// The convex solids met so far, and whether each was cast whole.
-    solids: SmallVec<[(usize, bool); 4]>,
-}
-
-impl ShadowSet {
-    /// Whether one of the outlines holds the convex `polygon` (boundary included, up to the
-    /// rounding tolerance of [`convex_contains`]).
-    fn holds(&self, polygon: &[DVec2]) -> bool {
-        self.casts.iter().any(|(outline, _)| convex_contains(outline, polygon))
-    }
-
-    /// Adds `shadow` (with its occluder's whole projection, if known) unless an outline holds
-    /// it, and drops the shadows that its own outline holds.
-    fn add(&mut self, projection: Option<SmallPolygon<DVec2>>, shadow: Vec<DVec2>) {
-        if self.holds(&shadow) {
-            return;
-        }
-        let outline = projection.unwrap_or_else(|| shadow.iter().copied().collect());
-        self.casts.retain(|(_, s)| !convex_contains(&outline, s));
-        self.casts.push((outline, shadow));
-    }
-
-    fn into_shadows(self) -> Vec<Vec<DVec2>> {
-        self.casts.into_iter().map(|(_, s)| s).collect()
-    }
-}
-
-/// What an occluder does to the segments between two boxes ([`PairPlanner::shaft`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Shaft {
-    /// No occluder meets any segment.
-    Clear,
-    /// One occluder crosses every segment.
-    Hidden,
-    /// Anything else.
-    Partial,
-}
-
-/// The eight corners of a box.
-fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
-    std::array::from_fn(|k| {
-        DVec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        )
-    })
-}
-
-/// Outward normals of supporting planes of the convex hull of two boxes: the six axes, and for
-/// each axis and each pair of corresponding corners the two normals perpendicular to the axis and
-/// to the segment joining those corners (the planes of Haines and Wallace's shaft).
-fn shaft_normals(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> Vec<DVec3> {
-    let mut normals = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
-    let (ca, cb) = (box_corners(a), box_corners(b));
-    for (axis, bit) in [(DVec3::X, 1), (DVec3::Y, 2), (DVec3::Z, 4)] {
-        // Corners with the axis's bit clear: one per sign pattern of the other two axes.
-        for k in (0..8).filter(|k| k & bit == 0) {
-            let n = axis.cross(cb[k] - ca[k]);
-            if n.length_squared() > 0.0 {
-                let n = n.normalize();
-                normals.extend([n, -n]);
-            }
-        }
-    }
-    normals
-}
-
-fn polygon_scale(poly: &[DVec2]) -> f64 {
-    let (lo, hi) = bounding_box(poly);
-    (hi - lo).length()
-}
-
-/// The inward normals (not normalised) of the planes through `p` and each edge of a convex window
-/// (its `corners`, in space): the sides of the pyramid with apex `p` over the window.
-fn pyramid_sides(p: DVec3, corners: &[DVec3]) -> Vec<DVec3> {
-    let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
-    let m = corners.len();
-    (0..m)
-        .map(|k| {
-            let (a, b) = (corners[k], corners[(k + 1) % m]);
-            let side = (a - p).cross(b - p);
-            if side.dot(centre - p) < 0.0 { -side } else { side }
-        })
-        .collect()
-}
-
-/// The shadow on face `f` (at height `z` below `p`) of a convex occluder polygon, as seen from `p`
-/// through the convex `window` of the face: the occluder clipped to the pyramid with apex `p` over
-/// the window (its `sides`, [`pyramid_sides`]), centrally projected onto the face's plane.
-fn shadow(
-    p: DVec3,
-    z: f64,
-    f: &PlannerFace,
-    window: &[DVec2],
-    sides: &[DVec3],
-    occluder: &Occluder,
-) -> Option<Vec<DVec2>> {
-    let normal = f.face.frame.normal;
-    // Two buffers in turn, the last clip's result in `current` (none yet: the piece itself);
-    // swapping them would copy both inline buffers at every clip.
-    let mut buffers: [SmallPolygon<DVec3>; 2] = [SmallPolygon::new(), SmallPolygon::new()];
-    let mut current: Option<usize> = None;
-    // In front of the face's plane, inside the pyramid. Most planes leave the piece whole, and
-    // the piece's own size bounds every tolerance of the clips: those are passed over.
-    let planes = std::iter::once((normal, -normal.dot(f.face.frame.origin)))
-        .chain(sides.iter().map(|&s| (s, -s.dot(p))));
-    for (n, offset) in planes {
-        let [first, second] = &mut buffers;
-        let (poly, out): (&[DVec3], _) = match current {
-            None => (&occluder.polygon, first),
-            Some(0) => (first, second),
-            Some(_) => (second, first),
-        };
-        if wholly_inside_3d(poly, n, offset, occluder.diameter) {
-            continue;
-        }
-        if !clip_polygon_3d(poly, n, offset, out) {
-            return None;
-        }
-        current = Some(current.map_or(0, |c| 1 - c));
-    }
-    let poly: &[DVec3] = match current {
-        None => &occluder.polygon,
-        Some(c) => &buffers[c],
-    };
-    // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
-    let mut projected: Vec<DVec2> = poly
-        .iter()
-        .map(|&x| {
-            let t = z / (z - f.face.frame.height(x));
-            f.face.frame.to_plane(p + (x - p) * t)
-        })
-        .collect();
-    let area = signed_area(&projected);
-    let scale = polygon_scale(window);
-    if is_sliver(area, scale) {
-        return None;
-    }
-    if area < 0.0 {
-        projected.reverse();
-    }
-    Some(projected)
-}
-
-/// The part of the convex counter-clockwise `polygon` in the convex `window` (face
-/// coordinates), if it has area as [`shadow`] decides it.
-fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
-    let part = clip_to_convex(polygon, window)?;
-    let area = signed_area(&part);
-    let scale = polygon_scale(window);
-    (area > 0.0 && !is_sliver(area, scale)).then(|| part.into_vec())
-}
-
-/// Whether a projected polygon's (signed) `area`, measured against a size `scale` (its window's,
-/// or its own), is no area at all: not finite, or within 1e-14 of the square of the size (a
-/// sliver, or an occluder seen edge-on).
-fn is_sliver(area: f64, scale: f64) -> bool {
-    area.abs() <= 1e-14 * scale * scale || !area.is_finite()
-}
-
-/// Whether the convex counter-clockwise `shadow` contains every point of `window`, up to rounding
-/// (shadows are clipped to the window, so a covering shadow has the window's outline).
-fn covers(shadow: &[DVec2], window: &[DVec2]) -> bool {
-    let scale = polygon_scale(shadow);
-    let m = shadow.len();
-    (0..m).all(|k| {
-        let (a, b) = (shadow[k], shadow[(k + 1) % m]);
-        let edge = b - a;
-        let margin = 1e-12 * scale * edge.length();
-        window.iter().all(|&w| edge.perp_dot(w - a) >= -margin)
-    })
-}
-
-/// Convex hull (counter-clockwise) of a polygon's vertices, by Andrew's monotone chain.
-fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
-    let mut pts = points.to_vec();
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
-    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &DVec2>> =
-            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
-        for &q in iter {
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(q);
-        }
-        hull.pop();
-    }
-    hull
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@ use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
 use super::*;
-use crate::geometry::{PlaneFrame, triangulate};
+use crate::geometry::{PlaneFrame, SmallPolygon, signed_area, triangulate};
 use crate::mesh::{Mesh, MeshKind};
 use crate::scene::{Face, Scene};
 

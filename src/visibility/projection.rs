@@ -1,0 +1,326 @@
+//! Central projection onto a face: the pyramid over its window, the shadows, their 2-D helpers.
+
+use glam::{DVec2, DVec3};
+use smallvec::SmallVec;
+
+use super::PlannerFace;
+use super::occluders::Occluder;
+use super::solids::Solid;
+use crate::geometry::{
+    SmallPolygon, bounding_box, clip_polygon_3d, clip_to_convex, convex_contains, signed_area,
+    wholly_inside_3d,
+};
+
+/// The segments from a point to the window of a face it sees
+/// ([`PairPlanner::face_view`](super::PairPlanner::face_view)).
+pub(super) struct Pyramid<'a> {
+    pub(super) apex: DVec3,
+    /// The apex's height over the face's plane.
+    pub(super) z: f64,
+    pub(super) face: &'a PlannerFace,
+    /// The window in face coordinates and in space, and the inward normals of the sides.
+    pub(super) window: &'a [DVec2],
+    pub(super) corners: &'a [DVec3],
+    pub(super) sides: &'a [DVec3],
+}
+
+impl Pyramid<'_> {
+    /// Adds the shadow of `piece` on the window to `shadows`, unless a shadow there already
+    /// holds it; returns whether the piece hides the whole window. `crosses_all` says whether it
+    /// crosses every segment (asked only of a piece that reaches into the pyramid).
+    fn cast(
+        &self,
+        piece: &Occluder,
+        crosses_all: impl FnOnce() -> bool,
+        shadows: &mut ShadowSet,
+    ) -> bool {
+        // Most candidates found by boxes miss the pyramid, and a separating plane shows it;
+        // the crossing test is cheaper than the shadow, which also catches an occluder whose
+        // outline meets the window's.
+        if !piece.may_shadow(self.apex, self.corners) {
+            return false;
+        }
+        let outline = self.projection(piece);
+        if outline.as_deref().is_some_and(|o| shadows.holds(o)) {
+            return false;
+        }
+        if crosses_all() {
+            return true;
+        }
+        // The shadow is the projection's part in the window, where the projection is known: a
+        // clip in the plane instead of the piece's clips in space.
+        let shadow = match &outline {
+            Some(outline) => in_window(outline, self.window),
+            None => shadow(self.apex, self.z, self.face, self.window, self.sides, piece),
+        };
+        match shadow {
+            Some(s) if covers(&s, self.window) => true,
+            Some(s) => {
+                shadows.add(outline, s);
+                false
+            }
+            None => false,
+        }
+    }
+
+    /// As [`Pyramid::cast`], for a piece that bounds the convex solid `solid` (an index
+    /// into `solids`), if any: the first of the solid's pieces that may shadow the window casts
+    /// the solid's whole shadow ([`Pyramid::cast_solid`]), and its other pieces cast nothing
+    /// more; where the solid cannot be projected whole, each piece casts its own.
+    pub(super) fn cast_part(
+        &self,
+        piece: &Occluder,
+        solid: Option<usize>,
+        solids: &[Solid],
+        crosses_all: impl FnOnce() -> bool,
+        shadows: &mut ShadowSet,
+    ) -> bool {
+        let Some(s) = solid else { return self.cast(piece, crosses_all, shadows) };
+        match shadows.solids.iter().find(|&&(t, _)| t == s) {
+            Some(&(_, true)) => return false,
+            Some(&(_, false)) => return self.cast(piece, crosses_all, shadows),
+            None => {}
+        }
+        if !piece.may_shadow(self.apex, self.corners) {
+            return false;
+        }
+        match self.cast_solid(&solids[s], shadows) {
+            Some(hidden) => {
+                shadows.solids.push((s, true));
+                hidden
+            }
+            None => {
+                shadows.solids.push((s, false));
+                self.cast(piece, crosses_all, shadows)
+            }
+        }
+    }
+
+    /// Adds the shadow of a whole convex solid to `shadows`, as [`Pyramid::cast`] adds a
+    /// piece's, and returns whether it hides the whole window: the solid's central projection,
+    /// the convex hull of its vertices' projections. `None` where a vertex is not between the
+    /// face's plane and the apex (as [`Pyramid::projection`] asks), or the hull has no area.
+    fn cast_solid(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
+        let projected: SmallVec<[DVec2; 16]> = self.project(&solid.vertices)?;
+        let outline: SmallPolygon<DVec2> = convex_hull(&projected).into_iter().collect();
+        if outline.len() < 3 || is_sliver(signed_area(&outline), polygon_scale(&outline)) {
+            return None;
+        }
+        if shadows.holds(&outline) {
+            return Some(false);
+        }
+        Some(match in_window(&outline, self.window) {
+            Some(s) if covers(&s, self.window) => true,
+            Some(s) => {
+                shadows.add(Some(outline), s);
+                false
+            }
+            None => false,
+        })
+    }
+
+    /// The central projection of the whole of `piece` onto the face's plane (counter-clockwise,
+    /// face coordinates), when every vertex lies between that plane and the apex, no more than
+    /// [`PROJECTION_REACH`] of the way up (so the projection is convex and no more than ten
+    /// times as far out as the piece); its part in the window is the piece's shadow.
+    fn projection(&self, piece: &Occluder) -> Option<SmallPolygon<DVec2>> {
+        let mut projected: SmallPolygon<DVec2> = self.project(&piece.polygon)?;
+        let area = signed_area(&projected);
+        let scale = polygon_scale(&projected);
+        if is_sliver(area, scale) {
+            return None;
+        }
+        if area < 0.0 {
+            projected.reverse();
+        }
+        Some(projected)
+    }
+
+    /// The central projections of `points` onto the face's plane (face coordinates), when each
+    /// lies between that plane and the apex, no more than [`PROJECTION_REACH`] of the way up.
+    fn project<C: FromIterator<DVec2>>(&self, points: &[DVec3]) -> Option<C> {
+        let frame = &self.face.face.frame;
+        points
+            .iter()
+            .map(|&x| {
+                let h = frame.height(x);
+                (0.0..=PROJECTION_REACH * self.z).contains(&h).then(|| {
+                    let t = self.z / (self.z - h);
+                    frame.to_plane(self.apex + (x - self.apex) * t)
+                })
+            })
+            .collect()
+    }
+}
+
+/// How far up from the face's plane towards the apex (as a fraction of the apex's height) an
+/// occluder's vertices may lie for [`Pyramid::projection`].
+const PROJECTION_REACH: f64 = 0.9;
+
+/// The shadows of one view, each kept only while no other holds it: subtracting a shadow that
+/// lies in another changes no visible part (in a city, most shadows on a face are those of a
+/// building's far side, inside those of its near side).
+#[derive(Default)]
+pub(super) struct ShadowSet {
+    /// Each shadow with an outline that holds it: the whole projection of its occluder when
+    /// known (whose part in the window is the shadow), else the shadow itself.
+    pub(super) casts: Vec<(SmallPolygon<DVec2>, Vec<DVec2>)>,
+    /// The convex solids met so far, and whether each was cast whole.
+    solids: SmallVec<[(usize, bool); 4]>,
+}
+
+impl ShadowSet {
+    /// Whether one of the outlines holds the convex `polygon` (boundary included, up to the
+    /// rounding tolerance of [`convex_contains`]).
+    fn holds(&self, polygon: &[DVec2]) -> bool {
+        self.casts.iter().any(|(outline, _)| convex_contains(outline, polygon))
+    }
+
+    /// Adds `shadow` (with its occluder's whole projection, if known) unless an outline holds
+    /// it, and drops the shadows that its own outline holds.
+    pub(super) fn add(&mut self, projection: Option<SmallPolygon<DVec2>>, shadow: Vec<DVec2>) {
+        if self.holds(&shadow) {
+            return;
+        }
+        let outline = projection.unwrap_or_else(|| shadow.iter().copied().collect());
+        self.casts.retain(|(_, s)| !convex_contains(&outline, s));
+        self.casts.push((outline, shadow));
+    }
+
+    pub(super) fn into_shadows(self) -> Vec<Vec<DVec2>> {
+        self.casts.into_iter().map(|(_, s)| s).collect()
+    }
+}
+
+pub(super) fn polygon_scale(poly: &[DVec2]) -> f64 {
+    let (lo, hi) = bounding_box(poly);
+    (hi - lo).length()
+}
+
+/// The inward normals (not normalised) of the planes through `p` and each edge of a convex window
+/// (its `corners`, in space): the sides of the pyramid with apex `p` over the window.
+pub(super) fn pyramid_sides(p: DVec3, corners: &[DVec3]) -> Vec<DVec3> {
+    let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+    let m = corners.len();
+    (0..m)
+        .map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % m]);
+            let side = (a - p).cross(b - p);
+            if side.dot(centre - p) < 0.0 { -side } else { side }
+        })
+        .collect()
+}
+
+/// The shadow on face `f` (at height `z` below `p`) of a convex occluder polygon, as seen from `p`
+/// through the convex `window` of the face: the occluder clipped to the pyramid with apex `p` over
+/// the window (its `sides`, [`pyramid_sides`]), centrally projected onto the face's plane.
+pub(super) fn shadow(
+    p: DVec3,
+    z: f64,
+    f: &PlannerFace,
+    window: &[DVec2],
+    sides: &[DVec3],
+    occluder: &Occluder,
+) -> Option<Vec<DVec2>> {
+    let normal = f.face.frame.normal;
+    // Two buffers in turn, the last clip's result in `current` (none yet: the piece itself);
+    // swapping them would copy both inline buffers at every clip.
+    let mut buffers: [SmallPolygon<DVec3>; 2] = [SmallPolygon::new(), SmallPolygon::new()];
+    let mut current: Option<usize> = None;
+    // In front of the face's plane, inside the pyramid. Most planes leave the piece whole, and
+    // the piece's own size bounds every tolerance of the clips: those are passed over.
+    let planes = std::iter::once((normal, -normal.dot(f.face.frame.origin)))
+        .chain(sides.iter().map(|&s| (s, -s.dot(p))));
+    for (n, offset) in planes {
+        let [first, second] = &mut buffers;
+        let (poly, out): (&[DVec3], _) = match current {
+            None => (&occluder.polygon, first),
+            Some(0) => (first, second),
+            Some(_) => (second, first),
+        };
+        if wholly_inside_3d(poly, n, offset, occluder.diameter) {
+            continue;
+        }
+        if !clip_polygon_3d(poly, n, offset, out) {
+            return None;
+        }
+        current = Some(current.map_or(0, |c| 1 - c));
+    }
+    let poly: &[DVec3] = match current {
+        None => &occluder.polygon,
+        Some(c) => &buffers[c],
+    };
+    // Central projection from p onto the face's plane: heights in (0, z] map to the plane.
+    let mut projected: Vec<DVec2> = poly
+        .iter()
+        .map(|&x| {
+            let t = z / (z - f.face.frame.height(x));
+            f.face.frame.to_plane(p + (x - p) * t)
+        })
+        .collect();
+    let area = signed_area(&projected);
+    let scale = polygon_scale(window);
+    if is_sliver(area, scale) {
+        return None;
+    }
+    if area < 0.0 {
+        projected.reverse();
+    }
+    Some(projected)
+}
+
+/// The part of the convex counter-clockwise `polygon` in the convex `window` (face
+/// coordinates), if it has area as [`shadow`] decides it.
+fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
+    let part = clip_to_convex(polygon, window)?;
+    let area = signed_area(&part);
+    let scale = polygon_scale(window);
+    (area > 0.0 && !is_sliver(area, scale)).then(|| part.into_vec())
+}
+
+/// Whether a projected polygon's (signed) `area`, measured against a size `scale` (its window's,
+/// or its own), is no area at all: not finite, or within 1e-14 of the square of the size (a
+/// sliver, or an occluder seen edge-on).
+fn is_sliver(area: f64, scale: f64) -> bool {
+    area.abs() <= 1e-14 * scale * scale || !area.is_finite()
+}
+
+/// Whether the convex counter-clockwise `shadow` contains every point of `window`, up to rounding
+/// (shadows are clipped to the window, so a covering shadow has the window's outline).
+fn covers(shadow: &[DVec2], window: &[DVec2]) -> bool {
+    let scale = polygon_scale(shadow);
+    let m = shadow.len();
+    (0..m).all(|k| {
+        let (a, b) = (shadow[k], shadow[(k + 1) % m]);
+        let edge = b - a;
+        let margin = 1e-12 * scale * edge.length();
+        window.iter().all(|&w| edge.perp_dot(w - a) >= -margin)
+    })
+}
+
+/// Convex hull (counter-clockwise) of a polygon's vertices, by Andrew's monotone chain.
+pub(super) fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+    let mut pts = points.to_vec();
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &DVec2>> =
+            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
+        for &q in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}

@@ -1,0 +1,151 @@
+//! Shafts between two boxes or polygons: the occluders that may meet a segment between them.
+
+use glam::DVec3;
+
+use super::PairPlanner;
+use super::occluders::ViewVolume;
+use crate::geometry::bounding_box_3d;
+
+impl PairPlanner {
+    /// What segments between a point of the box `nodes` on face `a` and a point of the box
+    /// `elements` on face `b` (a block of the compressed operator, each box in front of the other
+    /// face's plane) meet: nothing, when no occluder piece other than `a`'s and `b`'s reaches into
+    /// the shaft (Haines and Wallace 1994), the convex hull of the two boxes in front of both
+    /// planes; one piece that every such segment crosses (the block is hidden); or something in
+    /// between. The shaft is bounded by supporting planes of the two boxes (their faces, and
+    /// planes along each axis through corresponding corners), so the test only errs towards
+    /// [`Shaft::Partial`].
+    pub fn shaft(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+    ) -> Shaft {
+        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
+        let mut found = self.occluders.inside(a, b, &volume).peekable();
+        if found.peek().is_none() {
+            return Shaft::Clear;
+        }
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        if found.any(|o| self.hides_shaft(o, &from, &to, tol)) {
+            Shaft::Hidden
+        } else {
+            Shaft::Partial
+        }
+    }
+
+    /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether one
+    /// of them crosses every segment (hides the boxes from each other).
+    pub fn shaft_occluders(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+    ) -> (Vec<usize>, bool) {
+        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
+        let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        let hidden = found.iter().any(|&o| self.hides_shaft(o, &from, &to, tol));
+        (found, hidden)
+    }
+
+    /// Those of `candidates` (occluder pieces, none of faces `a` and `b`) that may meet a
+    /// segment from the convex polygon `from` on face `a` to the convex polygon `to` on face
+    /// `b`, and whether one of them crosses every such segment (exactly: the crossings of the
+    /// corner segments span those of all). A piece is left out when a plane separates it from
+    /// the segments: one of [`PairPlanner::shaft`]'s, or its own plane with both polygons on
+    /// one side of it.
+    pub fn polygon_shaft(
+        &self,
+        a: usize,
+        b: usize,
+        from: &[DVec3],
+        to: &[DVec3],
+        candidates: &[usize],
+    ) -> (Vec<usize>, bool) {
+        let (volume, tol) = self.shaft_volume(a, b, bounding_box_3d(from), bounding_box_3d(to));
+        let mut found = Vec::new();
+        for &o in candidates {
+            let piece = &self.occluders.pieces[o];
+            if !volume.may_hold(piece) || piece.plane_separates(from, to, tol) {
+                continue;
+            }
+            if piece.crosses_every_segment(from, to, tol, tol) {
+                return (vec![o], true);
+            }
+            found.push(o);
+        }
+        (found, false)
+    }
+
+    /// The shaft between two boxes on faces `a` and `b`, and the tolerance of its planes.
+    fn shaft_volume(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+    ) -> (ViewVolume, f64) {
+        let (fa, fb) = (&self.faces[a], &self.faces[b]);
+        let tol = 1e-12 * fa.size.max(fb.size);
+        let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
+        let corners: Vec<DVec3> =
+            box_corners(nodes).into_iter().chain(box_corners(elements)).collect();
+        for n in shaft_normals(nodes, elements) {
+            let reach = corners.iter().map(|c| n.dot(*c)).fold(f64::NEG_INFINITY, f64::max);
+            // Inside: n·x <= reach, shrunk by the tolerance: a piece that only touches the shaft
+            // from outside (a plate level with the top of a wall) blocks no segment inside it.
+            volume.push(-n, reach, tol);
+        }
+        (volume, tol)
+    }
+
+    /// Whether piece `occluder` crosses every segment between the boxes with corners `from` and
+    /// `to`.
+    fn hides_shaft(&self, occluder: usize, from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
+        self.occluders.pieces[occluder].crosses_every_segment(from, to, tol, tol)
+    }
+}
+
+/// What an occluder does to the segments between two boxes ([`PairPlanner::shaft`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shaft {
+    /// No occluder meets any segment.
+    Clear,
+    /// One occluder crosses every segment.
+    Hidden,
+    /// Anything else.
+    Partial,
+}
+
+/// The eight corners of a box.
+fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
+    std::array::from_fn(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
+/// Outward normals of supporting planes of the convex hull of two boxes: the six axes, and for
+/// each axis and each pair of corresponding corners the two normals perpendicular to the axis and
+/// to the segment joining those corners (the planes of Haines and Wallace's shaft).
+fn shaft_normals(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> Vec<DVec3> {
+    let mut normals = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
+    let (ca, cb) = (box_corners(a), box_corners(b));
+    for (axis, bit) in [(DVec3::X, 1), (DVec3::Y, 2), (DVec3::Z, 4)] {
+        // Corners with the axis's bit clear: one per sign pattern of the other two axes.
+        for k in (0..8).filter(|k| k & bit == 0) {
+            let n = axis.cross(cb[k] - ca[k]);
+            if n.length_squared() > 0.0 {
+                let n = n.normalize();
+                normals.extend([n, -n]);
+            }
+        }
+    }
+    normals
+}
