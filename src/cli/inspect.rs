@@ -104,9 +104,17 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         blocks,
         peak_rss_bytes: pipeline::peak_rss_bytes(),
     };
-    if let Some(target) = &args.json {
-        return report::write_json(&out, target);
+    match &args.json {
+        Some(target) => report::write_json(&out, target),
+        None => {
+            print_inspection(&out, config.compression.tolerance);
+            Ok(())
+        }
     }
+}
+
+/// The inspection as text.
+fn print_inspection(out: &Inspection, tolerance: f64) {
     println!(
         "{} ({} mesh, {} method): n = {}, dof = {}",
         out.surface, out.mesh, out.method, out.n, out.dof
@@ -127,7 +135,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
             "compressed operator (tolerance {:.0e}): {:.1} MB; {} exact blocks ({} entries), {} \
              low-rank blocks (standing for {} entries, rank <= {}), {} empty blocks, {} admissible \
              blocks kept exact",
-            config.compression.tolerance,
+            tolerance,
             out.operator_bytes as f64 / 1e6,
             b.near_blocks,
             b.near_entries,
@@ -139,5 +147,4 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         );
     }
     println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);
-    Ok(())
 }

@@ -494,19 +494,8 @@ impl<'a> GpuAssembler<'a> {
         // an error of this run, not a panic in wgpu's default handler.
         compute::checked(ctx, "GPU assembly", || {
             let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
-            // The near list holds every pair of the tile, up to what one indirect dispatch and one
-            // binding allow; pairs beyond it are evaluated in the first pass.
-            let near_capacity = if self.method.nodes_per_element() == 3 {
-                let grid_limit = ctx.limits.max_compute_workgroups_per_dimension as u64
-                    * layout::WORKGROUP as u64;
-                let binding_limit = (max_binding - layout::NEAR_HEADER_BYTES) / 8;
-                ((rows * disc.element_count()) as u64)
-                    .min(grid_limit)
-                    .min(binding_limit)
-                    .min(max_near_pairs)
-            } else {
-                0
-            };
+            let pairs = (rows * disc.element_count()) as u64;
+            let near_capacity = self.near_capacity(pairs, max_binding, max_near_pairs);
             let params = Params {
                 rows: rows as u32,
                 elements: disc.element_count() as u32,
@@ -547,32 +536,9 @@ impl<'a> GpuAssembler<'a> {
                 &[&params, &views, elements, tables, &exceptions, &vertices, &out, &near],
             );
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.full);
-                pass.set_bind_group(0, &group, &[]);
-                let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
-                pass.dispatch_workgroups(groups_x, rows as u32, 1);
-            }
-            if near_capacity > 0 {
-                // The pairs the first pass deferred, with every lane busy.
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.prepare_near);
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
-                drop(pass);
-                encoder.copy_buffer_to_buffer(
-                    &near,
-                    layout::NEAR_DISPATCH_OFFSET,
-                    &near_args,
-                    0,
-                    12,
-                );
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.near);
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups_indirect(&near_args, 0);
-            }
+            let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
+            let deferred = (near_capacity > 0).then_some((&near, &near_args));
+            self.encode_passes(&mut encoder, &group, (groups_x, rows as u32), deferred);
             if plan.exception_count > 0 {
                 // A second pass: ordered after the first, which it partly overwrites.
                 let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -589,6 +555,49 @@ impl<'a> GpuAssembler<'a> {
                 _buffers: vec![params, views, exceptions, vertices, out, near, near_args],
             })
         })?
+    }
+
+    /// Pairs the near list of a tile of `pairs` holds: every pair of the tile (linear method),
+    /// up to what one indirect dispatch and one binding allow; pairs beyond it are evaluated in
+    /// the first pass. None for the centroid method.
+    fn near_capacity(&self, pairs: u64, max_binding: u64, max_near_pairs: u64) -> u64 {
+        if self.method.nodes_per_element() != 3 {
+            return 0;
+        }
+        let limits = &self.ctx.limits;
+        let grid_limit =
+            limits.max_compute_workgroups_per_dimension as u64 * layout::WORKGROUP as u64;
+        let binding_limit = (max_binding - layout::NEAR_HEADER_BYTES) / 8;
+        pairs.min(grid_limit).min(binding_limit).min(max_near_pairs)
+    }
+
+    /// The first pass over a tile's grid of (element groups, rows), then, with the near list
+    /// and its dispatch arguments, the pairs it deferred with every lane busy.
+    fn encode_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        (groups_x, rows): (u32, u32),
+        deferred: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
+    ) {
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.full);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(groups_x, rows, 1);
+        }
+        if let Some((near, near_args)) = deferred {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.prepare_near);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            drop(pass);
+            encoder.copy_buffer_to_buffer(near, layout::NEAR_DISPATCH_OFFSET, near_args, 0, 12);
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.near);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups_indirect(near_args, 0);
+        }
     }
 
     fn finish(

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
-use super::{Block, BlockData, Entries, MemoryGuard, NodeViews, by_node_cluster};
+use super::{BlockData, BuiltBlock, Entries, MemoryGuard, NodeViews, by_node_cluster};
 use crate::assembly::{PairEvaluation, PairTask};
 use crate::error::Result;
 use crate::progress::Progress;
@@ -47,8 +47,7 @@ pub(super) fn build_blocks(
     device: &dyn PairEvaluation,
     guard: &MemoryGuard,
     progress: &dyn Progress,
-) -> Result<Vec<(Block, PairStats, bool)>> {
-    let mut built = Vec::with_capacity(plan.near.len() + plan.far.len());
+) -> Result<Vec<BuiltBlock>> {
     let mut exact: Vec<(usize, usize, bool)> =
         plan.near.iter().map(|&(t, s)| (t, s, false)).collect();
     let mut crossings = Vec::new();
@@ -61,7 +60,24 @@ pub(super) fn build_blocks(
             None => exact.push((t, s, true)),
         }
     }
+    let mut built =
+        cross_approximate(entries, faces, crossings, &mut exact, device, guard, progress)?;
+    built.extend(exact_blocks(entries, exact, device, guard, progress)?);
+    Ok(built)
+}
 
+/// The low-rank blocks of `crossings`, advanced in lockstep; a block whose rank would not pay is
+/// added to `exact` (incompressible).
+fn cross_approximate(
+    entries: &Entries,
+    faces: &FacePairs,
+    mut crossings: Vec<Crossing>,
+    exact: &mut Vec<(usize, usize, bool)>,
+    device: &dyn PairEvaluation,
+    guard: &MemoryGuard,
+    progress: &dyn Progress,
+) -> Result<Vec<BuiltBlock>> {
+    let mut built = Vec::with_capacity(crossings.len());
     while !crossings.is_empty() {
         let sizes: Vec<usize> = crossings.iter().map(|x| request_len(entries, x)).collect();
         for range in rounds(&sizes) {
@@ -89,7 +105,19 @@ pub(super) fn build_blocks(
         crossings = running;
         guard.check(0)?;
     }
+    Ok(built)
+}
 
+/// The `exact` blocks (with whether each is incompressible), their pairs planned on the host by
+/// the row walk and evaluated by `device` in rounds.
+fn exact_blocks(
+    entries: &Entries,
+    mut exact: Vec<(usize, usize, bool)>,
+    device: &dyn PairEvaluation,
+    guard: &MemoryGuard,
+    progress: &dyn Progress,
+) -> Result<Vec<BuiltBlock>> {
+    let mut built = Vec::with_capacity(exact.len());
     // By node cluster, so that each node's views of the faces are found once per round.
     exact.sort_unstable();
     let sizes: Vec<usize> = exact
@@ -125,7 +153,7 @@ pub(super) fn build_blocks(
         let values = device.evaluate(&tasks)?;
         drop(tasks);
         let per = entries.per;
-        let done: Vec<(Block, PairStats, bool)> = blocks
+        let done: Vec<BuiltBlock> = blocks
             .par_iter()
             .zip(planned.par_iter())
             .zip(offsets.par_iter())

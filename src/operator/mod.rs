@@ -202,22 +202,7 @@ impl CompressedOperator {
         options.validate()?;
         assembly.quadrature.validate()?;
         let per = disc.method.nodes_per_element();
-        let node_items: Vec<Item> = disc
-            .nodes
-            .iter()
-            .map(|n| Item { point: n.position, lo: n.position, hi: n.position, face: n.face })
-            .collect();
-        let element_items: Vec<Item> = mesh
-            .elements()
-            .iter()
-            .map(|e| {
-                let [a, b, c] = e.vertices;
-                Item { point: e.centroid(), lo: a.min(b).min(c), hi: a.max(b).max(c), face: e.face }
-            })
-            .collect();
-        let tree_leaf = options.mixed_leaf_size.min(options.leaf_size);
-        let nodes = ClusterTree::new(&node_items, tree_leaf);
-        let elements = ClusterTree::new(&element_items, tree_leaf);
+        let (nodes, elements) = cluster_trees(mesh, disc, options);
         let faces = FacePairs::new(scene, planner);
         let plan = BlockPlan::new(&nodes, &elements, &faces, options);
         // The exact blocks alone must fit before any is computed; then every block built counts.
@@ -235,88 +220,16 @@ impl CompressedOperator {
             per,
         };
         progress.start("compression", plan.near.len() + plan.far.len());
-        let built: Vec<(Block, PairStats, bool)> = match batches {
+        let tolerance = options.tolerance;
+        let built = match batches {
             Some(evaluator) => batched::build_blocks(
-                &entries,
-                &plan,
-                &faces,
-                options.tolerance,
-                evaluator,
-                &guard,
-                progress,
+                &entries, &plan, &faces, tolerance, evaluator, &guard, progress,
             )?,
-            None => {
-                // Admissible blocks too small for a low rank to pay are exact from the start.
-                let (small, far): (Vec<_>, Vec<_>) =
-                    plan.far.iter().partition(|&&(t, s)| entries.useful_rank(t, s).is_none());
-                let exact: Vec<(usize, usize, bool)> = plan
-                    .near
-                    .iter()
-                    .map(|&(t, s)| (t, s, false))
-                    .chain(small.into_iter().map(|(t, s)| (t, s, true)))
-                    .collect();
-                // The exact blocks of one node cluster together: each node's views of the faces
-                // are found once for all of them.
-                let near = by_node_cluster(&exact).into_par_iter().flat_map_iter(|group| {
-                    let mut views = NodeViews::default();
-                    let built: Vec<_> = group
-                        .iter()
-                        .filter(|_| !guard.is_over())
-                        .map(|&(t, s, incompressible)| {
-                            let (block, stats) = entries.exact_block(t, s, &mut views);
-                            guard.add(block.bytes());
-                            (block, stats, incompressible)
-                        })
-                        .collect();
-                    progress.advance(built.len());
-                    built
-                });
-                let far = far.into_par_iter().filter(|_| !guard.is_over()).map(|(t, s)| {
-                    let r = match entries.compressed_block(t, s, &faces, options.tolerance) {
-                        Some(block) => (block, PairStats::default(), false),
-                        None => {
-                            let (block, stats) =
-                                entries.exact_block(t, s, &mut NodeViews::default());
-                            (block, stats, true)
-                        }
-                    };
-                    guard.add(r.0.bytes());
-                    progress.advance(1);
-                    r
-                });
-                let built = near.chain(far).collect();
-                guard.check(0)?;
-                built
-            }
+            None => build_block_by_block(&entries, &plan, &faces, tolerance, &guard, progress)?,
         };
         progress.finish();
 
-        let mut stats = OperatorStats { empty_blocks: plan.empty as u64, ..Default::default() };
-        let mut pairs = PairStats::default();
-        let mut blocks = Vec::with_capacity(built.len());
-        for (block, s, incompressible) in built {
-            pairs += s;
-            stats.incompressible_blocks += u64::from(incompressible);
-            let index_bytes = std::mem::size_of::<Block>() as u64;
-            match &block.data {
-                BlockData::Dense(d) => {
-                    if d.iter().all(|&v| v == 0.0) {
-                        stats.empty_blocks += 1;
-                        continue;
-                    }
-                    stats.near_blocks += 1;
-                    stats.near_entries += d.len() as u64;
-                    stats.operator_bytes += 8 * d.len() as u64 + index_bytes;
-                }
-                BlockData::LowRank(lr) => {
-                    stats.far_blocks += 1;
-                    stats.far_entries += (lr.m * lr.c) as u64;
-                    stats.max_rank = stats.max_rank.max(lr.k);
-                    stats.operator_bytes += 8 * lr.len() as u64 + index_bytes;
-                }
-            }
-            blocks.push(block);
-        }
+        let (blocks, mut stats, pairs) = kept_blocks(built, plan.empty);
         stats.operator_bytes += 8 * (nodes.order.len() + elements.order.len()) as u64;
         let zero_rows = disc.nodes.iter().filter(|n| n.rho == 0.0).count();
         Ok(Self {
@@ -461,6 +374,117 @@ fn by_node_cluster<T: Copy + Ord>(blocks: &[(usize, usize, T)]) -> Vec<Vec<(usiz
     let mut sorted = blocks.to_vec();
     sorted.sort_unstable();
     sorted.chunk_by(|a, b| a.0 == b.0).map(<[_]>::to_vec).collect()
+}
+
+/// The cluster trees of the nodes (points) and of the elements (their bounding boxes).
+fn cluster_trees(
+    mesh: &Mesh,
+    disc: &Discretization,
+    options: &CompressionOptions,
+) -> (ClusterTree, ClusterTree) {
+    let node_items: Vec<Item> = disc
+        .nodes
+        .iter()
+        .map(|n| Item { point: n.position, lo: n.position, hi: n.position, face: n.face })
+        .collect();
+    let element_items: Vec<Item> = mesh
+        .elements()
+        .iter()
+        .map(|e| {
+            let [a, b, c] = e.vertices;
+            Item { point: e.centroid(), lo: a.min(b).min(c), hi: a.max(b).max(c), face: e.face }
+        })
+        .collect();
+    let leaf = options.mixed_leaf_size.min(options.leaf_size);
+    (ClusterTree::new(&node_items, leaf), ClusterTree::new(&element_items, leaf))
+}
+
+/// A built block, the classes of the pairs it evaluated exactly, and whether it was admissible
+/// but found incompressible.
+type BuiltBlock = (Block, PairStats, bool);
+
+/// The blocks of `plan` on the CPU, block by block: near ones exact, far ones compressed to
+/// `tolerance` or exact when their rank would not pay.
+fn build_block_by_block(
+    entries: &Entries,
+    plan: &BlockPlan,
+    faces: &FacePairs,
+    tolerance: f64,
+    guard: &MemoryGuard,
+    progress: &dyn Progress,
+) -> Result<Vec<BuiltBlock>> {
+    // Admissible blocks too small for a low rank to pay are exact from the start.
+    let (small, far): (Vec<_>, Vec<_>) =
+        plan.far.iter().partition(|&&(t, s)| entries.useful_rank(t, s).is_none());
+    let exact: Vec<(usize, usize, bool)> = plan
+        .near
+        .iter()
+        .map(|&(t, s)| (t, s, false))
+        .chain(small.into_iter().map(|(t, s)| (t, s, true)))
+        .collect();
+    // The exact blocks of one node cluster together: each node's views of the faces are found
+    // once for all of them.
+    let near = by_node_cluster(&exact).into_par_iter().flat_map_iter(|group| {
+        let mut views = NodeViews::default();
+        let built: Vec<_> = group
+            .iter()
+            .filter(|_| !guard.is_over())
+            .map(|&(t, s, incompressible)| {
+                let (block, stats) = entries.exact_block(t, s, &mut views);
+                guard.add(block.bytes());
+                (block, stats, incompressible)
+            })
+            .collect();
+        progress.advance(built.len());
+        built
+    });
+    let far = far.into_par_iter().filter(|_| !guard.is_over()).map(|(t, s)| {
+        let r = match entries.compressed_block(t, s, faces, tolerance) {
+            Some(block) => (block, PairStats::default(), false),
+            None => {
+                let (block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
+                (block, stats, true)
+            }
+        };
+        guard.add(r.0.bytes());
+        progress.advance(1);
+        r
+    });
+    let built = near.chain(far).collect();
+    guard.check(0)?;
+    Ok(built)
+}
+
+/// The blocks worth keeping (exact blocks of zeros are dropped and counted empty, with the
+/// `empty` blocks the plan left out), their statistics and the pair classes met.
+fn kept_blocks(built: Vec<BuiltBlock>, empty: usize) -> (Vec<Block>, OperatorStats, PairStats) {
+    let mut stats = OperatorStats { empty_blocks: empty as u64, ..Default::default() };
+    let mut pairs = PairStats::default();
+    let mut blocks = Vec::with_capacity(built.len());
+    for (block, s, incompressible) in built {
+        pairs += s;
+        stats.incompressible_blocks += u64::from(incompressible);
+        let index_bytes = std::mem::size_of::<Block>() as u64;
+        match &block.data {
+            BlockData::Dense(d) => {
+                if d.iter().all(|&v| v == 0.0) {
+                    stats.empty_blocks += 1;
+                    continue;
+                }
+                stats.near_blocks += 1;
+                stats.near_entries += d.len() as u64;
+                stats.operator_bytes += 8 * d.len() as u64 + index_bytes;
+            }
+            BlockData::LowRank(lr) => {
+                stats.far_blocks += 1;
+                stats.far_entries += (lr.m * lr.c) as u64;
+                stats.max_rank = stats.max_rank.max(lr.k);
+                stats.operator_bytes += 8 * lr.len() as u64 + index_bytes;
+            }
+        }
+        blocks.push(block);
+    }
+    (blocks, stats, pairs)
 }
 
 /// The views of faces found so far from each node of one node cluster, kept while its blocks

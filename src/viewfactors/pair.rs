@@ -85,20 +85,7 @@ impl Context<'_> {
             Vec::new()
         };
         let in_front = |h: [f64; 3]| h.iter().all(|&h| h >= -tol);
-        // The outer element cut where the integrand is not smooth: behind the other element's
-        // plane it sees nothing, and across the event lines of the occluders the visible part
-        // of the other element changes its shape.
-        let mut pieces = vec![ei.vertices.to_vec()];
-        if !in_front(hi) {
-            let (n, o) = (fb.frame.normal, fb.frame.origin);
-            pieces = pieces.iter().filter_map(|p| clip_polygon_3d(p, n, -n.dot(o))).collect();
-        }
-        for (normal, point) in contact_cuts(&ei.vertices, &fa.frame, &ej.vertices, tol)
-            .into_iter()
-            .chain(event_planes(&ei.vertices, &ej.vertices, &occluders, self.planner))
-        {
-            pieces = pieces.iter().flat_map(|p| split(p, normal, point)).collect();
-        }
+        let pieces = self.smooth_pieces((i, j), !in_front(hi), &occluders, tol);
         // Each piece has its own occluders, among the pair's: a piece in the light of all of
         // them sees T_j whole (no per-point visibility), one behind an occluder that crosses
         // every segment to T_j sees nothing, and the others shadow T_j by their own occluders
@@ -157,6 +144,32 @@ impl Context<'_> {
         let (value, error) = cells.total();
         tally.error = tally.error.max(error / ei.area());
         value / ei.area()
+    }
+
+    /// Element i of the pair `(i, j)` cut where the integrand is not smooth: behind element
+    /// j's plane (when it reaches there, `behind`) it sees nothing, and across the event lines of
+    /// the `occluders` the visible part of element j changes its shape.
+    fn smooth_pieces(
+        &self,
+        (i, j): (usize, usize),
+        behind: bool,
+        occluders: &[usize],
+        tol: f64,
+    ) -> Vec<Vec<DVec3>> {
+        let (ei, ej) = (&self.mesh.elements()[i], &self.mesh.elements()[j]);
+        let (fa, fb) = (&self.scene.faces[ei.face], &self.scene.faces[ej.face]);
+        let mut pieces = vec![ei.vertices.to_vec()];
+        if behind {
+            let (n, o) = (fb.frame.normal, fb.frame.origin);
+            pieces = pieces.iter().filter_map(|p| clip_polygon_3d(p, n, -n.dot(o))).collect();
+        }
+        for (normal, point) in contact_cuts(&ei.vertices, &fa.frame, &ej.vertices, tol)
+            .into_iter()
+            .chain(event_planes(&ei.vertices, &ej.vertices, occluders, self.planner))
+        {
+            pieces = pieces.iter().flat_map(|p| split(p, normal, point)).collect();
+        }
+        pieces
     }
 
     /// `Σ w (1/π) ∫ G V` over element `j` from the weighted points `(p, w)` of a piece of

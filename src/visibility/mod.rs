@@ -45,7 +45,9 @@ use std::borrow::Cow;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use crate::geometry::{HalfPlane, bounding_box, clip_convex, convex_contains, subtract_convex};
+use crate::geometry::{
+    HalfPlane, PlaneFrame, bounding_box, clip_convex, convex_contains, subtract_convex,
+};
 use crate::scene::{COPLANAR_DISTANCE, Scene};
 
 /// Why a pair contributes nothing.
@@ -284,50 +286,9 @@ impl PairPlanner {
             hiders.list[..=k].rotate_right(1);
             return FaceView::Skip(SkipReason::Hidden);
         }
-        // The planes that reject most boxes of the index first: the pyramid's bounding box,
-        // its sides, the two faces' planes, and the planes through a lateral edge parallel to
-        // an axis.
         let sides = pyramid_sides(p, &corners);
-        let mut volume = ViewVolume::default();
-        volume.push_box(lo, hi, -tol);
-        // A piece that reaches into the pyramid by less than the tolerance (the faces next to
-        // the window, touching it along an edge) would shadow a sliver under the clipping's own
-        // tolerance: it is no candidate.
-        for side in &sides {
-            let unit = side.normalize_or_zero();
-            if unit != DVec3::ZERO {
-                volume.push(unit, -unit.dot(p), tol);
-            }
-        }
-        volume.push_front_of(&own.face.frame, tol);
-        volume.push_front_of(&f.face.frame, tol);
-        let m = corners.len();
-        for (k, &c) in corners.iter().enumerate() {
-            let edges = [corners[(k + 1) % m] - c, c - corners[(k + m - 1) % m]];
-            for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
-                // Along an edge of the window, the plane is that edge's side (a plane of the
-                // volume unless degenerate): leaving it out only widens the volume.
-                if edges
-                    .iter()
-                    .any(|e| e.cross(axis).length_squared() <= 1e-24 * e.length_squared())
-                {
-                    continue;
-                }
-                // Not normalised: the margin is the tolerance times the normal's 1-norm, no
-                // less than its length, so the plane admits no fewer pieces than the unit one.
-                let n = axis.cross(c - p);
-                let side = |q: &DVec3| n.dot(*q - p);
-                if n == DVec3::ZERO {
-                    continue;
-                }
-                let margin = -tol * n.abs().element_sum();
-                if corners.iter().all(|q| side(q) >= 0.0) {
-                    volume.push(n, -n.dot(p), margin);
-                } else if corners.iter().all(|q| side(q) <= 0.0) {
-                    volume.push(-n, n.dot(p), margin);
-                }
-            }
-        }
+        let volume =
+            view_volume(p, &corners, &sides, (lo, hi), [&own.face.frame, &f.face.frame], tol);
         // One shadow that covers the whole window hides the face (most faces of a large scene,
         // seen from most nodes): the search stops there.
         let mut shadows = ShadowSet::default();
@@ -549,6 +510,59 @@ struct Window<'a> {
     polygon: Cow<'a, [DVec2]>,
     /// The same in space.
     corners: SmallVec<[DVec3; 8]>,
+}
+
+/// The volume in which a view's candidate occluders are searched, planes that reject most boxes
+/// of the index first: the pyramid's bounding box `(lo, hi)`, its `sides` (apex `p`, window
+/// `corners`), the front of the two faces' `planes`, and the planes through a lateral edge
+/// parallel to an axis.
+fn view_volume(
+    p: DVec3,
+    corners: &[DVec3],
+    sides: &[DVec3],
+    (lo, hi): (DVec3, DVec3),
+    planes: [&PlaneFrame; 2],
+    tol: f64,
+) -> ViewVolume {
+    let mut volume = ViewVolume::default();
+    volume.push_box(lo, hi, -tol);
+    // A piece that reaches into the pyramid by less than the tolerance (the faces next to
+    // the window, touching it along an edge) would shadow a sliver under the clipping's own
+    // tolerance: it is no candidate.
+    for side in sides {
+        let unit = side.normalize_or_zero();
+        if unit != DVec3::ZERO {
+            volume.push(unit, -unit.dot(p), tol);
+        }
+    }
+    for frame in planes {
+        volume.push_front_of(frame, tol);
+    }
+    let m = corners.len();
+    for (k, &c) in corners.iter().enumerate() {
+        let edges = [corners[(k + 1) % m] - c, c - corners[(k + m - 1) % m]];
+        for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+            // Along an edge of the window, the plane is that edge's side (a plane of the
+            // volume unless degenerate): leaving it out only widens the volume.
+            if edges.iter().any(|e| e.cross(axis).length_squared() <= 1e-24 * e.length_squared()) {
+                continue;
+            }
+            // Not normalised: the margin is the tolerance times the normal's 1-norm, no
+            // less than its length, so the plane admits no fewer pieces than the unit one.
+            let n = axis.cross(c - p);
+            let side = |q: &DVec3| n.dot(*q - p);
+            if n == DVec3::ZERO {
+                continue;
+            }
+            let margin = -tol * n.abs().element_sum();
+            if corners.iter().all(|q| side(q) >= 0.0) {
+                volume.push(n, -n.dot(p), margin);
+            } else if corners.iter().all(|q| side(q) <= 0.0) {
+                volume.push(-n, n.dot(p), margin);
+            }
+        }
+    }
+    volume
 }
 
 #[cfg(test)]

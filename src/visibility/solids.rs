@@ -38,11 +38,7 @@ pub(super) struct Solid {
 /// shadows as the closed solid does. Anything else (a T-junction, a dent, an open box in
 /// mid-air) is left as pieces, which is always right, only slower.
 pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usize>>) {
-    let key = |v: DVec3| v.to_array().map(f64::to_bits);
-    let edge_key = |a: DVec3, b: DVec3| {
-        let (a, b) = (key(a), key(b));
-        if a <= b { (a, b) } else { (b, a) }
-    };
+    let key = vertex_key;
     let edges_of = |k: usize| {
         let polygon = &pieces[k].polygon;
         let m = polygon.len();
@@ -117,25 +113,10 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
         if group.len() < 4 || group.len() > MAX_SOLID_PIECES {
             continue;
         }
-        // The edges that bound one piece of the group (each must bound one or two).
-        let mut open: Vec<(DVec3, DVec3)> = Vec::new();
-        let mut closed = true;
-        for &k in &group {
-            let polygon = &pieces[k].polygon;
-            let m = polygon.len();
-            for l in 0..m {
-                let (u, v) = (polygon[l], polygon[(l + 1) % m]);
-                match edges[&edge_key(u, v)].iter().filter(|g| group.contains(g)).count() {
-                    1 => open.push((u, v)),
-                    2 => {}
-                    _ => closed = false,
-                }
-            }
-        }
         // Vertices off every plane of the group (not all in one plane).
         let solid_volume = sides.iter().all(|&s| s != 0.0);
-        if !closed || !solid_volume || !(open.is_empty() || is_capped(&open, &vertices, &all, tol))
-        {
+        let Some(open) = open_edges(&group, pieces, &edges) else { continue };
+        if !solid_volume || !(open.is_empty() || is_capped(&open, &vertices, &all, tol)) {
             continue;
         }
         let mut faces: Vec<usize> =
@@ -148,6 +129,42 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
         solids.push(Solid { faces, vertices });
     }
     (solids, solid_of)
+}
+
+/// A vertex by its bits: faces of one scene file or mesh share vertices to the bit.
+type VertexKey = [u64; 3];
+
+fn vertex_key(v: DVec3) -> VertexKey {
+    v.to_array().map(f64::to_bits)
+}
+
+/// An edge by its two vertices, in either direction.
+fn edge_key(a: DVec3, b: DVec3) -> (VertexKey, VertexKey) {
+    let (a, b) = (vertex_key(a), vertex_key(b));
+    if a <= b { (a, b) } else { (b, a) }
+}
+
+/// The edges of `group` that bound one of its pieces, or `None` when an edge bounds more than
+/// two (each must bound one or two).
+fn open_edges(
+    group: &[usize],
+    pieces: &[Occluder],
+    edges: &HashMap<(VertexKey, VertexKey), Vec<usize>>,
+) -> Option<Vec<(DVec3, DVec3)>> {
+    let mut open = Vec::new();
+    for &k in group {
+        let polygon = &pieces[k].polygon;
+        let m = polygon.len();
+        for l in 0..m {
+            let (u, v) = (polygon[l], polygon[(l + 1) % m]);
+            match edges[&edge_key(u, v)].iter().filter(|g| group.contains(g)).count() {
+                1 => open.push((u, v)),
+                2 => {}
+                _ => return None,
+            }
+        }
+    }
+    Some(open)
 }
 
 /// The side of `piece`'s plane that `points` lie on: 1 or -1, 0 where all lie in it (within
