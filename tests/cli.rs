@@ -1,4 +1,4 @@
-//! The command-line contract (DESIGN.md sec. 5): JSON keys, the paper's numbers, identities and
+//! The command-line contract (ARCHITECTURE.md, "The command line"): JSON keys, the paper's numbers, identities and
 //! clear errors, through the real binary.
 
 mod common;

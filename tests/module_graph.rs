@@ -1,6 +1,7 @@
-//! The library's modules import one another in one direction only: no cycle among the top-level
-//! modules of src/, nor among the sibling modules of one directory (results flow from the layers
-//! that compute them to `report`, which only formats them). Test code is left out: tests may use
+//! The library's modules import one another in one direction only (ARCHITECTURE.md): each
+//! top-level module of src/ lies in a layer and names only modules of lower layers, and the
+//! modules of one directory have no cycle among themselves (results flow from the layers that
+//! compute them to `report`, which only formats them). Test code is left out: tests may use
 //! anything.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -46,35 +47,40 @@ fn module_graph(src: &Path) -> Graph {
 }
 
 /// The module graph of source files given by path relative to src/ (`mesh/constrained.rs`) and
-/// text.
+/// text: an edge between two modules of one parent (two top-level modules, or two files of one
+/// directory) wherever a file inside the first names the second.
 fn graph_of(files: impl IntoIterator<Item = (String, String)>) -> Graph {
     let mut graph = Graph::new();
+    let mut edge = |from: &[String], to: &[String]| {
+        // The first module where the two paths part: siblings under their common parent.
+        let common = from.iter().zip(to).take_while(|(a, b)| a == b).count();
+        if common < from.len() && common < to.len() && !to[common].is_empty() {
+            let key = |p: &[String]| p[..=common].join("/");
+            graph.entry(key(from)).or_default().insert(key(to));
+        }
+    };
     for (rel, text) in files {
         let rel = Path::new(&rel).with_extension("");
         let parts: Vec<String> =
             rel.iter().map(|p| p.to_string_lossy().into_owned()).filter(|p| p != "mod").collect();
-        let Some(top) = parts.first().cloned() else { continue };
+        let is_mod = rel.file_name().is_some_and(|n| n == "mod");
+        let Some(top) = parts.first() else { continue };
         if top == "main" || top == "lib" || parts.last().is_some_and(|p| p == "tests") {
             continue;
         }
         let code = without_tests(&text);
         for path in named_after(code, "crate::") {
-            let Some(target) = path.first().filter(|t| !t.is_empty()) else { continue };
-            if *target != top {
-                graph.entry(top.clone()).or_default().insert(target.clone());
-            } else if parts.len() >= 2 && path.len() >= 2 && path[1] != parts[1] {
-                let (from, to) = (format!("{top}/{}", parts[1]), format!("{top}/{}", path[1]));
-                graph.entry(from).or_default().insert(to);
-            }
+            edge(&parts, &path);
         }
-        // `super::x` from a file of directory module `top` names its sibling `top/x`.
-        if parts.len() == 2 {
-            for path in named_after(code, "super::") {
-                if let Some(sibling) = path.first().filter(|s| !s.is_empty() && **s != parts[1]) {
-                    let from = format!("{top}/{}", parts[1]);
-                    graph.entry(from).or_default().insert(format!("{top}/{sibling}"));
-                }
-            }
+        // `super::x` names x in the parent of the file's module (a directory's mod.rs is that
+        // directory's module, so its `super` is one level further up).
+        let parent = &parts[..parts.len() - 1];
+        if parent.is_empty() || (is_mod && parts.len() < 2) {
+            continue;
+        }
+        for path in named_after(code, "super::") {
+            let target: Vec<String> = parent.iter().cloned().chain(path).collect();
+            edge(&parts, &target);
         }
     }
     graph
@@ -142,6 +148,68 @@ fn the_modules_of_src_import_each_other_without_a_cycle() {
     }
 }
 
+/// The layers of src/, lowest first: a module names only modules of lower layers.
+const LAYERS: &[&[&str]] = &[
+    &["error", "progress", "geometry", "quadrature"],
+    &["kernels", "scene"],
+    &["visibility"],
+    &["mesh"],
+    &["discretization"],
+    &["assembly"],
+    &["gpu", "operator", "problems", "viewfactors"],
+    &["solve", "solution", "surface_error"],
+    &["pipeline"],
+    &["bench", "study"],
+    &["report"],
+    &["cli"],
+];
+
+/// Edges that name what a layer must not know, and why (the layers forbid them too; these say
+/// why in the failure).
+const FORBIDDEN: &[(&str, &str, &str)] = &[
+    ("operator", "gpu", "the operator asks for values through assembly's PairEvaluation"),
+    ("visibility", "mesh", "the pair plan sees faces and points, not the mesh"),
+    ("assembly", "gpu", "the GPU implements assembly's traits, not the other way round"),
+];
+
+fn layer_of(module: &str) -> Option<usize> {
+    LAYERS.iter().position(|layer| layer.contains(&module))
+}
+
+#[test]
+fn each_module_names_only_lower_layers() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let graph = module_graph(&src);
+    for (from, targets) in graph.iter().filter(|(from, _)| !from.contains('/')) {
+        let own = layer_of(from).unwrap_or_else(|| {
+            panic!("module {from} is in no layer of LAYERS: place it there and in ARCHITECTURE.md")
+        });
+        for to in targets {
+            if let Some((_, _, why)) = FORBIDDEN.iter().find(|(a, b, _)| a == from && b == to) {
+                panic!("{from} must not use {to}: {why}");
+            }
+            assert!(to != "cli", "{from} uses cli: the command line is the binary's only");
+            let below = layer_of(to).is_some_and(|layer| layer < own);
+            assert!(below, "{from} (layer {own}) uses {to} (layer {:?})", layer_of(to));
+        }
+    }
+    let text = |file: &str| std::fs::read_to_string(src.join(file)).unwrap_or_default();
+    for (file, module) in [("lib.rs", "pub mod "), ("main.rs", "mod ")] {
+        for line in text(file).lines().filter_map(|l| l.strip_prefix(module)) {
+            let name = line.trim_end_matches(';');
+            assert!(layer_of(name).is_some(), "module {name} ({file}) is in no layer of LAYERS");
+        }
+    }
+}
+
+#[test]
+fn the_layer_check_sees_a_forbidden_edge() {
+    let graph = graph_of([("operator/mod.rs".to_string(), "use crate::gpu::X;".to_string())]);
+    assert!(graph["operator"].contains("gpu"));
+    assert!(FORBIDDEN.iter().any(|(a, b, _)| *a == "operator" && *b == "gpu"));
+    assert!(layer_of("gpu") >= layer_of("operator"), "the layers forbid it as well");
+}
+
 #[test]
 fn the_cycle_check_finds_cycles() {
     let edges = |list: &[(&str, &str)]| -> Graph {
@@ -184,6 +252,14 @@ fn the_scan_finds_the_cycles_of_a_cyclic_crate() {
         ("mesh/shadow_lines.rs", "use super::constrained::triangulate;"),
     ]);
     assert!(find_cycle(&siblings).is_some(), "{siblings:?}");
+    // Two files of a nested directory, through `super::`, and a parent's mod.rs naming one.
+    let nested = crate_of(&[
+        ("scene/file/mod.rs", "use builder::Builder;"),
+        ("scene/file/builder.rs", "use super::schema::Properties;"),
+        ("scene/file/schema.rs", "use super::builder::Rules;"),
+    ]);
+    assert!(find_cycle(&nested).is_some(), "{nested:?}");
+    assert!(nested["scene/file/builder"].contains("scene/file/schema"), "{nested:?}");
     // Imports in test modules, and the crate root, are left out; one-way imports are no cycle.
     let acyclic = crate_of(&[
         ("report/mod.rs", "use crate::study::StudyResult;"),

@@ -8,7 +8,7 @@ use radiosity::scene::SurfaceParameters;
 /// Times the pair plan on `scene` with and without the occluder index, and prints it.
 pub(crate) fn run(scene: &str, nodes: usize, json: Option<&str>) -> Result<()> {
     let scene = SceneSource::parse(scene)?.build(SurfaceParameters::default())?;
-    let b = radiosity::visibility::bench_plan(&scene, nodes);
+    let b = radiosity::bench::bench_plan(&scene, nodes);
     if let Some(target) = json {
         return report::write_json(&b, target);
     }

@@ -510,7 +510,7 @@ impl SolveArgs {
     }
 }
 
-// Imperfect scene files, colour bands and pictures (issue 16).
+// Imperfect scene files, colour bands and pictures.
 
 #[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum NonPlanarArg {

@@ -27,7 +27,7 @@ pub(crate) fn run(
     let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
     match id {
         "stability" => {
-            let result = radiosity::stability::run_stability(device)?;
+            let result = radiosity::study::stability::run_stability(device)?;
             emit(&result, json, || report::stability_table(&result, format))
         }
         "compression" => {
@@ -44,7 +44,7 @@ pub(crate) fn run(
             emit(&result, json, || report::compression_table(&result, format))
         }
         "stiff" => {
-            let result = radiosity::stability::run_stiff(device)?;
+            let result = radiosity::study::stability::run_stiff(device)?;
             emit(&result, json, || report::stiff_table(&result, format))
         }
         _ => {

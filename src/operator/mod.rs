@@ -1,4 +1,4 @@
-//! The compressed collocation operator for large n (DESIGN.md sec. 2b): K applied to vectors
+//! The compressed collocation operator for large n (ARCHITECTURE.md): K applied to vectors
 //! without the dense n × n matrix, in about n log n memory and time.
 //!
 //! Rows (collocation nodes) and columns (elements, with their basis functions) are ordered by

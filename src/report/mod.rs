@@ -302,7 +302,7 @@ fn line_label((method, tolerance): (&str, Option<f64>)) -> String {
 }
 
 /// `study stability` as a table: one row per case, method and backend.
-pub fn stability_table(result: &crate::stability::StabilityResult, format: TableFormat) -> String {
+pub fn stability_table(result: &crate::study::stability::StabilityResult, format: TableFormat) -> String {
     let rows: Vec<Vec<String>> = result
         .rows
         .iter()
@@ -335,7 +335,7 @@ pub fn stability_table(result: &crate::stability::StabilityResult, format: Table
 }
 
 /// `study stiff` as a table: one row per scene and rho.
-pub fn stiff_table(result: &crate::stability::StiffResult, format: TableFormat) -> String {
+pub fn stiff_table(result: &crate::study::stability::StiffResult, format: TableFormat) -> String {
     let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.1e}"));
     let rows: Vec<Vec<String>> = result
         .rows

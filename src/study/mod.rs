@@ -4,6 +4,7 @@
 mod analysis;
 pub mod compression;
 mod specs;
+pub mod stability;
 
 pub use analysis::{fit_rate, pareto_front};
 pub use specs::{Kind, Placement, Series, StudySpec, study_ids};

@@ -447,7 +447,7 @@ impl StudySpec {
 /// Ids of all studies.
 pub fn study_ids() -> Vec<&'static str> {
     let mut ids: Vec<&'static str> = StudySpec::all().iter().map(|s| s.id).collect();
-    ids.extend(crate::stability::STUDY_IDS);
+    ids.extend(crate::study::stability::STUDY_IDS);
     ids.push("compression");
     ids
 }

@@ -21,7 +21,6 @@
 //! runs shadow code, and a scene of thousands of faces does not test every occluder for every
 //! pair ([`Acceleration`]).
 
-mod bench;
 mod hiders;
 mod occluders;
 mod projection;
@@ -30,7 +29,6 @@ mod shaft;
 mod solids;
 mod stats;
 
-pub use bench::{PlanBench, bench_plan};
 use hiders::Hider;
 pub use hiders::RecentHiders;
 use occluders::ViewVolume;

@@ -269,7 +269,7 @@ fn a_shadow_set_keeps_no_shadow_that_another_holds() {
 
 /// In a city, most shadows on a face lie inside another's (a building's far side behind its near
 /// side): the views keep far fewer shadows than the core solver's plan, which lists every one,
-/// and leave the same visible area ([`super::bench_plan`] compares the areas).
+/// and leave the same visible area ([`crate::bench::bench_plan`] compares the areas).
 #[test]
 fn views_keep_only_the_shadows_that_no_other_holds() {
     let scene = crate::scene::city(6, 6).unwrap();

@@ -6,7 +6,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{Acceleration, FaceView, PairPlanner, SkipReason};
+use crate::visibility::{Acceleration, FaceView, PairPlanner, SkipReason};
 use crate::geometry::signed_area;
 use crate::scene::Scene;
 

@@ -1,7 +1,13 @@
+//! Whole runs timed in one process: `radiosity bench` (here) and `radiosity bench-plan` ([`plan`]).
+//!
 //! `radiosity bench`: the same matrix assembled on each backend, timed in one run, and compared
 //! entry by entry. It is the matrix `solve` uses: the same [`Assembler`] (on the GPU, thin
 //! elements' columns recomputed on the CPU). Timings exclude one-time costs (device creation, shader compilation), which are
 //! reported apart, and are the best of several repetitions.
+
+pub mod plan;
+
+pub use plan::{PlanBench, PlanTiming, bench_plan};
 
 use std::time::Instant;
 
