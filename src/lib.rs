@@ -18,8 +18,8 @@ pub mod scene;
 pub mod visibility;
 
 // The mesh and the collocation scheme on it.
-pub mod mesh;
 pub mod discretization;
+pub mod mesh;
 
 // The collocation matrix, and what evaluates its entries.
 pub mod assembly;

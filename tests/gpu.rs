@@ -304,9 +304,10 @@ fn bench_prints_per_backend_timings_and_differences_as_json() {
 #[test]
 fn the_stability_study_passes_its_bounds_on_the_gpu_in_f64_and_f32() {
     let Some(_) = gpu() else { return };
-    let result =
-        radiosity::study::stability::run_stability(radiosity::study::StudyDevice::Gpu(Precision::F64))
-            .unwrap();
+    let result = radiosity::study::stability::run_stability(radiosity::study::StudyDevice::Gpu(
+        Precision::F64,
+    ))
+    .unwrap();
     for precision in ["f64", "f32"] {
         let rows: Vec<_> =
             result.rows.iter().filter(|r| r.backend == "gpu" && r.precision == precision).collect();

@@ -13,6 +13,7 @@ pub use options::{AssemblyOptions, Quadrature};
 pub use pairs::{CpuPairs, PairEvaluation, PairTask};
 
 use std::f64::consts::PI;
+use std::ops::Range;
 
 use glam::DVec2;
 use rayon::prelude::*;
@@ -25,7 +26,9 @@ use crate::kernels::{Affine2, Observer, exact, lanes};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::quadrature::ImtRule;
-use crate::visibility::{FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility};
+use crate::visibility::{
+    FaceSight, PairPlanner, PairStats, PartSight, RecentHiders, Views, Visibility,
+};
 
 /// Evaluates the collocation integrals of one (node, element) pair.
 pub struct PairIntegrator {
@@ -343,47 +346,60 @@ pub(crate) fn assemble_row(
     integrator: &PairIntegrator,
     hiders: &mut RecentHiders,
 ) -> PairStats {
+    let scale = node.rho / PI;
+    let mut batch = lanes::Batch::default();
+    let faces = (0..mesh.face_count()).map(|face| (face, mesh.face_range(face)));
+    let stats = planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, range, sight| {
+        let visible = match sight {
+            FaceSight::Hidden(_) => return,
+            FaceSight::Whole => None,
+            FaceSight::Part(part) => Some(part),
+        };
+        fill_row(range, visible, node, disc, integrator, row, &mut batch);
+    });
+    batch.flush(|j, v| row[j] = scale * v);
+    stats
+}
+
+/// The entries of the elements `range` of one face in `node`'s row: all whole, or each as
+/// `part` sees it. Whole elements wait in `batch` where the centroid method's closed form
+/// applies. (A function of its own, with every reference a parameter, so that the compiler
+/// knows the row's stores leave the discretization alone: as a closure over them, the loop
+/// took a sixth longer on the five-piece surface.)
+fn fill_row(
+    range: Range<usize>,
+    mut part: Option<PartSight<'_>>,
+    node: &Node,
+    disc: &Discretization,
+    integrator: &PairIntegrator,
+    row: &mut [f64],
+    batch: &mut lanes::Batch<usize>,
+) {
     let per = disc.method.nodes_per_element();
     let scale = node.rho / PI;
-    let mut batch = lanes::Batch::<usize>::default();
-    let mut evaluate = |j: usize, vis: &Visibility, row: &mut [f64]| {
+    for j in range {
         let el = &disc.elements[j];
-        let values = if matches!(vis, Visibility::Full) && integrator.uses_lanes() {
-            match integrator.full_pair(el, &disc.bases[j], node.position, node.normal) {
-                FullPair::Values(values) => values,
-                FullPair::Lane(obs, tri) => {
-                    batch.push(j, obs, tri, |j, v| row[j] = scale * v);
-                    return;
+        let vis = match &mut part {
+            None => Visibility::Full,
+            Some(part) => part.element(&el.in_face()),
+        };
+        let values = match vis {
+            Visibility::Skip(_) => continue,
+            Visibility::Full if integrator.uses_lanes() => {
+                match integrator.full_pair(el, &disc.bases[j], node.position, node.normal) {
+                    FullPair::Values(values) => values,
+                    FullPair::Lane(obs, tri) => {
+                        batch.push(j, obs, tri, |j, v| row[j] = scale * v);
+                        continue;
+                    }
                 }
             }
-        } else {
-            integrator.integrate(el, &disc.bases[j], node.position, node.normal, vis)
+            vis => integrator.integrate(el, &disc.bases[j], node.position, node.normal, &vis),
         };
         for (c, v) in values.iter().take(per).enumerate() {
             row[j * per + c] = scale * v;
         }
-    };
-    let faces = (0..mesh.face_count()).map(|face| (face, mesh.face_range(face)));
-    let stats =
-        planner.walk_row(
-            &node.viewer(),
-            faces,
-            Views::Fresh(hiders),
-            |_, range, sight| match sight {
-                FaceSight::Hidden(_) => {}
-                FaceSight::Whole => range.for_each(|j| evaluate(j, &Visibility::Full, row)),
-                FaceSight::Part(mut part) => {
-                    for j in range {
-                        let vis = part.element(&disc.elements[j].in_face());
-                        if !matches!(vis, Visibility::Skip(_)) {
-                            evaluate(j, &vis, row);
-                        }
-                    }
-                }
-            },
-        );
-    batch.flush(|j, v| row[j] = scale * v);
-    stats
+    }
 }
 
 #[cfg(test)]

@@ -6,9 +6,9 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::visibility::{Acceleration, FaceView, PairPlanner, SkipReason};
 use crate::geometry::signed_area;
 use crate::scene::Scene;
+use crate::visibility::{Acceleration, FaceView, PairPlanner, SkipReason};
 
 /// Timings of the pair plan for a sample of nodes against every face.
 #[derive(Clone, Debug, Serialize)]

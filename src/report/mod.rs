@@ -302,7 +302,10 @@ fn line_label((method, tolerance): (&str, Option<f64>)) -> String {
 }
 
 /// `study stability` as a table: one row per case, method and backend.
-pub fn stability_table(result: &crate::study::stability::StabilityResult, format: TableFormat) -> String {
+pub fn stability_table(
+    result: &crate::study::stability::StabilityResult,
+    format: TableFormat,
+) -> String {
     let rows: Vec<Vec<String>> = result
         .rows
         .iter()
