@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::assembly::{GpuAssembler, RuleCounts, Uploaded};
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
-use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, PairTask};
+use crate::assembly::{AssemblyOptions, CpuPairs, PairEvaluation, PairIntegrator, PairTask};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -191,17 +191,15 @@ impl PairEvaluation for PairEvaluator<'_> {
             self.batch(&tasks[start..end], &mut out[start..end])?;
             start = end;
         }
-        out.par_iter_mut().zip(tasks).filter(|(_, t)| self.thin[t.element]).for_each(|(o, t)| {
-            let node = &self.disc.nodes[t.node];
-            let values = self.integrator.integrate(
-                &self.disc.elements[t.element],
-                &self.disc.bases[t.element],
-                node.position,
-                node.normal,
-                &t.visible,
-            );
-            *o = values.map(|v| v * node.rho / std::f64::consts::PI);
-        });
+        // Thin elements' closed forms cancel: their pairs are evaluated again on the CPU.
+        let thin: Vec<usize> = (0..tasks.len()).filter(|&k| self.thin[tasks[k].element]).collect();
+        if !thin.is_empty() {
+            let again: Vec<PairTask> = thin.iter().map(|&k| tasks[k].clone()).collect();
+            let values = CpuPairs::new(self.disc, &self.integrator).evaluate(&again)?;
+            for (&k, v) in thin.iter().zip(values) {
+                out[k] = v;
+            }
+        }
         Ok(out)
     }
 }

@@ -24,26 +24,17 @@ fn case(scene: Scene, method: Method, refine: u32) -> Case {
 }
 
 fn compressed(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator {
-    let options = CompressionOptions { tolerance, leaf_size, ..Default::default() };
-    let assembly = AssemblyOptions::default();
-    CompressedOperator::build(
-        &c.scene,
-        &c.mesh,
-        &c.disc,
-        &c.planner,
-        &assembly,
-        &options,
-        None,
-        &crate::progress::Silent,
-    )
-    .unwrap()
+    build(c, tolerance, leaf_size, false)
 }
 
-fn compressed_in_batches(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator {
+/// The operator, built block by block on the CPU or, with `batched`, through the batched path
+/// with the CPU's pair evaluation.
+fn build(c: &Case, tolerance: f64, leaf_size: usize, batched: bool) -> CompressedOperator {
     let options = CompressionOptions { tolerance, leaf_size, ..Default::default() };
     let assembly = AssemblyOptions::default();
     let integrator = PairIntegrator::new(c.disc.method, &assembly);
     let cpu = crate::assembly::CpuPairs::new(&c.disc, &integrator);
+    let batches = batched.then_some(&cpu as &dyn PairEvaluation);
     CompressedOperator::build(
         &c.scene,
         &c.mesh,
@@ -51,7 +42,7 @@ fn compressed_in_batches(c: &Case, tolerance: f64, leaf_size: usize) -> Compress
         &c.planner,
         &assembly,
         &options,
-        Some(&cpu),
+        batches,
         &crate::progress::Silent,
     )
     .unwrap()
@@ -92,7 +83,7 @@ fn batched_evaluation_builds_the_operator_of_the_block_by_block_path() {
     for (scene, method, refine, compresses) in scenes {
         let c = case(scene, method, refine);
         let k = dense(&c);
-        let (by_block, batched) = (compressed(&c, 1e-8, 8), compressed_in_batches(&c, 1e-8, 8));
+        let (by_block, batched) = (build(&c, 1e-8, 8, false), build(&c, 1e-8, 8, true));
         assert_eq!(by_block.pairs, batched.pairs);
         assert_eq!(by_block.stats.near_blocks, batched.stats.near_blocks);
         assert_eq!(batched.stats.far_blocks > 0, compresses, "{:?}", batched.stats);
