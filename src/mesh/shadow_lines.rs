@@ -37,10 +37,14 @@ pub enum LineExtent {
 /// A segment in a face's 2-D coordinates.
 pub type Segment = (DVec2, DVec2);
 
-/// The shadow lines on every face of `scene`, in each face's own coordinates, without duplicates
-/// and without pieces along the face's outline.
-pub fn shadow_lines(scene: &Scene, sources: Sources, extent: LineExtent) -> Vec<Vec<Segment>> {
-    let planner = PairPlanner::new(scene);
+/// The shadow lines on every face of `scene` (its occluders in `planner`), in each face's own
+/// coordinates, without duplicates and without pieces along the face's outline.
+pub fn shadow_lines(
+    scene: &Scene,
+    planner: &PairPlanner,
+    sources: Sources,
+    extent: LineExtent,
+) -> Vec<Vec<Segment>> {
     let emitting: Vec<usize> =
         (0..scene.faces.len()).filter(|&k| scene.faces[k].emission > 0.0).collect();
     let sources: Vec<usize> = match sources {
@@ -268,7 +272,8 @@ mod tests {
     fn the_four_piece_surface_has_the_papers_shadow_lines_on_s1() {
         let p = SurfaceParameters::default();
         let scene = four_piece(p).unwrap();
-        let chords = shadow_lines(&scene, Sources::All, LineExtent::Chords);
+        let chords =
+            shadow_lines(&scene, &PairPlanner::new(&scene), Sources::All, LineExtent::Chords);
         // S1's frame: origin (0,0,0), first axis x: local = (x, y).
         let mut lines: Vec<String> = chords[0]
             .iter()
@@ -286,7 +291,8 @@ mod tests {
             assert!(((*a - *b).length() - 5.0).abs() < 1e-12, "a chord spans S1");
         }
         // The segments stop where the events do: x = 3 from y = 0 to 4.
-        let segments = shadow_lines(&scene, Sources::All, LineExtent::Segments);
+        let segments =
+            shadow_lines(&scene, &PairPlanner::new(&scene), Sources::All, LineExtent::Segments);
         let x3 = segments[0]
             .iter()
             .find(|(a, b)| (a.x - 3.0).abs() < 1e-12 && (b.x - 3.0).abs() < 1e-12);
@@ -300,7 +306,8 @@ mod tests {
     fn automatic_meshing_of_the_four_piece_surface_is_the_papers_mesh() {
         let p = SurfaceParameters::default();
         let scene = four_piece(p).unwrap();
-        let lines = shadow_lines(&scene, Sources::All, LineExtent::Chords);
+        let lines =
+            shadow_lines(&scene, &PairPlanner::new(&scene), Sources::All, LineExtent::Chords);
         let auto = Mesh::new(&scene, &MeshKind::Constrained(lines), 1).unwrap();
         let cuts = paper_discontinuity_cuts(&scene, &p, S5Diagonals::Paper).unwrap();
         let hand = Mesh::new(&scene, &MeshKind::Discontinuity(cuts), 1).unwrap();
@@ -322,7 +329,8 @@ mod tests {
     #[test]
     fn chords_continue_across_a_shared_edge_and_segments_triangulate_by_cdt() {
         let scene = five_piece(SurfaceParameters::default()).unwrap();
-        let chords = shadow_lines(&scene, Sources::All, LineExtent::Chords);
+        let chords =
+            shadow_lines(&scene, &PairPlanner::new(&scene), Sources::All, LineExtent::Chords);
         let s5 = &scene.faces[4];
         // S1's x = 3 and x = 4 go on up S5, plus S5's own events x + z = 3 and x + 2z = 4.
         let ends: Vec<(DVec3, DVec3)> = chords[4]
@@ -333,7 +341,8 @@ mod tests {
             |x: f64| ends.iter().any(|(a, b)| (a.x - x).abs() < 1e-9 && (b.x - x).abs() < 1e-9);
         assert!(vertical(3.0) && vertical(4.0), "{ends:?}");
         assert_eq!(ends.len(), 4, "{ends:?}");
-        let segments = shadow_lines(&scene, Sources::All, LineExtent::Segments);
+        let segments =
+            shadow_lines(&scene, &PairPlanner::new(&scene), Sources::All, LineExtent::Segments);
         let mesh = Mesh::new(&scene, &MeshKind::Constrained(segments.clone()), 0).unwrap();
         for (f, lines) in segments.iter().enumerate() {
             let area: f64 = mesh.elements()[mesh.face_range(f)].iter().map(|e| e.area()).sum();

@@ -35,26 +35,25 @@ use report::range;
 /// tolerance (1e-12): the sum of per-triangle estimates is pessimistic by about that much.
 const EMISSION_WARNING: f64 = 1e-9;
 
-/// The scene, mesh and discretization of a configuration.
-pub fn build(config: &RunConfig) -> Result<(Scene, Mesh, Discretization)> {
-    let scene = config.scene.build(config.params)?;
+/// The mesh of `config` on `scene` (whose occluders are in `planner`, for the shadow lines of an
+/// automatic discontinuity mesh).
+fn mesh_of(config: &RunConfig, scene: &Scene, planner: &PairPlanner) -> Result<Mesh> {
     let kind = match config.mesh {
         MeshChoice::Uniform => MeshKind::Uniform,
         MeshChoice::Discontinuity(s5) => {
-            MeshKind::Discontinuity(paper_discontinuity_cuts(&scene, &config.params, s5)?)
+            MeshKind::Discontinuity(paper_discontinuity_cuts(scene, &config.params, s5)?)
         }
         MeshChoice::AutoDiscontinuity(extent) => {
             // With a true solution every face carries light (E is computed from it everywhere).
             let sources = if config.solution.is_some() { Sources::All } else { Sources::Emitting };
-            MeshKind::Constrained(shadow_lines(&scene, sources, extent))
+            MeshKind::Constrained(shadow_lines(scene, planner, sources, extent))
         }
     };
-    let mut mesh = Mesh::new(&scene, &kind, config.refine)?;
+    let mut mesh = Mesh::new(scene, &kind, config.refine)?;
     if !config.grade.is_empty() {
-        mesh.grade(&scene, &Grading::parse(&scene, &config.grade, config.grading_exponent)?)?;
+        mesh.grade(scene, &Grading::parse(scene, &config.grade, config.grading_exponent)?)?;
     }
-    let disc = Discretization::new(&scene, &mesh, config.method)?;
-    Ok((scene, mesh, disc))
+    Ok(mesh)
 }
 
 /// What every stage after the scene works on, each part built once: the scene, its mesh, the
@@ -74,10 +73,15 @@ pub struct Problem {
 }
 
 impl Problem {
-    /// The problem of `config` ([`build`], then the pair planner).
+    /// The scene of `config`, its pair planner, its mesh and the discretization on it.
     pub fn new(config: &RunConfig) -> Result<Self> {
-        let (scene, mesh, disc) = build(config)?;
-        Ok(Self::from_parts(scene, mesh, disc))
+        let scene = config.scene.build(config.params)?;
+        let started = Instant::now();
+        let planner = PairPlanner::new(&scene);
+        let plan_seconds = started.elapsed().as_secs_f64();
+        let mesh = mesh_of(config, &scene, &planner)?;
+        let disc = Discretization::new(&scene, &mesh, config.method)?;
+        Ok(Self { scene, mesh, disc, planner, plan_seconds })
     }
 
     /// The problem of a scene, mesh and discretization built otherwise.
@@ -148,6 +152,12 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
 
 /// Runs one configuration and keeps the scene, mesh and emissivity.
 pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
+    check_bands(config)?;
+    run_problem(config, Problem::new(config)?)
+}
+
+/// Colour bands are lit by the scene's own emission, not by a true solution.
+fn check_bands(config: &RunConfig) -> Result<()> {
     if !config.bands.is_empty() && config.solution.is_some() {
         return Err(Error::InvalidParameter {
             name: "bands",
@@ -155,7 +165,12 @@ pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
             reason: "colour bands are lit by the scene's own emission: use --solution none".into(),
         });
     }
-    let problem = Problem::new(config)?;
+    Ok(())
+}
+
+/// Runs `config` on its `problem`, built already ([`Problem::new`]).
+pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
+    check_bands(config)?;
     let u_faces = match &config.solution {
         Some(sol) => Some(sol.on_faces(&problem.scene, &config.params)?),
         None => None,

@@ -184,12 +184,16 @@ impl SeriesRun<'_> {
         let mut previous: Option<(f64, Option<f64>)> = None;
         for refine in 0.. {
             let config = series_config(spec, series, refine, self.backend, &self.options.progress);
-            let (_, mesh, _) = pipeline::build(&config)?;
-            if mesh.len() > max_n {
+            let problem = pipeline::Problem::new(&config)?;
+            if problem.mesh.len() > max_n {
                 break;
             }
-            self.options.progress.note(&format!("{}: {label}: n = {}", spec.id, mesh.len()));
-            let report = pipeline::run(&config)?;
+            self.options.progress.note(&format!(
+                "{}: {label}: n = {}",
+                spec.id,
+                problem.mesh.len()
+            ));
+            let report = pipeline::run_problem(&config, problem)?.report;
             let error = report.error.expect("a true solution is set");
             let paper_error = lookup(series.paper, report.label.n);
             let paper_ratio = match (previous, paper_error) {
