@@ -3,12 +3,11 @@
 //! `radiosity bench` times whole runs; this times the assembly alone, with criterion's statistics.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use radiosity::assembly::{AssemblyOptions, assemble};
+use radiosity::assembly::{AssemblyOptions, Problem, assemble};
 use radiosity::discretization::{Discretization, Method};
 use radiosity::gpu::{self, GpuAssembler, Precision};
 use radiosity::mesh::{Mesh, MeshKind};
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
-use radiosity::visibility::PairPlanner;
 
 fn assembly(c: &mut Criterion) {
     let mut group = c.benchmark_group("assembly five-piece centroid");
@@ -24,28 +23,17 @@ fn assembly(c: &mut Criterion) {
     for refine in [3, 4] {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
         let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        let planner = PairPlanner::new(&scene);
+        let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
         let options = AssemblyOptions::default();
         let n = mesh.len();
         group.bench_function(format!("cpu n = {n}"), |b| {
-            b.iter(|| {
-                assemble(&mesh, &disc, &planner, &options, &radiosity::progress::Silent).unwrap()
-            })
+            b.iter(|| assemble(&problem, &options, &radiosity::progress::Silent).unwrap())
         });
         if let Some(ctx) = ctx {
             let assembler = GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
             group.bench_function(format!("gpu n = {n} ({})", ctx.adapter.name), |b| {
                 b.iter(|| {
-                    assembler
-                        .assemble(
-                            &scene,
-                            &mesh,
-                            &disc,
-                            &planner,
-                            &options,
-                            &radiosity::progress::Silent,
-                        )
-                        .unwrap()
+                    assembler.assemble(&problem, &options, &radiosity::progress::Silent).unwrap()
                 })
             });
         }

@@ -9,13 +9,12 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::assembly::{self, AssemblyOptions};
+use crate::assembly::{self, AssemblyOptions, Problem};
 use crate::discretization::{Discretization, Node};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::problems::{EmissionOptions, FaceFunction, emission_at};
 use crate::scene::Scene;
-use crate::visibility::PairPlanner;
 
 /// Default lattice of sample points: spacing 1/9 in barycentric coordinates, 28 points per element.
 pub const DEFAULT_LATTICE: usize = 9;
@@ -69,21 +68,18 @@ pub fn interpolant_at(disc: &Discretization, u: &[f64], point: &Node) -> f64 {
 
 /// The errors of `u` (the collocation solution) against the true solution `truth` (face by face)
 /// at the sample points of `lattice`.
-#[allow(clippy::too_many_arguments)]
 pub fn surface_errors(
-    scene: &Scene,
-    mesh: &Mesh,
-    disc: &Discretization,
-    planner: &PairPlanner,
+    problem: &Problem,
     truth: &[FaceFunction],
     u: &[f64],
     assembly: &AssemblyOptions,
     emission: &EmissionOptions,
     lattice: usize,
 ) -> Result<SurfaceErrors> {
+    let Problem { scene, mesh, disc, planner, .. } = problem;
     let points = sample_points(scene, mesh, lattice);
     let e = emission_at(scene, &points, planner, truth, emission, &crate::progress::Silent).values;
-    let ku = assembly::apply_at(&points, mesh, disc, planner, assembly, u)?;
+    let ku = assembly::apply_at(&points, problem, assembly, u)?;
     let (mut interpolant, mut iterated) = (0.0f64, 0.0f64);
     for ((p, e), ku) in points.iter().zip(e).zip(ku) {
         let exact = truth[p.face].eval(p.position);
@@ -124,29 +120,29 @@ mod tests {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
         for method in [Method::Centroid, Method::linear(1.0 / 6.0).unwrap()] {
             let disc = Discretization::new(&scene, &mesh, method).unwrap();
-            let planner = PairPlanner::new(&scene);
+            let problem = Problem::new(scene.clone(), mesh.clone(), disc);
+            let Problem { disc, planner, .. } = &problem;
             let options = AssemblyOptions::default();
             let truth =
                 TrueSolution::Shadow { beta: 1.0, gamma: 1.5 }.on_faces(&scene, &params).unwrap();
             let emission = EmissionOptions::default();
-            let k = assembly::assemble(&mesh, &disc, &planner, &options, &crate::progress::Silent)
-                .unwrap();
+            let k = assembly::assemble(&problem, &options, &crate::progress::Silent).unwrap();
             let e = emission_at(
                 &scene,
                 &disc.nodes,
-                &planner,
+                planner,
                 &truth,
                 &emission,
                 &crate::progress::Silent,
             )
             .values;
             let u = solve(&k.matrix, &e, SolverOptions::with(SolverChoice::Lu)).unwrap().u;
-            let ku = assembly::apply_at(&disc.nodes, &mesh, &disc, &planner, &options, &u).unwrap();
+            let ku = assembly::apply_at(&disc.nodes, &problem, &options, &u).unwrap();
             let scale = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (i, node) in disc.nodes.iter().enumerate() {
                 let iterated = e[i] + ku[i];
                 assert!((iterated - u[i]).abs() < 1e-12 * scale, "{}: node {i}", method.name());
-                let interpolated = interpolant_at(&disc, &u, node);
+                let interpolated = interpolant_at(disc, &u, node);
                 assert!((interpolated - u[i]).abs() < 1e-12 * scale, "{}: node {i}", method.name());
             }
         }

@@ -34,11 +34,10 @@ fn f64_math_library_is_within_2_ulp_on_200_000_samples() {
     }
 }
 
-use radiosity::assembly::{AssemblyOptions, CollocationMatrix, assemble};
+use radiosity::assembly::{AssemblyOptions, CollocationMatrix, Problem, assemble};
 use radiosity::discretization::{Discretization, Method};
 use radiosity::mesh::{Mesh, MeshKind, S5Diagonals, paper_discontinuity_cuts};
 use radiosity::scene::{BuiltinScene, SurfaceParameters};
-use radiosity::visibility::PairPlanner;
 
 /// Largest difference between two matrices relative to the largest entry of each row.
 fn max_row_relative_diff(a: &CollocationMatrix, b: &CollocationMatrix) -> (f64, usize, usize) {
@@ -81,13 +80,11 @@ fn gpu_and_cpu_matrices_agree_to_1e_12_in_f64() {
         };
         let mesh = Mesh::new(&scene, &kind, refine).unwrap();
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
-        let planner = PairPlanner::new(&scene);
+        let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
         let opts = AssemblyOptions::default();
-        let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
+        let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
         let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
-        let gpu = assembler
-            .assemble(&scene, &mesh, &disc, &planner, &opts, &radiosity::progress::Silent)
-            .unwrap();
+        let gpu = assembler.assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
         assert_eq!(cpu.stats, gpu.stats);
         let (d, i, j) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
         println!("{which} discontinuity={discontinuity} {method}: max row-relative diff {d:.2e}");
@@ -108,13 +105,11 @@ fn f32_kernels_are_within_single_precision_error_of_the_f64_cpu_matrix() {
         let scene = BuiltinScene::FivePiece.build(p).unwrap();
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
-        let planner = PairPlanner::new(&scene);
+        let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
         let opts = AssemblyOptions::default();
-        let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
+        let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
         let assembler = gpu::GpuAssembler::new(ctx, Precision::F32, method).unwrap();
-        let f32 = assembler
-            .assemble(&scene, &mesh, &disc, &planner, &opts, &radiosity::progress::Silent)
-            .unwrap();
+        let f32 = assembler.assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
         let (d, i, j) = max_row_relative_diff(&cpu.matrix, &f32.matrix);
         println!("{method}: f32 max row-relative diff {d:.2e}");
         // f32 rounding is 6e-8; near the node the closed forms amplify it where their edge terms
@@ -182,23 +177,15 @@ fn tiles_and_a_full_near_list_give_the_same_matrix() {
     let mesh = Mesh::new(&scene, &MeshKind::Uniform, 3).unwrap();
     let method = Method::linear(1.0 / 6.0).unwrap();
     let disc = Discretization::new(&scene, &mesh, method).unwrap();
-    let planner = PairPlanner::new(&scene);
+    let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
     let opts = AssemblyOptions::default();
     let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
     let limits = gpu::TileLimits { rows: 97, near_pairs: 100, ..Default::default() };
     let gpu = assembler
-        .assemble_with_limits(
-            &scene,
-            &mesh,
-            &disc,
-            &planner,
-            &opts,
-            limits,
-            &radiosity::progress::Silent,
-        )
+        .assemble_with_limits(&problem, &opts, limits, &radiosity::progress::Silent)
         .unwrap();
     assert!(assembler.last_timings().tiles > 1);
-    let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
+    let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
     // Closed box: rows of K/rho sum to 1.
@@ -217,23 +204,15 @@ fn tiles_are_sized_by_the_views_of_a_scene_of_many_faces() {
     let scene = radiosity::scene::city(3, 3).unwrap();
     let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
     let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-    let planner = PairPlanner::new(&scene);
+    let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
     let opts = AssemblyOptions::default();
     let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
     let limits = gpu::TileLimits { binding_bytes: 64 << 10, ..Default::default() };
     let gpu = assembler
-        .assemble_with_limits(
-            &scene,
-            &mesh,
-            &disc,
-            &planner,
-            &opts,
-            limits,
-            &radiosity::progress::Silent,
-        )
+        .assemble_with_limits(&problem, &opts, limits, &radiosity::progress::Silent)
         .unwrap();
     assert!(assembler.last_timings().tiles > 10, "{} tiles", assembler.last_timings().tiles);
-    let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
+    let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
 }
@@ -247,27 +226,19 @@ fn tiles_whose_visible_pieces_outgrow_a_binding_are_split() {
     let scene = radiosity::scene::load(std::path::Path::new("examples/occluded-box.toml")).unwrap();
     let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
     let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-    let planner = PairPlanner::new(&scene);
+    let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
     let opts = AssemblyOptions::default();
     let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
     let binding: u64 = 24 << 10;
     let limits = gpu::TileLimits { binding_bytes: binding, ..Default::default() };
     let gpu = assembler
-        .assemble_with_limits(
-            &scene,
-            &mesh,
-            &disc,
-            &planner,
-            &opts,
-            limits,
-            &radiosity::progress::Silent,
-        )
+        .assemble_with_limits(&problem, &opts, limits, &radiosity::progress::Silent)
         .unwrap();
     // Tiles sized by their output alone: 5 rows of 576 entries each.
     let by_output = disc.dof().div_ceil((binding / (8 * disc.dof() as u64)) as usize);
     let tiles = assembler.last_timings().tiles;
     assert!(tiles > by_output, "{tiles} tiles, as many as the output alone needs ({by_output})");
-    let cpu = assemble(&mesh, &disc, &planner, &opts, &radiosity::progress::Silent).unwrap();
+    let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
 }

@@ -6,14 +6,13 @@
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 
-use radiosity::assembly::{AssemblyOptions, assemble};
+use radiosity::assembly::{AssemblyOptions, Problem, assemble};
 use radiosity::discretization::{Discretization, Method};
 use radiosity::kernels::reference::{integral, integral_of};
 use radiosity::kernels::{Affine2, Observer, exact};
 use radiosity::mesh::{Mesh, MeshKind};
 use radiosity::quadrature::{ImtRule, Tolerance};
 use radiosity::scene::{Face, Scene};
-use radiosity::visibility::PairPlanner;
 
 fn point2() -> impl Strategy<Value = DVec2> {
     (-1.0..1.0f64, -1.0..1.0f64).prop_map(|(x, y)| DVec2::new(x, y))
@@ -113,8 +112,8 @@ proptest! {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
         let method = if linear { Method::Linear { alpha: 1.0 / 6.0 } } else { Method::Centroid };
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &radiosity::progress::Silent).unwrap();
+        let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
+        let a = assemble(&problem, &AssemblyOptions::default(), &radiosity::progress::Silent).unwrap();
         for i in 0..disc.dof() {
             let row = a.matrix.row(i);
             prop_assert!(row.iter().all(|v| v.is_finite()));
@@ -143,8 +142,8 @@ proptest! {
             let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
             let method = if linear { Method::Linear { alpha: 1.0 / 6.0 } } else { Method::Centroid };
             let disc = Discretization::new(&scene, &mesh, method).unwrap();
-            let planner = PairPlanner::new(&scene);
-            assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &radiosity::progress::Silent).unwrap().matrix
+            let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
+            assemble(&problem, &AssemblyOptions::default(), &radiosity::progress::Silent).unwrap().matrix
         };
         let (one, scaled) = (matrix(1.0), matrix(10f64.powi(exponent)));
         for (a, b) in one.as_slice().iter().zip(scaled.as_slice()) {

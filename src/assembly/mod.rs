@@ -7,10 +7,12 @@
 mod matrix;
 mod options;
 mod pairs;
+mod problem;
 
 pub use matrix::{CollocationMatrix, available_memory, check_fits, memory_allowance};
 pub use options::{AssemblyOptions, Quadrature};
 pub use pairs::{CpuPairs, PairEvaluation, PairTask};
+pub use problem::Problem;
 
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -233,12 +235,11 @@ pub struct Assembly {
 /// Assembles K on the CPU. `progress` advances by the rows finished (from worker
 /// threads).
 pub fn assemble(
-    mesh: &Mesh,
-    disc: &Discretization,
-    planner: &PairPlanner,
+    problem: &Problem,
     options: &AssemblyOptions,
     progress: &dyn Progress,
 ) -> Result<Assembly> {
+    let Problem { mesh, disc, planner, .. } = problem;
     options.quadrature.validate()?;
     let dof = disc.dof();
     let mut matrix = CollocationMatrix::zeros(dof)?;
@@ -264,10 +265,10 @@ pub fn assemble(
 /// are asked for everywhere (`far_field` off).
 pub fn recompute_thin_columns(
     assembly: &mut Assembly,
-    disc: &Discretization,
-    planner: &PairPlanner,
+    problem: &Problem,
     options: &AssemblyOptions,
 ) {
+    let Problem { disc, planner, .. } = problem;
     let thin: Vec<usize> = (0..disc.elements.len()).filter(|&j| disc.elements[j].thin).collect();
     if thin.is_empty() || !options.far_field {
         return;
@@ -314,12 +315,11 @@ pub fn recompute_thin_columns(
 /// `u` of `disc`, seen from each point), without storing K.
 pub fn apply_at(
     points: &[Node],
-    mesh: &Mesh,
-    disc: &Discretization,
-    planner: &PairPlanner,
+    problem: &Problem,
     options: &AssemblyOptions,
     u: &[f64],
 ) -> Result<Vec<f64>> {
+    let Problem { mesh, disc, planner, .. } = problem;
     options.quadrature.validate()?;
     let integrator = PairIntegrator::new(disc.method, options);
     Ok(points

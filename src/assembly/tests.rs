@@ -10,9 +10,9 @@ use crate::scene::{Scene, baffled_box, cube};
 fn row_sum_range(scene: &Scene, method: Method, refine: u32) -> (f64, f64, PairStats) {
     let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();
     let disc = Discretization::new(scene, &mesh, method).unwrap();
-    let planner = PairPlanner::new(scene);
-    let a = assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &crate::progress::Silent)
-        .unwrap();
+    let problem = Problem::new(scene.clone(), mesh, disc);
+    let a = assemble(&problem, &AssemblyOptions::default(), &crate::progress::Silent).unwrap();
+    let disc = &problem.disc;
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, node) in disc.nodes.iter().enumerate() {
         let s: f64 = a.matrix.row(i).iter().sum::<f64>() / node.rho;
@@ -75,7 +75,9 @@ fn accelerated_plan_assembles_the_core_solvers_matrix() {
         let options = AssemblyOptions::default();
         let assembled = |acceleration| {
             let planner = PairPlanner::with_acceleration(&scene, acceleration);
-            assemble(&mesh, &disc, &planner, &options, &crate::progress::Silent).unwrap()
+            let problem =
+                Problem::with_planner(scene.clone(), mesh.clone(), disc.clone(), planner, 0.0);
+            assemble(&problem, &options, &crate::progress::Silent).unwrap()
         };
         let (fast, core) = (assembled(Acceleration::Tree), assembled(Acceleration::BoxScan));
         assert!(fast.stats.hidden > 0 && fast.stats.partial > 0, "{:?}", fast.stats);
@@ -93,16 +95,16 @@ fn lanes_assemble_the_scalar_matrix() {
     {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
         let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        let planner = PairPlanner::new(&scene);
+        let problem = Problem::new(scene, mesh, disc);
         let assembled = |lanes| {
             let options = AssemblyOptions { lanes, ..Default::default() };
-            assemble(&mesh, &disc, &planner, &options, &crate::progress::Silent).unwrap()
+            assemble(&problem, &options, &crate::progress::Silent).unwrap()
         };
         let (vector, scalar) = (assembled(true), assembled(false));
         assert_eq!(vector.stats, scalar.stats);
         let diff = max_row_relative_difference(&vector.matrix, &scalar.matrix);
-        assert!(diff <= 1e-13, "{}: {diff:e}", scene.name);
-        assert!(diff > 0.0, "{}: the lanes were not used", scene.name);
+        assert!(diff <= 1e-13, "{}: {diff:e}", problem.scene.name);
+        assert!(diff > 0.0, "{}: the lanes were not used", problem.scene.name);
     }
 }
 
@@ -149,10 +151,8 @@ fn the_row_walk_keeps_every_matrix_bit_for_bit() {
     for (name, scene, method, refine, expected) in cases {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let a =
-            assemble(&mesh, &disc, &planner, &AssemblyOptions::default(), &crate::progress::Silent)
-                .unwrap();
+        let problem = Problem::new(scene, mesh, disc);
+        let a = assemble(&problem, &AssemblyOptions::default(), &crate::progress::Silent).unwrap();
         let found = fingerprint(&a.matrix);
         assert_eq!(found, expected, "{name}: fingerprint {found:#x}, expected {expected:#x}");
     }

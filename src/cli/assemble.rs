@@ -10,7 +10,7 @@ use super::*;
 pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
     let mut config = args.geometry.config()?;
     config.backend = backend(args.device.backend, args.device.precision);
-    let problem = Problem::new(&config)?;
+    let problem = pipeline::build(&config)?;
     super::output::print_notes(&problem.scene);
     let a = assemble_without_progress(&config, &problem)?;
     radiosity::report::write_npy(&args.output, a.matrix.dof(), a.matrix.as_slice())?;

@@ -36,7 +36,7 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
         backends.push(b);
     }
     args.operator.apply(&mut config)?;
-    let built = pipeline::Problem::new(&config)?;
+    let built = pipeline::build(&config)?;
     // Under auto only a CPU-only bench of a large system switches to the compressed operator;
     // asked for, it is built on each named backend and benched against the dense CPU assembly.
     let gpu_named = backends.iter().any(|b| *b != Backend::Cpu);

@@ -55,7 +55,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         });
     }
     let config = args.config()?;
-    let problem = Problem::new(&config)?;
+    let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, disc, planner, .. } = &problem;
     super::output::print_notes(scene);
     let started = std::time::Instant::now();

@@ -2,7 +2,7 @@
 
 use radiosity::error::{Error, Result};
 use radiosity::mesh::Mesh;
-use radiosity::pipeline::Problem;
+use radiosity::pipeline::{self, Problem};
 use radiosity::report;
 use radiosity::scene::Scene;
 use radiosity::viewfactors::{
@@ -20,7 +20,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         });
     }
     let config = args.geometry.config()?;
-    let problem = Problem::new(&config)?;
+    let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, planner, .. } = &problem;
     super::output::print_notes(scene);
     let started = std::time::Instant::now();

@@ -17,7 +17,7 @@ use super::GpuContext;
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::shaders::{self, Precision};
-use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix};
+use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
 use crate::kernels::far_field::FarFieldRule;
@@ -351,36 +351,22 @@ impl<'a> GpuAssembler<'a> {
     /// Assembles K like [`crate::assembly::assemble`]. `progress` advances by the rows finished.
     pub fn assemble(
         &self,
-        scene: &Scene,
-        mesh: &Mesh,
-        disc: &Discretization,
-        planner: &PairPlanner,
+        problem: &Problem,
         options: &AssemblyOptions,
         progress: &dyn Progress,
     ) -> Result<Assembly> {
-        self.assemble_with_limits(
-            scene,
-            mesh,
-            disc,
-            planner,
-            options,
-            TileLimits::default(),
-            progress,
-        )
+        self.assemble_with_limits(problem, options, TileLimits::default(), progress)
     }
 
     /// [`Self::assemble`] within `limits` (the device's limits may make tiles smaller still).
-    #[allow(clippy::too_many_arguments)]
     pub fn assemble_with_limits(
         &self,
-        scene: &Scene,
-        mesh: &Mesh,
-        disc: &Discretization,
-        planner: &PairPlanner,
+        problem: &Problem,
         options: &AssemblyOptions,
         limits: TileLimits,
         progress: &dyn Progress,
     ) -> Result<Assembly> {
+        let Problem { scene, mesh, disc, planner, .. } = problem;
         if disc.method.nodes_per_element() != self.method.nodes_per_element() {
             return Err(Error::Gpu(format!(
                 "kernels compiled for the {} method cannot assemble the {} method",
@@ -392,7 +378,8 @@ impl<'a> GpuAssembler<'a> {
         let dof = disc.dof();
         let mut matrix = CollocationMatrix::zeros(dof)?;
         let p = self.precision;
-        let Uploaded { unit, elements, tables, counts } = self.upload(scene, disc, options)?;
+        let uploaded = self.upload(scene, disc, options)?;
+        let unit = uploaded.unit;
         let max_binding = self.max_binding().min(limits.binding_bytes);
         // Per row of a tile: its output and its views of every face (a scene of 10 000 faces has
         // 5 MB of views per row in f64, more than its output row).
@@ -437,16 +424,8 @@ impl<'a> GpuAssembler<'a> {
         while let Some(plan) = next_plan.take() {
             self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
-            let submitted = self.submit(
-                &plan,
-                disc,
-                mesh,
-                &elements,
-                &tables,
-                counts,
-                max_binding,
-                limits.near_pairs,
-            )?;
+            let submitted =
+                self.submit(&plan, disc, mesh, &uploaded, max_binding, limits.near_pairs)?;
             if let Some(done) = in_flight.take() {
                 self.finish(done, &mut matrix, progress)?;
             }
@@ -460,18 +439,17 @@ impl<'a> GpuAssembler<'a> {
         Ok(Assembly { matrix, stats })
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Sends the tile `plan` to the device over the `uploaded` elements and tables.
     fn submit(
         &self,
         plan: &TilePlan,
         disc: &Discretization,
         mesh: &Mesh,
-        elements: &wgpu::Buffer,
-        tables: &wgpu::Buffer,
-        counts: RuleCounts,
+        uploaded: &Uploaded,
         max_binding: u64,
         max_near_pairs: u64,
     ) -> Result<InFlight> {
+        let Uploaded { elements, tables, counts, .. } = uploaded;
         let ctx = self.ctx;
         let p = self.precision;
         let dof = disc.dof();

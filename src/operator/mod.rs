@@ -28,12 +28,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, memory_allowance};
+use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, Problem, memory_allowance};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::scene::Scene;
 use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility};
 
 use aca::LowRank;
@@ -184,21 +183,18 @@ pub struct CompressedOperator {
 const MIN_USEFUL_RANK: usize = 4;
 
 impl CompressedOperator {
-    /// Builds K for `disc` on `mesh` of `scene`; `progress` counts the blocks (stage
+    /// Builds K for `problem`; `progress` counts the blocks (stage
     /// `compression`). With `batches` (the GPU's pair kernel), the entries are evaluated by it in
     /// batches (the exact blocks' pairs planned on the host, the cross approximations in
     /// lockstep), else on the CPU block by block.
-    #[allow(clippy::too_many_arguments)]
     pub fn build(
-        scene: &Scene,
-        mesh: &Mesh,
-        disc: &Discretization,
-        planner: &PairPlanner,
+        problem: &Problem,
         assembly: &AssemblyOptions,
         options: &CompressionOptions,
         batches: Option<&dyn PairEvaluation>,
         progress: &dyn Progress,
     ) -> Result<Self> {
+        let Problem { scene, mesh, disc, planner, .. } = problem;
         options.validate()?;
         assembly.quadrature.validate()?;
         let per = disc.method.nodes_per_element();

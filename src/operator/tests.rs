@@ -7,20 +7,14 @@ use super::*;
 use crate::assembly::{AssemblyOptions, CollocationMatrix, assemble};
 use crate::discretization::Method;
 use crate::mesh::MeshKind;
-use crate::scene::{Face, SurfaceParameters, baffled_box, cube, five_piece};
+use crate::scene::{Face, Scene, SurfaceParameters, baffled_box, cube, five_piece};
 
-struct Case {
-    scene: Scene,
-    mesh: Mesh,
-    disc: Discretization,
-    planner: PairPlanner,
-}
+type Case = Problem;
 
 fn case(scene: Scene, method: Method, refine: u32) -> Case {
     let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
     let disc = Discretization::new(&scene, &mesh, method).unwrap();
-    let planner = PairPlanner::new(&scene);
-    Case { scene, mesh, disc, planner }
+    Problem::new(scene, mesh, disc)
 }
 
 fn compressed(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator {
@@ -35,23 +29,11 @@ fn build(c: &Case, tolerance: f64, leaf_size: usize, batched: bool) -> Compresse
     let integrator = PairIntegrator::new(c.disc.method, &assembly);
     let cpu = crate::assembly::CpuPairs::new(&c.disc, &integrator);
     let batches = batched.then_some(&cpu as &dyn PairEvaluation);
-    CompressedOperator::build(
-        &c.scene,
-        &c.mesh,
-        &c.disc,
-        &c.planner,
-        &assembly,
-        &options,
-        batches,
-        &crate::progress::Silent,
-    )
-    .unwrap()
+    CompressedOperator::build(c, &assembly, &options, batches, &crate::progress::Silent).unwrap()
 }
 
 fn dense(c: &Case) -> CollocationMatrix {
-    assemble(&c.mesh, &c.disc, &c.planner, &AssemblyOptions::default(), &crate::progress::Silent)
-        .unwrap()
-        .matrix
+    assemble(c, &AssemblyOptions::default(), &crate::progress::Silent).unwrap().matrix
 }
 
 #[test]

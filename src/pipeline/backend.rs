@@ -62,12 +62,11 @@ impl Assembler {
         options: &AssemblyOptions,
         progress: &dyn Progress,
     ) -> Result<Assembly> {
-        let Problem { scene, mesh, disc, planner, .. } = problem;
         match self {
-            Self::Cpu => assembly::assemble(mesh, disc, planner, options, progress),
+            Self::Cpu => assembly::assemble(problem, options, progress),
             Self::Gpu(g) => {
-                let mut a = g.assemble(scene, mesh, disc, planner, options, progress)?;
-                assembly::recompute_thin_columns(&mut a, disc, planner, options);
+                let mut a = g.assemble(problem, options, progress)?;
+                assembly::recompute_thin_columns(&mut a, problem, options);
                 Ok(a)
             }
         }

@@ -3,7 +3,7 @@
 //!
 //! [`RunConfig`] says what to run; [`Problem`] holds what is built once from it (the scene, its
 //! mesh, the discretization and the pair plan), which every later stage and every command works
-//! on; [`run`] takes a configuration through all stages to a [`RunReport`].
+//! on (built by [`build`]); [`run`] takes a configuration through all stages to a [`RunReport`].
 
 mod backend;
 mod bands;
@@ -11,6 +11,7 @@ mod config;
 mod operator;
 mod report;
 
+pub use crate::assembly::Problem;
 pub use backend::{Assembler, assemble_on};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
 pub use operator::{build_compressed, compresses};
@@ -56,41 +57,15 @@ fn mesh_of(config: &RunConfig, scene: &Scene, planner: &PairPlanner) -> Result<M
     Ok(mesh)
 }
 
-/// What every stage after the scene works on, each part built once: the scene, its mesh, the
-/// discretization and the pair planner.
-#[derive(Clone, Debug)]
-pub struct Problem {
-    /// The scene.
-    pub scene: Scene,
-    /// Its mesh.
-    pub mesh: Mesh,
-    /// Nodes, elements and method.
-    pub disc: Discretization,
-    /// The scene's occluders and their index, for every pair plan.
-    pub planner: PairPlanner,
-    /// Time to build the planner: part of the setup time, as the assembly is.
-    pub plan_seconds: f64,
-}
-
-impl Problem {
-    /// The scene of `config`, its pair planner, its mesh and the discretization on it.
-    pub fn new(config: &RunConfig) -> Result<Self> {
-        let scene = config.scene.build(config.params)?;
-        let started = Instant::now();
-        let planner = PairPlanner::new(&scene);
-        let plan_seconds = started.elapsed().as_secs_f64();
-        let mesh = mesh_of(config, &scene, &planner)?;
-        let disc = Discretization::new(&scene, &mesh, config.method)?;
-        Ok(Self { scene, mesh, disc, planner, plan_seconds })
-    }
-
-    /// The problem of a scene, mesh and discretization built otherwise.
-    pub fn from_parts(scene: Scene, mesh: Mesh, disc: Discretization) -> Self {
-        let started = Instant::now();
-        let planner = PairPlanner::new(&scene);
-        let plan_seconds = started.elapsed().as_secs_f64();
-        Self { scene, mesh, disc, planner, plan_seconds }
-    }
+/// The problem of `config`: its scene, the pair planner, the mesh and the discretization on it.
+pub fn build(config: &RunConfig) -> Result<Problem> {
+    let scene = config.scene.build(config.params)?;
+    let started = Instant::now();
+    let planner = PairPlanner::new(&scene);
+    let plan_seconds = started.elapsed().as_secs_f64();
+    let mesh = mesh_of(config, &scene, &planner)?;
+    let disc = Discretization::new(&scene, &mesh, config.method)?;
+    Ok(Problem::with_planner(scene, mesh, disc, planner, plan_seconds))
 }
 
 /// A finished run with what it was computed on (for outputs such as VTK files and pictures).
@@ -153,7 +128,7 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
 /// Runs one configuration and keeps the scene, mesh and emissivity.
 pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
     check_bands(config)?;
-    run_problem(config, Problem::new(config)?)
+    run_problem(config, build(config)?)
 }
 
 /// Colour bands are lit by the scene's own emission, not by a true solution.
@@ -168,7 +143,7 @@ fn check_bands(config: &RunConfig) -> Result<()> {
     Ok(())
 }
 
-/// Runs `config` on its `problem`, built already ([`Problem::new`]).
+/// Runs `config` on its `problem`, built already ([`build`]).
 pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
     check_bands(config)?;
     let u_faces = match &config.solution {
@@ -195,7 +170,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
     let u = outcome.u;
     let summary = built.summary(config, problem.disc.dof());
 
-    let Problem { scene, mesh, disc, planner, .. } = &problem;
+    let Problem { scene, disc, .. } = &problem;
     let error = u_faces.as_ref().map(|uf| {
         disc.nodes
             .iter()
@@ -204,17 +179,9 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
             .fold(0.0, f64::max)
     });
     let over_surface = match (&u_faces, config.surface_lattice) {
-        (Some(truth), Some(lattice)) => Some(surface_errors(
-            scene,
-            mesh,
-            disc,
-            planner,
-            truth,
-            &u,
-            &config.assembly,
-            &config.emission,
-            lattice,
-        )?),
+        (Some(truth), Some(lattice)) => {
+            Some(surface_errors(&problem, truth, &u, &config.assembly, &config.emission, lattice)?)
+        }
         _ => None,
     };
     let report = RunReport {

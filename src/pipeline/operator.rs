@@ -119,16 +119,13 @@ pub fn build_compressed(
                 .into(),
         });
     }
-    let Problem { scene, mesh, disc, planner, .. } = problem;
+    let Problem { scene, disc, .. } = problem;
     let device = match assembler {
         Assembler::Cpu => None,
         Assembler::Gpu(g) => Some(gpu::PairEvaluator::new(g, scene, disc, &config.assembly)?),
     };
     let mut op = CompressedOperator::build(
-        scene,
-        mesh,
-        disc,
-        planner,
+        problem,
         &config.assembly,
         &config.compression,
         device.as_ref().map(|d| d as &dyn PairEvaluation),

@@ -184,7 +184,7 @@ impl SeriesRun<'_> {
         let mut previous: Option<(f64, Option<f64>)> = None;
         for refine in 0.. {
             let config = series_config(spec, series, refine, self.backend, &self.options.progress);
-            let problem = pipeline::Problem::new(&config)?;
+            let problem = pipeline::build(&config)?;
             if problem.mesh.len() > max_n {
                 break;
             }

@@ -388,7 +388,7 @@ pub fn run(backends: &[Backend]) -> Result<Vec<ExtremeRow>> {
         } else {
             geometric_condition(case.node, case.normal, &case.element)
         };
-        let problem = Problem::from_parts(scene, mesh, disc);
+        let problem = Problem::new(scene, mesh, disc);
         let columns: Vec<usize> = match case.method {
             Method::Centroid => vec![1],
             Method::Linear { .. } => vec![3, 4, 5],

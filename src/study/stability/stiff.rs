@@ -100,7 +100,7 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
         };
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine)?;
         let disc = Discretization::new(&scene, &mesh, method)?;
-        let problem = Problem::from_parts(scene, mesh, disc);
+        let problem = Problem::new(scene, mesh, disc);
         let (k1, _) = assemble_on(backend, &problem, &AssemblyOptions::default(), &Silent)?;
         let disc = &problem.disc;
         let exact: Vec<f64> =
