@@ -118,7 +118,71 @@ fn view_factors_of_howell_c11_and_a_closed_box() {
     assert!(lo > 1.0 - 1e-10 && hi < 1.0 + 1e-10, "{lo} {hi}");
     assert!(v["reciprocity_error"].as_f64().unwrap() < 1e-9, "{v}");
     let (ok, _, err) = radiosity(&["viewfactors", "--scene", "cube", "--output", "F.txt"]);
-    assert!(!ok && err.contains(".npy or .csv"), "{err}");
+    assert!(!ok && err.contains(".npy, .csv, .npz (sparse CSR) or .mtx"), "{err}");
+}
+
+/// The arrays of a NumPy `.npz` archive by name, as npyz reads each `.npy` in it.
+fn npz_arrays(path: &std::path::Path) -> std::collections::HashMap<String, Vec<u8>> {
+    use std::io::Read;
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
+    (0..zip.len())
+        .map(|k| {
+            let mut entry = zip.by_index(k).unwrap();
+            let mut bytes = Vec::new();
+            entry.read_to_end(&mut bytes).unwrap();
+            (entry.name().to_string(), bytes)
+        })
+        .collect()
+}
+
+fn npy_values<T: npyz::Deserialize>(bytes: &[u8]) -> Vec<T> {
+    npyz::NpyFile::new(bytes).unwrap().into_vec().unwrap()
+}
+
+#[test]
+fn sparse_view_factors_hold_the_dense_output_s_non_zero_entries() {
+    // A closed box of two triangles per face: every pair of one face is zero (coplanar), so the
+    // sparse files leave out a sixth of the entries.
+    let dir = temp_dir("vf-sparse");
+    let file = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let base = ["viewfactors", "--scene", "cube", "--refine", "0", "--output"];
+    for name in ["F.npy", "F.npz", "F.mtx"] {
+        let (ok, _, err) = radiosity(&[&base[..], &[file(name).as_str()]].concat());
+        assert!(ok, "{name}: {err}");
+    }
+    let dense: Vec<f64> = npy_values(&std::fs::read(file("F.npy")).unwrap());
+    let n = (dense.len() as f64).sqrt() as usize;
+    let nonzeros = dense.iter().filter(|&&v| v != 0.0).count();
+    assert!(nonzeros < dense.len() && nonzeros > 0, "{nonzeros} of {}", dense.len());
+    // The npz: SciPy's CSR arrays, rebuilding every entry bit for bit.
+    let arrays = npz_arrays(&dir.join("F.npz"));
+    let shape: Vec<i64> = npy_values(&arrays["shape.npy"]);
+    assert_eq!(shape, vec![n as i64, n as i64]);
+    assert!(arrays["format.npy"].ends_with(b"csr"));
+    let data: Vec<f64> = npy_values(&arrays["data.npy"]);
+    let indices: Vec<i64> = npy_values(&arrays["indices.npy"]);
+    let indptr: Vec<i64> = npy_values(&arrays["indptr.npy"]);
+    assert_eq!((data.len(), indptr.len()), (nonzeros, n + 1));
+    let mut rebuilt = vec![0.0; n * n];
+    for i in 0..n {
+        for k in indptr[i] as usize..indptr[i + 1] as usize {
+            rebuilt[i * n + indices[k] as usize] = data[k];
+        }
+    }
+    assert_eq!(rebuilt, dense);
+    // The Matrix Market file: the same entries, 1-based, each value read back exactly.
+    let mtx = std::fs::read_to_string(file("F.mtx")).unwrap();
+    let mut lines = mtx.lines().filter(|l| !l.starts_with('%'));
+    assert_eq!(lines.next().unwrap(), format!("{n} {n} {nonzeros}"));
+    let mut from_mtx = vec![0.0; n * n];
+    for line in lines {
+        let f: Vec<&str> = line.split(' ').collect();
+        let (i, j): (usize, usize) = (f[0].parse().unwrap(), f[1].parse().unwrap());
+        from_mtx[(i - 1) * n + j - 1] = f[2].parse().unwrap();
+    }
+    assert_eq!(from_mtx, dense);
+    let v = json(&["viewfactors", "--scene", "cube", "--refine", "0", "--json", "-"]);
+    assert_eq!(v["nonzeros"].as_u64(), Some(nonzeros as u64), "{v}");
 }
 
 #[test]

@@ -347,7 +347,8 @@ pub(crate) struct ViewFactorArgs {
     /// difference says: on the paper's surface, reciprocity is 5e-11 without splitting)
     #[arg(long, default_value_t = 0)]
     pub(crate) max_depth: u32,
-    /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv
+    /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv (dense), or only its non-zero
+    /// entries as SciPy sparse CSR .npz (scipy.sparse.load_npz) or Matrix Market .mtx
     #[arg(long, value_name = "FILE")]
     pub(crate) output: Option<String>,
     /// Write the summary as JSON to PATH (`-` for standard output) instead of text

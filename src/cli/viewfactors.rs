@@ -49,6 +49,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         reciprocity_error: f.reciprocity_error(),
         error_estimate: f.error_estimate,
         evaluations: f.evaluations,
+        nonzeros: f.nonzeros(),
         seconds: problem.plan_seconds + started.elapsed().as_secs_f64(),
     };
     if summary.error_estimate > args.tolerance {
@@ -61,7 +62,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         );
     }
     if let Some(path) = &args.output {
-        write_matrix(path, &f)?;
+        write_matrix(path, &f, &scene.name)?;
     }
     if let Some(target) = &args.json {
         return report::write_json(&summary, target);
@@ -70,9 +71,15 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     Ok(())
 }
 
-/// F as a NumPy file (`.npy`) or as CSV (`.csv`), one row per element.
-fn write_matrix(path: &str, f: &ViewFactors) -> Result<()> {
-    if path.ends_with(".npy") {
+/// F as a NumPy file (`.npy`) or as CSV (`.csv`), one row per element, or only its non-zero
+/// entries: SciPy's sparse CSR (`.npz`, `scipy.sparse.load_npz`) or Matrix Market (`.mtx`).
+fn write_matrix(path: &str, f: &ViewFactors, surface: &str) -> Result<()> {
+    if path.ends_with(".npz") {
+        report::write_npz(path, &report::Csr::from_dense(f.len(), f.len(), &f.matrix))?;
+    } else if path.ends_with(".mtx") {
+        let csr = report::Csr::from_dense(f.len(), f.len(), &f.matrix);
+        report::write_mtx(path, &csr, &format!("view factors F_ij of {surface}, row i"))?;
+    } else if path.ends_with(".npy") {
         report::write_npy(path, f.len(), &f.matrix)?;
     } else if path.ends_with(".csv") {
         let text: String = f
@@ -85,7 +92,7 @@ fn write_matrix(path: &str, f: &ViewFactors) -> Result<()> {
         return Err(Error::InvalidParameter {
             name: "output",
             value: path.to_string(),
-            reason: "expected a .npy or .csv file".into(),
+            reason: "expected a .npy, .csv, .npz (sparse CSR) or .mtx (Matrix Market) file".into(),
         });
     }
     Ok(())

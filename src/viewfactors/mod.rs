@@ -108,6 +108,8 @@ pub struct ViewFactorSummary {
     pub error_estimate: f64,
     /// Point-to-element integrals evaluated.
     pub evaluations: u64,
+    /// Entries F_ij that are not zero (what a sparse output stores).
+    pub nonzeros: usize,
     /// Wall time.
     pub seconds: f64,
 }
@@ -116,6 +118,11 @@ impl ViewFactors {
     /// Number of elements.
     pub fn len(&self) -> usize {
         self.areas.len()
+    }
+
+    /// Entries that are not zero.
+    pub fn nonzeros(&self) -> usize {
+        self.matrix.iter().filter(|&&v| v != 0.0).count()
     }
 
     /// Whether there are no elements.
