@@ -141,8 +141,8 @@ fn npy_values<T: npyz::Deserialize>(bytes: &[u8]) -> Vec<T> {
 
 #[test]
 fn sparse_view_factors_hold_the_dense_output_s_non_zero_entries() {
-    // A closed box of two triangles per face: every pair of one face is zero (coplanar), so the
-    // sparse files leave out a sixth of the entries.
+    // A closed box: every pair of elements of one face is zero (coplanar), and the sparse files
+    // leave those entries out.
     let dir = temp_dir("vf-sparse");
     let file = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let base = ["viewfactors", "--scene", "cube", "--refine", "0", "--output"];
@@ -203,6 +203,8 @@ fn view_factors_say_when_their_estimates_miss_the_tolerance() {
     let (ok, _, err) =
         radiosity(&["viewfactors", "--scene", scene, "--refine", "0", "--tolerance", "1e-16"]);
     assert!(ok && err.contains("exceeds --tolerance 1.0e-16"), "{err}");
+    // Said before the work starts, too.
+    assert!(err.contains("below what f64 arithmetic delivers"), "{err}");
 }
 
 #[test]

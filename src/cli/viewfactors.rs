@@ -11,6 +11,9 @@ use radiosity::viewfactors::{
 
 use super::*;
 
+/// The smallest tolerance f64 arithmetic can meet on an entry F_ij (about 64 ulp of 1).
+const ROUNDING_FLOOR: f64 = 1e-14;
+
 pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(Error::InvalidParameter {
@@ -18,6 +21,16 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
             value: args.tolerance.to_string(),
             reason: "must be positive".into(),
         });
+    }
+    if args.tolerance < ROUNDING_FLOOR {
+        // Rounding in the closed forms and the sums of a pair's cells alone is about this: the
+        // adaptive rule would split every cell to the limit and still miss it.
+        eprintln!(
+            "warning: --tolerance {:.1e} is below what f64 arithmetic delivers for a view factor \
+             (about {ROUNDING_FLOOR:.0e}): every cell will be split to the limit ({MAX_SPLITS} \
+             rounds), which takes long, and the estimates will still exceed it",
+            args.tolerance
+        );
     }
     let config = args.geometry.config()?;
     let problem = pipeline::build(&config)?;
