@@ -604,3 +604,36 @@ fn bad_up_directions_and_band_names_are_refused() {
     let (ok, _, err) = radiosity(&["solve", "--scene", "five-piece", "--bands", "rgb"]);
     assert!(!ok && err.contains("--solution none"), "{err}");
 }
+
+#[test]
+fn a_lit_city_solves_with_light_on_every_street() {
+    // The plain city emits nothing (a warning, u = 0); under its sky every face is lit, the
+    // ground most where it sees most sky, and u <= E + rho max u keeps it below 1.
+    let v = json(&["solve", "--scene", "city:2x2", "--refine", "0", "--json", "-"]);
+    assert!(v["warnings"].to_string().contains("no face"), "{v}");
+    let v = json(&["solve", "--scene", "city:2x2:lit", "--refine", "0", "--json", "-"]);
+    assert_eq!(v["surface"], "city-2x2-lit");
+    assert_eq!(v["warnings"].as_array().map(Vec::len), Some(0), "{v}");
+    let [lo, _, hi] = [0, 1, 2].map(|k| v["solution_range"][k].as_f64().unwrap());
+    assert!(lo >= 0.0 && (hi - 1.0).abs() < 1e-12, "{lo} {hi}: the sky's u is E = 1");
+    let dir = temp_dir("lit-city");
+    let csv = dir.join("u.csv");
+    let (ok, _, err) = radiosity(&[
+        "solve",
+        "--scene",
+        "city:2x2:lit",
+        "--refine",
+        "0",
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lit = text.lines().skip(1).filter(|l| !l.contains(",sky,")).all(|l| {
+        let u: f64 = l.rsplit(',').next().unwrap().parse().unwrap();
+        u > 0.0 && u < 1.0
+    });
+    assert!(lit, "every face but the sky has 0 < u < 1:\n{text}");
+    let (ok, _, err) = radiosity(&["solve", "--scene", "city:2x2:dark"]);
+    assert!(!ok && err.contains("city:NXxNY:lit"), "{err}");
+}

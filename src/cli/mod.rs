@@ -155,7 +155,8 @@ pub(crate) enum QuadratureArg {
 /// The scene, its mesh and the collocation method.
 #[derive(Args)]
 pub(crate) struct GeometryArgs {
-    /// Scene: four-piece, five-piece, cube, baffled-box, or a scene file (.toml, .obj, .stl)
+    /// Scene: four-piece, five-piece, cube, baffled-box, a generated city (city:NXxNY, or
+    /// city:NXxNY:lit under an emitting sky panel), or a scene file (.toml, .obj, .stl)
     #[arg(long)]
     pub(crate) scene: String,
     /// Collocation method

@@ -90,8 +90,9 @@ pub enum SceneSource {
     /// A `.toml` scene file or an `.obj` / `.stl` mesh ([`crate::scene::load_with`]), and what
     /// to do with its imperfections.
     File(PathBuf, ImportOptions),
-    /// `city:NXxNY`: the generated city of NX x NY buildings ([`crate::scene::city`]).
-    City(usize, usize),
+    /// `city:NXxNY`: the generated city of NX x NY buildings ([`crate::scene::city`]), or with
+    /// `:lit` under an emitting sky panel ([`crate::scene::lit_city`]).
+    City(usize, usize, bool),
 }
 
 impl SceneSource {
@@ -100,14 +101,18 @@ impl SceneSource {
         if crate::scene::is_scene_file(name) {
             Ok(Self::File(PathBuf::from(name), ImportOptions::default()))
         } else if let Some(size) = name.strip_prefix("city:") {
+            let (size, lit) = match size.strip_suffix(":lit") {
+                Some(size) => (size, true),
+                None => (size, false),
+            };
             let parsed =
                 size.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)));
             let (nx, ny) = parsed.ok_or_else(|| Error::InvalidParameter {
                 name: "scene",
                 value: name.into(),
-                reason: "expected city:NXxNY, e.g. city:35x36".into(),
+                reason: "expected city:NXxNY or city:NXxNY:lit, e.g. city:35x36".into(),
             })?;
-            Ok(Self::City(nx, ny))
+            Ok(Self::City(nx, ny, lit))
         } else {
             Ok(Self::Builtin(name.parse()?))
         }
@@ -118,7 +123,8 @@ impl SceneSource {
         match self {
             Self::Builtin(b) => b.build(params),
             Self::File(path, import) => crate::scene::load_with(path, *import),
-            Self::City(nx, ny) => crate::scene::city(*nx, *ny),
+            Self::City(nx, ny, false) => crate::scene::city(*nx, *ny),
+            Self::City(nx, ny, true) => crate::scene::lit_city(*nx, *ny),
         }
     }
 

@@ -12,8 +12,32 @@ use crate::error::{Error, Result};
 const BLOCK: f64 = 10.0;
 const STREET: f64 = 6.0;
 
+/// Height of the sky panel of a lit city: above the tallest building (40).
+const SKY_HEIGHT: f64 = 60.0;
+
 /// The city of `nx` x `ny` buildings; rho 0.3 for the ground, 0.6 for the buildings.
 pub fn city(nx: usize, ny: usize) -> Result<Scene> {
+    Scene::new(format!("city-{nx}x{ny}"), city_faces(nx, ny)?)
+}
+
+/// The city of `nx` x `ny` buildings under a sky: one rectangle over the whole city at height
+/// [`SKY_HEIGHT`], facing down, emitting E = 1 and reflecting nothing, so that `solve` has light
+/// to spread (`city:NXxNY:lit`).
+pub fn lit_city(nx: usize, ny: usize) -> Result<Scene> {
+    let mut faces = city_faces(nx, ny)?;
+    let (lo, hi) = faces.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), f| {
+        let (a, b) = f.bounding_box();
+        (lo.min(a), hi.max(b))
+    });
+    let z = SKY_HEIGHT;
+    let corners = [(lo.x, lo.y), (lo.x, hi.y), (hi.x, hi.y), (hi.x, lo.y)];
+    let sky = corners.iter().map(|&(x, y)| DVec3::new(x, y, z)).collect();
+    faces.push(Face::new("sky", sky, 0.0)?.with_emission(1.0)?);
+    Scene::new(format!("city-{nx}x{ny}-lit"), faces)
+}
+
+/// The faces of the city of `nx` x `ny` buildings.
+fn city_faces(nx: usize, ny: usize) -> Result<Vec<Face>> {
     if nx == 0 || ny == 0 || nx * ny > 100_000 {
         return Err(Error::InvalidParameter {
             name: "city",
@@ -57,7 +81,7 @@ pub fn city(nx: usize, ny: usize) -> Result<Scene> {
             }
         }
     }
-    Scene::new(format!("city-{nx}x{ny}"), faces)
+    Ok(faces)
 }
 
 #[cfg(test)]
@@ -75,5 +99,19 @@ mod tests {
         let east = &s.faces[s.face_index("b1-1/east").unwrap()];
         assert!((east.frame.normal - DVec3::X).length() < 1e-15);
         assert!(city(0, 3).is_err());
+    }
+
+    #[test]
+    fn a_lit_city_has_a_sky_over_every_building_facing_down() {
+        let s = lit_city(3, 2).unwrap();
+        assert_eq!(s.faces.len(), city(3, 2).unwrap().faces.len() + 1);
+        let sky = &s.faces[s.face_index("sky").unwrap()];
+        assert!((sky.frame.normal + DVec3::Z).length() < 1e-15);
+        assert_eq!((sky.rho, sky.emission), (0.0, 1.0));
+        let (lo, hi) = sky.bounding_box();
+        for f in s.faces.iter().filter(|f| f.name != "sky") {
+            let (a, b) = f.bounding_box();
+            assert!(a.x >= lo.x && a.y >= lo.y && b.x <= hi.x && b.y <= hi.y && b.z < lo.z);
+        }
     }
 }

@@ -7,7 +7,7 @@ mod face;
 mod file;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
-pub use city::city;
+pub use city::{city, lit_city};
 pub use face::{CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA};
 pub use file::{
     Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, is_scene_file, load, load_with,
