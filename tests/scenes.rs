@@ -637,3 +637,41 @@ fn a_lit_city_solves_with_light_on_every_street() {
     let (ok, _, err) = radiosity(&["solve", "--scene", "city:2x2:dark"]);
     assert!(!ok && err.contains("city:NXxNY:lit"), "{err}");
 }
+
+#[test]
+fn the_louvre_room_closes_and_is_lit_through_its_slats() {
+    // Lemma 2.1 across the louvre: every row of K/rho sums to 1, with pairs hidden and partly
+    // seen through the slats.
+    let v =
+        json(&["inspect", "--scene", "examples/louvre-room.toml", "--refine", "1", "--json", "-"]);
+    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
+    assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "{lo} {hi}");
+    assert!(v["pairs_partial"].as_u64().unwrap() > 0 && v["pairs_hidden"].as_u64().unwrap() > 0);
+    // The east part sees the lamp only through the louvre: lit, but far less than the west.
+    let dir = temp_dir("louvre");
+    let csv = dir.join("u.csv");
+    let path = csv.to_str().unwrap();
+    let (ok, _, err) = radiosity(&[
+        "solve",
+        "--scene",
+        "examples/louvre-room.toml",
+        "--refine",
+        "1",
+        "--csv",
+        path,
+    ]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let floor_u = |east: bool| -> f64 {
+        let values: Vec<f64> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|f| f[2] == "floor" && (f[3].parse::<f64>().unwrap() > 2.0) == east)
+            .map(|f| f[8].parse().unwrap())
+            .collect();
+        values.iter().sum::<f64>() / values.len() as f64
+    };
+    let (west, east) = (floor_u(false), floor_u(true));
+    assert!(east > 0.0 && east < 0.5 * west, "floor west {west}, east {east}");
+}
