@@ -156,9 +156,16 @@ fn sparse_view_factors_hold_the_dense_output_s_non_zero_entries() {
     assert!(nonzeros < dense.len() && nonzeros > 0, "{nonzeros} of {}", dense.len());
     // The npz: SciPy's CSR arrays, rebuilding every entry bit for bit.
     let arrays = npz_arrays(&dir.join("F.npz"));
+    let mut names: Vec<&str> = arrays.keys().map(String::as_str).collect();
+    names.sort_unstable();
+    assert_eq!(names, ["data.npy", "format.npy", "indices.npy", "indptr.npy", "shape.npy"]);
     let shape: Vec<i64> = npy_values(&arrays["shape.npy"]);
     assert_eq!(shape, vec![n as i64, n as i64]);
-    assert!(arrays["format.npy"].ends_with(b"csr"));
+    // A 0-d array of the bytes "csr", as numpy writes `np.array(b"csr")`.
+    let format = &arrays["format.npy"];
+    let header = String::from_utf8_lossy(&format[10..format.len() - 3]);
+    assert!(header.contains("'descr': '|S3'") && header.contains("'shape': ()"), "{header}");
+    assert!(format.ends_with(b"csr"));
     let data: Vec<f64> = npy_values(&arrays["data.npy"]);
     let indices: Vec<i64> = npy_values(&arrays["indices.npy"]);
     let indptr: Vec<i64> = npy_values(&arrays["indptr.npy"]);

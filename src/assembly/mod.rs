@@ -29,7 +29,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::quadrature::ImtRule;
 use crate::visibility::{
-    FaceSight, PairPlanner, PairStats, PartSight, RecentHiders, Views, Visibility,
+    FaceSight, PairPlanner, PairStats, PartSight, RecentHiders, Views, Visibility, by_face,
 };
 
 /// Evaluates the collocation integrals of one (node, element) pair.
@@ -275,13 +275,7 @@ pub fn recompute_thin_columns(
     }
     let integrator = PairIntegrator::new(disc.method, options);
     let per = disc.method.nodes_per_element();
-    let mut by_face: Vec<(usize, Vec<usize>)> = Vec::new();
-    for &j in &thin {
-        match by_face.last_mut() {
-            Some((face, list)) if *face == disc.elements[j].face => list.push(j),
-            _ => by_face.push((disc.elements[j].face, vec![j])),
-        }
-    }
+    let by_face = by_face(thin.iter().map(|&j| (disc.elements[j].face, j)));
     assembly.matrix.rows_mut().enumerate().for_each_init(
         RecentHiders::default,
         |hiders, (i, row)| {

@@ -27,10 +27,15 @@ pub struct Problem {
 impl Problem {
     /// The problem of `scene`, `mesh` and `disc`, with the planner built here.
     pub fn new(scene: Scene, mesh: Mesh, disc: Discretization) -> Self {
-        let started = Instant::now();
-        let planner = PairPlanner::new(&scene);
-        let plan_seconds = started.elapsed().as_secs_f64();
+        let (planner, plan_seconds) = Self::plan(&scene);
         Self::with_planner(scene, mesh, disc, planner, plan_seconds)
+    }
+
+    /// The pair planner of `scene`, and the seconds it took to build.
+    pub fn plan(scene: &Scene) -> (PairPlanner, f64) {
+        let started = Instant::now();
+        let planner = PairPlanner::new(scene);
+        (planner, started.elapsed().as_secs_f64())
     }
 
     /// The problem with a planner built already (in `plan_seconds`).

@@ -33,7 +33,7 @@ use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility};
+use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face};
 
 use aca::LowRank;
 use blocks::{BlockPlan, FacePairs};
@@ -528,14 +528,8 @@ impl Entries<'_> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let element_ids = &self.elements.order[sc.start..sc.end];
         // The block's elements face by face (positions k in the block), as the walk takes them.
-        let mut by_face: Vec<(usize, Vec<usize>)> = Vec::new();
-        for (k, &j) in element_ids.iter().enumerate() {
-            let face = self.disc.elements[j].face;
-            match by_face.iter_mut().find(|(f, _)| *f == face) {
-                Some((_, list)) => list.push(k),
-                None => by_face.push((face, vec![k])),
-            }
-        }
+        let by_face =
+            by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face, k)));
         let mut stats = PairStats::default();
         views.prepare(t, tc.len());
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {

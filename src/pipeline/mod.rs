@@ -60,9 +60,7 @@ fn mesh_of(config: &RunConfig, scene: &Scene, planner: &PairPlanner) -> Result<M
 /// The problem of `config`: its scene, the pair planner, the mesh and the discretization on it.
 pub fn build(config: &RunConfig) -> Result<Problem> {
     let scene = config.scene.build(config.params)?;
-    let started = Instant::now();
-    let planner = PairPlanner::new(&scene);
-    let plan_seconds = started.elapsed().as_secs_f64();
+    let (planner, plan_seconds) = Problem::plan(&scene);
     let mesh = mesh_of(config, &scene, &planner)?;
     let disc = Discretization::new(&scene, &mesh, config.method)?;
     Ok(Problem::with_planner(scene, mesh, disc, planner, plan_seconds))

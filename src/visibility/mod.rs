@@ -34,7 +34,7 @@ pub use hiders::RecentHiders;
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
 use projection::{Pyramid, ShadowSet, convex_hull, polygon_scale, pyramid_sides, shadow};
-pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views};
+pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
 pub use stats::PairStats;
 

@@ -90,6 +90,19 @@ impl PartSight<'_> {
     }
 }
 
+/// `items` (each with its face) grouped face by face, faces in the order they first appear, as
+/// [`PairPlanner::walk_row`] takes them.
+pub fn by_face(items: impl IntoIterator<Item = (usize, usize)>) -> Vec<(usize, Vec<usize>)> {
+    let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+    for (face, item) in items {
+        match groups.iter_mut().rev().find(|(f, _)| *f == face) {
+            Some((_, list)) => list.push(item),
+            None => groups.push((face, vec![item])),
+        }
+    }
+    groups
+}
+
 impl PairPlanner {
     /// Walks `viewer`'s row over `faces`, each given with the elements of it to classify, calling
     /// `visit(face, elements, sight)` for every face (none when the viewer reflects nothing), and
