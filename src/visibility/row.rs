@@ -83,11 +83,6 @@ impl PartSight<'_> {
         self.stats.record(&visibility, 1);
         visibility
     }
-
-    /// The view itself (the clip and the shadows).
-    pub fn view(&self) -> &FaceView {
-        self.view
-    }
 }
 
 /// `items` (each with its face) grouped face by face, faces in the order they first appear, as
