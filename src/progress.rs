@@ -6,7 +6,8 @@ use std::sync::Arc;
 
 /// Receives the progress of long-running work (called from worker threads).
 pub trait Progress: Send + Sync {
-    /// A stage of `len` steps begins (`assembly`, `emission`).
+    /// A stage of `len` steps begins (`assembly`, `emission`); `len` 0 for a stage whose
+    /// steps are not counted (`scene`, `occluders`, `blocks`), shown as running.
     fn start(&self, stage: &str, len: usize);
     /// `steps` more steps of the current stage are done.
     fn advance(&self, steps: usize);
@@ -25,6 +26,15 @@ impl Progress for Silent {
     fn advance(&self, _: usize) {}
     fn finish(&self) {}
     fn note(&self, _: &str) {}
+}
+
+/// Runs `work` as a stage whose steps are not counted, so that a long preprocessing step shows
+/// as running instead of as silence.
+pub fn in_stage<T>(progress: &dyn Progress, stage: &str, work: impl FnOnce() -> T) -> T {
+    progress.start(stage, 0);
+    let result = work();
+    progress.finish();
+    result
 }
 
 /// A shared progress observer, as configurations hold it ([`Silent`] by default).

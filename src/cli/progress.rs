@@ -5,8 +5,19 @@ use std::sync::{Arc, Mutex};
 use indicatif::{ProgressBar, ProgressStyle};
 use radiosity::progress::{Progress, ProgressSink};
 
-/// A bar per stage of `len` steps, on stderr.
+/// A bar per stage of `len` steps, on stderr; a spinner with the time spent for a stage of
+/// uncounted steps (`len` 0).
 fn bar(stage: &str, len: usize) -> ProgressBar {
+    if len == 0 {
+        let spinner = ProgressBar::new_spinner();
+        spinner.set_style(
+            ProgressStyle::with_template("{msg:>10} {spinner} ({elapsed})")
+                .expect("valid template"),
+        );
+        spinner.set_message(stage.to_string());
+        spinner.enable_steady_tick(std::time::Duration::from_millis(250));
+        return spinner;
+    }
     let bar = ProgressBar::new(len as u64);
     bar.set_style(
         ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({elapsed}, eta {eta})")

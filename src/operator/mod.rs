@@ -32,7 +32,7 @@ use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, Problem, 
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::progress::Progress;
+use crate::progress::{Progress, in_stage};
 use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face};
 
 use aca::LowRank;
@@ -198,9 +198,12 @@ impl CompressedOperator {
         options.validate()?;
         assembly.quadrature.validate()?;
         let per = disc.method.nodes_per_element();
-        let (nodes, elements) = cluster_trees(mesh, disc, options);
         let faces = FacePairs::new(scene, planner);
-        let plan = BlockPlan::new(&nodes, &elements, &faces, options);
+        let (nodes, elements, plan) = in_stage(progress, "blocks", || {
+            let (nodes, elements) = cluster_trees(mesh, disc, options);
+            let plan = BlockPlan::new(&nodes, &elements, &faces, options);
+            (nodes, elements, plan)
+        });
         // The exact blocks alone must fit before any is computed; then every block built counts.
         let guard = MemoryGuard::new(disc.dof());
         guard.check(8 * plan.near_entries(&nodes, &elements, per))?;

@@ -23,6 +23,7 @@ use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::{Grading, Mesh, MeshKind, Sources, paper_discontinuity_cuts, shadow_lines};
 use crate::problems::emission_at;
+use crate::progress::in_stage;
 use crate::scene::{CHANNELS, Scene};
 use crate::solution::BandValues;
 use crate::solve;
@@ -59,10 +60,14 @@ fn mesh_of(config: &RunConfig, scene: &Scene, planner: &PairPlanner) -> Result<M
 
 /// The problem of `config`: its scene, the pair planner, the mesh and the discretization on it.
 pub fn build(config: &RunConfig) -> Result<Problem> {
-    let scene = config.scene.build(config.params)?;
-    let (planner, plan_seconds) = Problem::plan(&scene);
-    let mesh = mesh_of(config, &scene, &planner)?;
-    let disc = Discretization::new(&scene, &mesh, config.method)?;
+    let progress = &*config.progress;
+    let scene = in_stage(progress, "scene", || config.scene.build(config.params))?;
+    let (planner, plan_seconds) = in_stage(progress, "occluders", || Problem::plan(&scene));
+    let (mesh, disc) = in_stage(progress, "mesh", || {
+        let mesh = mesh_of(config, &scene, &planner)?;
+        let disc = Discretization::new(&scene, &mesh, config.method)?;
+        Ok::<_, Error>((mesh, disc))
+    })?;
     Ok(Problem::with_planner(scene, mesh, disc, planner, plan_seconds))
 }
 
@@ -163,7 +168,8 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
     }
 
     let started = Instant::now();
-    let (outcome, bands, band_reports) = solve_built(config, &problem, &built, &rhs)?;
+    let (outcome, bands, band_reports) =
+        in_stage(&*config.progress, "solve", || solve_built(config, &problem, &built, &rhs))?;
     let solve_seconds = started.elapsed().as_secs_f64();
     let u = outcome.u;
     let summary = built.summary(config, problem.disc.dof());

@@ -50,9 +50,8 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
             edges.entry(e).or_default().push(k);
         }
     }
-    let all: Vec<DVec3> = pieces.iter().flat_map(|p| p.polygon.iter().copied()).collect();
-    let (lo, hi) = crate::geometry::bounding_box_3d(&all);
-    let tol = 1e-12 * (hi - lo).length();
+    let mut scene = SceneVertices::new(pieces);
+    let tol = 1e-12 * scene.size;
     let mut solids = Vec::new();
     let mut solid_of = vec![None; pieces.len()];
     // Pieces already in a solid are no seeds and join no group; a group that is no solid
@@ -116,7 +115,7 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
         // Vertices off every plane of the group (not all in one plane).
         let solid_volume = sides.iter().all(|&s| s != 0.0);
         let Some(open) = open_edges(&group, pieces, &edges) else { continue };
-        if !solid_volume || !(open.is_empty() || is_capped(&open, &vertices, &all, tol)) {
+        if !solid_volume || !(open.is_empty() || is_capped(&open, &vertices, &mut scene, tol)) {
             continue;
         }
         let mut faces: Vec<usize> =
@@ -189,9 +188,54 @@ fn side(piece: &Occluder, points: &[DVec3], tol: f64) -> Option<f64> {
 /// piece seeds a group of its own).
 const MAX_SOLID_PIECES: usize = 16;
 
+/// Every vertex of the scene, and the extent of their projections on the directions asked so
+/// far: the caps of a city's buildings all lie in the ground's plane, so one pass over the
+/// scene answers all of them (a pass per cap made the solids quadratic in the faces).
+struct SceneVertices {
+    all: Vec<DVec3>,
+    size: f64,
+    /// Per unit normal (by its bits), the least and greatest `n·v` over `all`.
+    extents: HashMap<VertexKey, (f64, f64)>,
+}
+
+impl SceneVertices {
+    fn new(pieces: &[Occluder]) -> Self {
+        let all: Vec<DVec3> = pieces.iter().flat_map(|p| p.polygon.iter().copied()).collect();
+        let (lo, hi) = crate::geometry::bounding_box_3d(&all);
+        Self { size: (hi - lo).length(), all, extents: HashMap::new() }
+    }
+
+    /// Whether every vertex `v` has `n·(v - origin)`, times `sign`, at least `-tol`.
+    fn on_side(&mut self, n: DVec3, origin: DVec3, sign: f64, tol: f64) -> bool {
+        let all = &self.all;
+        let (least, greatest) = *self.extents.entry(vertex_key(n)).or_insert_with(|| {
+            all.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                let h = n.dot(v);
+                (a.min(h), b.max(h))
+            })
+        });
+        let h = if sign > 0.0 { least - n.dot(origin) } else { n.dot(origin) - greatest };
+        // `n·v - n·origin` and `n·(v - origin)` differ by rounding only: decide by the extent
+        // away from the boundary, and by the vertices themselves within rounding of it.
+        let rounding = 1e-14 * (self.size + origin.abs().max_element());
+        if h >= -tol + rounding {
+            true
+        } else if h < -tol - rounding {
+            false
+        } else {
+            all.iter().all(|&v| n.dot(v - origin) * sign >= -tol)
+        }
+    }
+}
+
 /// Whether the open edges of a group (with vertices `vertices`) form one loop in a plane that
-/// has the group and every vertex of the scene (`all`) on one side.
-fn is_capped(open: &[(DVec3, DVec3)], vertices: &[DVec3], all: &[DVec3], tol: f64) -> bool {
+/// has the group and every vertex of the scene on one side.
+fn is_capped(
+    open: &[(DVec3, DVec3)],
+    vertices: &[DVec3],
+    scene: &mut SceneVertices,
+    tol: f64,
+) -> bool {
     // One loop: every vertex of the open edges ends exactly two of them (pieces need not agree
     // on their orientation), and walking from the first edge visits them all.
     let ends = |p: DVec3| open.iter().filter(|e| e.0 == p || e.1 == p).count();
@@ -224,5 +268,5 @@ fn is_capped(open: &[(DVec3, DVec3)], vertices: &[DVec3], all: &[DVec3], tol: f6
     let planar = loop_points.iter().all(|&v| h(v).abs() <= tol);
     let up =
         vertices.iter().map(|&v| h(v)).fold(0.0, |a: f64, x| if x.abs() > a.abs() { x } else { a });
-    planar && up != 0.0 && all.iter().all(|&v| h(v) * up.signum() >= -tol)
+    planar && up != 0.0 && scene.on_side(n, loop_points[0], up.signum(), tol)
 }
