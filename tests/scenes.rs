@@ -682,3 +682,93 @@ fn the_louvre_room_closes_and_is_lit_through_its_slats() {
     let (west, east) = (floor_u(false), floor_u(true));
     assert!(east > 0.0 && east < 0.5 * west, "floor west {west}, east {east}");
 }
+
+/// An STL triangle soup: a ground of 2 x 2 cells around a 2 x 2 footprint, in a 6 x 6 square,
+/// and a building of height 3 on the footprint, walls in 1 x 1 cells; under a sky in a TOML
+/// scene.
+fn tessellated_block(dir: &std::path::Path) -> PathBuf {
+    let mut stl = String::from("solid block\n");
+    let mut quad = |p: [[f64; 3]; 4]| {
+        for t in [[p[0], p[1], p[2]], [p[0], p[2], p[3]]] {
+            stl.push_str("facet normal 0 0 0\nouter loop\n");
+            for v in t {
+                stl.push_str(&format!("vertex {} {} {}\n", v[0], v[1], v[2]));
+            }
+            stl.push_str("endloop\nendfacet\n");
+        }
+    };
+    for i in 0..6 {
+        for j in 0..6 {
+            if (2..4).contains(&i) && (2..4).contains(&j) {
+                continue;
+            }
+            let (x, y) = (i as f64, j as f64);
+            quad([[x, y, 0.0], [x + 1.0, y, 0.0], [x + 1.0, y + 1.0, 0.0], [x, y + 1.0, 0.0]]);
+        }
+    }
+    // Walls from (x, y) along (ux, uy), outward normal (ux, uy) x z.
+    for (x, y, ux, uy) in
+        [(2.0, 2.0, 1.0, 0.0), (4.0, 2.0, 0.0, 1.0), (4.0, 4.0, -1.0, 0.0), (2.0, 4.0, 0.0, -1.0)]
+    {
+        for s in 0..2 {
+            for z in 0..3 {
+                let p = |ds: f64, dz: f64| {
+                    let t = s as f64 + ds;
+                    [x + ux * t, y + uy * t, z as f64 + dz]
+                };
+                quad([p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)]);
+            }
+        }
+    }
+    quad([[2.0, 2.0, 3.0], [4.0, 2.0, 3.0], [4.0, 4.0, 3.0], [2.0, 4.0, 3.0]]);
+    stl.push_str("endsolid block\n");
+    std::fs::write(dir.join("block.stl"), stl).unwrap();
+    let toml = "name = \"block\"\n[[faces]]\nname = \"sky\"\n\
+                vertices = [[0, 0, 8], [0, 6, 8], [6, 6, 8], [6, 0, 8]]\nrho = 0.0\nemission = 1.0\n\
+                [[meshes]]\nfile = \"block.stl\"\nrho = 0.4\n";
+    let path = dir.join("block.toml");
+    std::fs::write(&path, toml).unwrap();
+    path
+}
+
+#[test]
+fn a_triangle_soup_merged_into_faces_gives_the_solution_of_its_triangles() {
+    use radiosity::pipeline::{RunConfig, SceneSource};
+    use radiosity::scene::{Coplanar, ImportOptions};
+    let path = tessellated_block(&temp_dir("soup"));
+    let run = |coplanar| {
+        let mut config = RunConfig::paper(radiosity::scene::BuiltinScene::Cube, 1);
+        let import = ImportOptions { coplanar: Some(coplanar), ..Default::default() };
+        config.scene = SceneSource::File(path.clone(), import);
+        config.solution = None;
+        radiosity::pipeline::run_keeping_mesh(&config).unwrap()
+    };
+    let (merged, kept) = (run(Coplanar::Merge), run(Coplanar::Keep));
+    // 32 ground cells, 24 wall cells and the roof as 114 triangles, and the sky.
+    assert_eq!(kept.scene.faces.len(), 115);
+    // The ground in a few disks around the footprint, four walls, the roof, the sky.
+    let faces = merged.scene.faces.len();
+    assert!((8..=12).contains(&faces), "{faces} faces");
+    assert!(merged.report.notes.iter().any(|n| n.starts_with("faces_merged: 115 -> ")));
+    // The same elements, found by their centroids, with the same solution.
+    let by_centroid = |run: &radiosity::pipeline::Run| {
+        let mut values: Vec<([u64; 3], f64)> = run
+            .mesh
+            .elements()
+            .iter()
+            .zip(&run.report.u)
+            .map(|(e, &u)| (e.centroid().to_array().map(f64::to_bits), u))
+            .collect();
+        values.sort_by_key(|v| v.0);
+        values
+    };
+    let (a, b) = (by_centroid(&merged), by_centroid(&kept));
+    assert_eq!(a.len(), 4 * 116);
+    let mut worst = 0.0f64;
+    for ((ka, ua), (kb, ub)) in a.iter().zip(&b) {
+        assert_eq!(ka, kb);
+        worst = worst.max((ua - ub).abs());
+    }
+    let lit = a.iter().map(|x| x.1).fold(0.0, f64::max);
+    assert!(lit > 0.5 && worst <= 1e-13, "largest difference {worst:.2e}");
+}

@@ -22,7 +22,9 @@ use radiosity::operator::{CompressionOptions, OperatorChoice};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
 use radiosity::problems::{EmissionOptions, TrueSolution};
 use radiosity::report::Tone;
-use radiosity::scene::{CHANNELS, Duplicates, ImportOptions, NonPlanar, SurfaceParameters};
+use radiosity::scene::{
+    CHANNELS, Coplanar, Duplicates, ImportOptions, NonPlanar, SurfaceParameters,
+};
 use radiosity::solve::{SolverChoice, SolverOptions};
 
 #[derive(Parser)]
@@ -529,6 +531,14 @@ pub(crate) enum DuplicatesArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum CoplanarArg {
+    /// Join them into planar faces for visibility, the triangles kept as elements
+    Merge,
+    /// Every triangle a face of its own
+    Keep,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum ToneArg {
     Linear,
     Log,
@@ -545,6 +555,9 @@ pub(crate) struct ImportArgs {
     /// for TOML faces]; partial overlaps are always refused
     #[arg(long, value_enum)]
     pub(crate) duplicates: Option<DuplicatesArg>,
+    /// Coplanar triangles of OBJ/STL meshes that share edges and properties [default: merge]
+    #[arg(long, value_enum)]
+    pub(crate) coplanar: Option<CoplanarArg>,
 }
 
 impl ImportArgs {
@@ -557,6 +570,10 @@ impl ImportArgs {
             duplicates: self.duplicates.map(|d| match d {
                 DuplicatesArg::Drop => Duplicates::Drop,
                 DuplicatesArg::Refuse => Duplicates::Refuse,
+            }),
+            coplanar: self.coplanar.map(|c| match c {
+                CoplanarArg::Merge => Coplanar::Merge,
+                CoplanarArg::Keep => Coplanar::Keep,
             }),
         }
     }

@@ -156,9 +156,12 @@ impl Mesh {
     }
 }
 
-/// Initial triangles of a face: quadrilaterals by their diagonal, other convex polygons by a fan
-/// from vertex 0, non-convex polygons by ear clipping.
+/// Initial triangles of a face: those it was merged from, if any; else quadrilaterals by their
+/// diagonal, other convex polygons by a fan from vertex 0, non-convex polygons by ear clipping.
 fn initial_triangles(face: &crate::scene::Face) -> Result<Vec<[DVec3; 3]>> {
+    if !face.triangles.is_empty() {
+        return Ok(face.triangles.clone());
+    }
     let v = &face.vertices;
     if v.len() == 4 && face.is_convex() {
         return Ok(match face.diagonal {

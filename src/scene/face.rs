@@ -44,6 +44,10 @@ pub struct Face {
     /// Red, green and blue channels of rho and E where the scene gives them (an OBJ material's
     /// Kd and Ke); `rho` and `emission` are then their means.
     pub colour: Colour,
+    /// The triangles the face was merged from, where it joins coplanar triangles of an imported
+    /// mesh ([`crate::scene::merge_coplanar`]): they stay its initial elements. Empty: the mesh
+    /// triangulates the polygon.
+    pub triangles: Vec<[DVec3; 3]>,
 }
 
 /// The colour channels (r, g, b) behind a face's rho and E; `None`: grey (every channel equals
@@ -79,7 +83,7 @@ pub const COPLANAR_DISTANCE: f64 = 1e-9;
 const COPLANAR_ANGLE: f64 = 1e-6;
 
 /// Relative tolerance (of the face's size) for planarity.
-const PLANARITY: f64 = 1e-9;
+pub(crate) const PLANARITY: f64 = 1e-9;
 
 impl Face {
     /// A face from its vertices (counter-clockwise about the radiating side) and reflectivity.
@@ -152,6 +156,7 @@ impl Face {
             emission: 0.0,
             diagonal: Diagonal::default(),
             colour: Colour::default(),
+            triangles: Vec::new(),
         };
         face.check_simple()?;
         Ok(face)
@@ -168,7 +173,8 @@ impl Face {
             (0..n).map(|k| (vertices[k] - centre).cross(vertices[(k + 1) % n] - centre)).sum();
         let frame = plane_frame(&vertices, twice_area.normalize(), self.size())
             .expect("a validated face keeps its first edge when moved");
-        Self { vertices, frame, ..self.clone() }
+        let triangles = self.triangles.iter().map(|t| t.map(|v| v - offset)).collect();
+        Self { vertices, frame, triangles, ..self.clone() }
     }
 
     /// Sets the emissivity (finite, non-negative).
@@ -178,6 +184,12 @@ impl Face {
         }
         self.emission = emission;
         Ok(self)
+    }
+
+    /// The face with the triangles it was merged from as its initial elements.
+    pub(crate) fn with_triangles(mut self, triangles: Vec<[DVec3; 3]>) -> Self {
+        self.triangles = triangles;
+        self
     }
 
     /// Sets the colour channels (rho in [0, 1], E finite and non-negative).

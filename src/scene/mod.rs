@@ -5,14 +5,16 @@ mod builtin;
 mod city;
 mod face;
 mod file;
+mod merge;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use city::{city, lit_city};
 pub use face::{CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA};
 pub use file::{
-    Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, is_scene_file, load, load_with,
-    parse_toml,
+    Coplanar, Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, is_scene_file, load,
+    load_with, parse_toml,
 };
+pub use merge::{Merged, merge_coplanar};
 
 use glam::{DVec2, DVec3};
 use rstar::primitives::{GeomWithData, Rectangle};

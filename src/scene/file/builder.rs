@@ -6,9 +6,9 @@ use std::collections::{HashMap, HashSet};
 use glam::DVec3;
 
 use super::schema::{Channels, Properties};
-use super::{Duplicates, ImportOptions, NonPlanar, Side};
+use super::{Coplanar, Duplicates, ImportOptions, NonPlanar, Side};
 use crate::error::{Error, Result};
-use crate::scene::{Colour, Face, Scene};
+use crate::scene::{Colour, Face, Scene, merge_coplanar};
 
 impl ImportOptions {
     /// The rules for polygons read from OBJ/STL files: split and drop unless told otherwise.
@@ -16,6 +16,7 @@ impl ImportOptions {
         Rules {
             split: self.nonplanar.unwrap_or(NonPlanar::Split) == NonPlanar::Split,
             drop: self.duplicates.unwrap_or(Duplicates::Drop) == Duplicates::Drop,
+            merge: self.coplanar.unwrap_or(Coplanar::Merge) == Coplanar::Merge,
         }
     }
 
@@ -24,15 +25,18 @@ impl ImportOptions {
         Rules {
             split: self.nonplanar == Some(NonPlanar::Split),
             drop: self.duplicates == Some(Duplicates::Drop),
+            merge: false,
         }
     }
 }
 
-/// Whether non-planar polygons are split and exact duplicates dropped.
+/// Whether non-planar polygons are split, exact duplicates dropped and coplanar triangles
+/// merged.
 #[derive(Clone, Copy)]
 pub(super) struct Rules {
     split: bool,
     drop: bool,
+    merge: bool,
 }
 
 /// Collects a file's faces: unique names, non-planar polygons split, exact duplicates dropped,
@@ -40,6 +44,8 @@ pub(super) struct Rules {
 pub(super) struct Builder {
     rules: Rules,
     faces: Vec<Face>,
+    /// Per face, whether it may be merged with coplanar neighbours (a mesh's one-sided faces).
+    mergeable: Vec<bool>,
     names: HashSet<String>,
     /// Each face's vertices and properties (bit patterns, from its smallest vertex on): the
     /// first face with them.
@@ -55,6 +61,7 @@ impl Builder {
         Self {
             rules,
             faces: Vec::new(),
+            mergeable: Vec::new(),
             names: HashSet::new(),
             seen: HashMap::new(),
             split: Vec::new(),
@@ -127,6 +134,9 @@ impl Builder {
                     face.check_normal(n)?;
                 }
                 self.faces.push(face);
+                // The two sides of a plate would merge each their own way, into polygons
+                // that no longer cover each other.
+                self.mergeable.push(self.rules.merge && side != Side::Both);
             }
         }
         Ok(())
@@ -153,7 +163,16 @@ impl Builder {
                 self.dropped.len()
             ));
         }
-        let mut scene = Scene::new(name, self.faces)?;
+        let (faces, merged) = merge_coplanar(self.faces, &self.mergeable);
+        if merged.to < merged.from {
+            notes.push(format!(
+                "faces_merged: {} -> {}: coplanar triangles that share edges and properties \
+                 joined into planar faces for visibility, the triangles kept as elements; \
+                 --coplanar keep to keep them apart",
+                merged.from, merged.to
+            ));
+        }
+        let mut scene = Scene::new(name, faces)?;
         scene.notes = notes;
         Ok(scene)
     }

@@ -30,7 +30,9 @@
 //! plane that fits them best), and a face that repeats an earlier one exactly is dropped; both by
 //! default for OBJ/STL polygons and on request for TOML faces, and both counted in
 //! [`Scene::notes`]. OBJ faces are named by file and line (`box.obj:12 (g lid; usemtl glow)`),
-//! since an OBJ file's `g` may follow the faces it means to name.
+//! since an OBJ file's `g` may follow the faces it means to name. Coplanar triangles of a mesh
+//! that share edges and properties are joined into polygons for visibility, keeping the
+//! triangles as elements ([`crate::scene::merge_coplanar`]; `--coplanar keep` keeps them apart).
 
 mod builder;
 mod import;
@@ -82,14 +84,26 @@ pub enum Duplicates {
     Refuse,
 }
 
-/// How a scene file's imperfections are treated; `None`: split and drop for OBJ/STL polygons,
-/// refuse for TOML faces (whose coordinates the user typed).
+/// What to do with coplanar triangles of a mesh file that share edges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coplanar {
+    /// Join them into planar polygons for visibility, the triangles kept as the elements
+    /// ([`crate::scene::merge_coplanar`]).
+    Merge,
+    /// Keep every triangle a face of its own.
+    Keep,
+}
+
+/// How a scene file's imperfections are treated; `None`: split, drop and merge for OBJ/STL
+/// polygons, refuse for TOML faces (whose coordinates the user typed), which are never merged.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ImportOptions {
     /// Non-planar polygons.
     pub nonplanar: Option<NonPlanar>,
     /// Exact duplicates.
     pub duplicates: Option<Duplicates>,
+    /// Coplanar triangles of OBJ/STL meshes.
+    pub coplanar: Option<Coplanar>,
 }
 
 /// Whether `name` looks like a scene file (by extension) rather than a built-in scene.
