@@ -1,6 +1,8 @@
 //! The block tree: which pairs (node cluster, element cluster) hold nothing, which are smooth and
 //! far enough apart to be compressed, and which are leaves computed exactly.
 
+use std::cell::OnceCell;
+
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -37,7 +39,14 @@ impl<'a> FacePairs<'a> {
         Self { scene, planner }
     }
 
-    fn class(&self, a: usize, b: usize, nodes: &Cluster, elements: &Cluster) -> PairClass {
+    fn class(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: &Cluster,
+        elements: &Cluster,
+        between: &Between,
+    ) -> PairClass {
         if self.planner.same_plane(a, b) {
             return PairClass::Nothing;
         }
@@ -54,7 +63,8 @@ impl<'a> FacePairs<'a> {
         if elo < margin || nlo < margin {
             return PairClass::Mixed;
         }
-        match self.planner.shaft(a, b, nodes.bounds(), elements.bounds()) {
+        let candidates = Some(between.candidates(self.planner, nodes, elements));
+        match self.planner.shaft(a, b, nodes.bounds(), elements.bounds(), candidates) {
             Shaft::Clear => PairClass::Smooth,
             Shaft::Hidden => PairClass::Nothing,
             Shaft::Partial => PairClass::Mixed,
@@ -76,6 +86,33 @@ impl<'a> FacePairs<'a> {
         self.planner.same_plane(face, el.face)
             || vertices.iter().all(|&v| fa.normal.dot(v - p) <= 0.0)
             || el.frame.height(p) <= 0.0
+    }
+}
+
+/// The occluder pieces that may come between a block's two clusters, found when a shaft test
+/// first needs them: from the parent block's list where it has one (the block's segments are
+/// among the parent's), else from the whole scene. The block's list is its sub-blocks' parent
+/// list, so the walk narrows the occluders as it descends instead of searching the scene's
+/// index from its root for every block.
+struct Between<'a> {
+    parent: Option<&'a [usize]>,
+    found: OnceCell<Vec<usize>>,
+}
+
+impl<'a> Between<'a> {
+    fn new(parent: Option<&'a [usize]>) -> Self {
+        Self { parent, found: OnceCell::new() }
+    }
+
+    fn candidates(&self, planner: &PairPlanner, nodes: &Cluster, elements: &Cluster) -> &[usize] {
+        self.found.get_or_init(|| {
+            planner.shaft_candidates(nodes.bounds(), elements.bounds(), self.parent)
+        })
+    }
+
+    /// The list for the sub-blocks: this block's if found, else its parent's.
+    fn for_children(&self) -> Option<&[usize]> {
+        self.found.get().map(Vec::as_slice).or(self.parent)
     }
 }
 
@@ -115,7 +152,7 @@ impl BlockPlan {
         let mut plan = Self::default();
         if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
             let walk = Walk { nodes, elements, faces, options };
-            walk.visit(&mut plan, 0, 0);
+            walk.visit(&mut plan, 0, 0, None);
         }
         plan
     }
@@ -143,9 +180,11 @@ struct Walk<'a> {
 }
 
 impl Walk<'_> {
-    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize) {
+    /// Plans block (t, s), whose occluders are among `within` (any when `None`).
+    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize, within: Option<&[usize]>) {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
-        let class = classify(self.faces, tc, sc);
+        let between = Between::new(within);
+        let class = classify(self.faces, tc, sc, &between);
         if class == PairClass::Nothing {
             plan.empty += 1;
             return;
@@ -169,12 +208,13 @@ impl Walk<'_> {
         };
         // Large blocks' subtrees in parallel (each classification is a shaft test); the plans
         // are joined in order, so the plan is the same as a sequential walk's.
+        let within = between.for_children();
         if tc.len() * sc.len() >= PARALLEL_PAIRS {
             let parts: Vec<BlockPlan> = children
                 .par_iter()
                 .map(|&(a, b)| {
                     let mut part = BlockPlan::default();
-                    self.visit(&mut part, a, b);
+                    self.visit(&mut part, a, b, within);
                     part
                 })
                 .collect();
@@ -185,7 +225,7 @@ impl Walk<'_> {
             }
         } else {
             for (a, b) in children {
-                self.visit(plan, a, b);
+                self.visit(plan, a, b, within);
             }
         }
     }
@@ -196,7 +236,12 @@ const PARALLEL_PAIRS: usize = 1 << 16;
 
 /// The class of a block: nothing if every face pair gives nothing, smooth if every one is smooth
 /// or nothing, mixed otherwise (and whenever it spans too many face pairs to test).
-fn classify(faces: &FacePairs, nodes: &Cluster, elements: &Cluster) -> PairClass {
+fn classify(
+    faces: &FacePairs,
+    nodes: &Cluster,
+    elements: &Cluster,
+    between: &Between,
+) -> PairClass {
     if nodes.faces.len() * elements.faces.len() > MAX_FACE_PAIRS {
         return PairClass::Mixed;
     }
@@ -206,7 +251,7 @@ fn classify(faces: &FacePairs, nodes: &Cluster, elements: &Cluster) -> PairClass
     let mut class = PairClass::Nothing;
     for &a in &nodes.faces {
         for &b in &elements.faces {
-            match faces.class(a, b, nodes, elements) {
+            match faces.class(a, b, nodes, elements, between) {
                 PairClass::Mixed => return PairClass::Mixed,
                 PairClass::Smooth if !one_pair => return PairClass::Mixed,
                 PairClass::Smooth => class = PairClass::Smooth,

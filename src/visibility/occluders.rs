@@ -98,10 +98,19 @@ impl OccluderIndex {
         b: usize,
         volume: &'a ViewVolume,
     ) -> Box<dyn Iterator<Item = usize> + 'a> {
-        let keep = move |&k: &usize| {
+        Box::new(self.reaching(volume).filter(move |&k| {
             let o = &self.pieces[k];
-            !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(o)
-        };
+            !o.faces.contains(&a) && !o.faces.contains(&b)
+        }))
+    }
+
+    /// Occluders not wholly outside one of the volume's planes, in the tree's order or in index
+    /// order.
+    pub(super) fn reaching<'a>(
+        &'a self,
+        volume: &'a ViewVolume,
+    ) -> Box<dyn Iterator<Item = usize> + 'a> {
+        let keep = move |&k: &usize| volume.may_hold(&self.pieces[k]);
         match &self.tree {
             Some(tree) => {
                 Box::new(tree.locate_with_selection_function(volume).map(|g| g.data).filter(keep))

@@ -15,15 +15,27 @@ impl PairPlanner {
     /// between. The shaft is bounded by supporting planes of the two boxes (their faces, and
     /// planes along each axis through corresponding corners), so the test only errs towards
     /// [`Shaft::Partial`].
+    ///
+    /// With `candidates` (those of [`PairPlanner::shaft_candidates`] for these boxes or boxes
+    /// around them), only those are tried; every piece that can meet a segment is among them.
     pub fn shaft(
         &self,
         a: usize,
         b: usize,
         nodes: (DVec3, DVec3),
         elements: (DVec3, DVec3),
+        candidates: Option<&[usize]>,
     ) -> Shaft {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let mut found = self.occluders.inside(a, b, &volume).peekable();
+        let pieces = &self.occluders.pieces;
+        let mut found: Box<dyn Iterator<Item = usize>> = match candidates {
+            Some(list) => Box::new(list.iter().copied().filter(|&o| {
+                let piece = &pieces[o];
+                !piece.faces.contains(&a) && !piece.faces.contains(&b) && volume.may_hold(piece)
+            })),
+            None => self.occluders.inside(a, b, &volume),
+        };
+        let mut found = found.by_ref().peekable();
         if found.peek().is_none() {
             return Shaft::Clear;
         }
@@ -32,6 +44,27 @@ impl PairPlanner {
             Shaft::Hidden
         } else {
             Shaft::Partial
+        }
+    }
+
+    /// The occluder pieces, of `within` (all when `None`), that may meet a segment between the
+    /// boxes `nodes` and `elements`: those reaching into the boxes' shaft, without the faces'
+    /// planes and without the shrink of [`PairPlanner::shaft`], so a superset of what that finds
+    /// for any faces. Boxes inside these have their segments among these boxes' segments, so
+    /// the list of a block of the compressed operator serves as `within` for its sub-blocks,
+    /// which then never search the whole scene.
+    pub fn shaft_candidates(
+        &self,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+        within: Option<&[usize]>,
+    ) -> Vec<usize> {
+        let mut volume = ViewVolume::default();
+        push_shaft(&mut volume, nodes, elements, 0.0);
+        let pieces = &self.occluders.pieces;
+        match within {
+            Some(list) => list.iter().copied().filter(|&o| volume.may_hold(&pieces[o])).collect(),
+            None => self.occluders.reaching(&volume).collect(),
         }
     }
 
@@ -91,14 +124,7 @@ impl PairPlanner {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
         let tol = 1e-12 * fa.size.max(fb.size);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
-        let corners: Vec<DVec3> =
-            box_corners(nodes).into_iter().chain(box_corners(elements)).collect();
-        for n in shaft_normals(nodes, elements) {
-            let reach = corners.iter().map(|c| n.dot(*c)).fold(f64::NEG_INFINITY, f64::max);
-            // Inside: n·x <= reach, shrunk by the tolerance: a piece that only touches the shaft
-            // from outside (a plate level with the top of a wall) blocks no segment inside it.
-            volume.push(-n, reach, tol);
-        }
+        push_shaft(&mut volume, nodes, elements, tol);
         (volume, tol)
     }
 
@@ -131,11 +157,26 @@ fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
     })
 }
 
-/// Outward normals of supporting planes of the convex hull of two boxes: the six axes, and for
-/// each axis and each pair of corresponding corners the two normals perpendicular to the axis and
-/// to the segment joining those corners (the planes of Haines and Wallace's shaft).
+/// Adds the shaft between two boxes to `volume`, shrunk by `shrink` (a piece that only touches
+/// the shaft from outside, as a plate level with the top of a wall, blocks no segment inside
+/// it): the box around both, tested first by comparisons alone, and the planes of
+/// [`shaft_normals`] through their farthest corners.
+fn push_shaft(volume: &mut ViewVolume, a: (DVec3, DVec3), b: (DVec3, DVec3), shrink: f64) {
+    volume.push_box(a.0.min(b.0), a.1.max(b.1), shrink);
+    let corners: Vec<DVec3> = box_corners(a).into_iter().chain(box_corners(b)).collect();
+    for n in shaft_normals(a, b) {
+        let reach = corners.iter().map(|c| n.dot(*c)).fold(f64::NEG_INFINITY, f64::max);
+        // Inside: n·x <= reach.
+        volume.push(-n, reach, shrink);
+    }
+}
+
+/// Outward normals of the supporting planes of the convex hull of two boxes besides those of
+/// the box around both: for each axis and each pair of corresponding corners the two normals
+/// perpendicular to the axis and to the segment joining those corners (the planes of Haines and
+/// Wallace's shaft).
 fn shaft_normals(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> Vec<DVec3> {
-    let mut normals = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
+    let mut normals = Vec::with_capacity(24);
     let (ca, cb) = (box_corners(a), box_corners(b));
     for (axis, bit) in [(DVec3::X, 1), (DVec3::Y, 2), (DVec3::Z, 4)] {
         // Corners with the axis's bit clear: one per sign pattern of the other two axes.

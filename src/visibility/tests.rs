@@ -452,3 +452,36 @@ fn only_closed_or_capped_convex_groups_of_pieces_are_solids() {
         assert!(PairPlanner::new(&scene).occluders.solids.is_empty(), "{name}");
     }
 }
+
+#[test]
+fn a_shaft_tried_on_its_parent_s_candidates_finds_what_the_whole_scene_gives() {
+    // Boxes on pairs of the city's faces, inside boxes of the whole faces: the pieces that the
+    // outer shafts hand down give every inner shaft's answer.
+    let city = crate::scene::city(4, 4).unwrap();
+    let planner = PairPlanner::new(&city);
+    let mut rng = StdRng::seed_from_u64(5);
+    let mut point_on = |f: &Face| {
+        let (u, v): (f64, f64) = (rng.random(), rng.random());
+        let w = &f.vertices;
+        w[0] + (w[1] - w[0]) * u + (w[3] - w[0]) * v
+    };
+    let (mut tested, mut partial, mut hidden) = (0, 0, 0);
+    for a in 0..city.faces.len() {
+        for b in (0..city.faces.len()).filter(|b| (b * 7 + a * 3) % 29 == 0 && *b != a) {
+            let (fa, fb) = (&city.faces[a], &city.faces[b]);
+            let outer = planner.shaft_candidates(fa.bounding_box(), fb.bounding_box(), None);
+            let inner_box = |p: DVec3, q: DVec3| (p.min(q), p.max(q));
+            let nodes = inner_box(point_on(fa), point_on(fa));
+            let elements = inner_box(point_on(fb), point_on(fb));
+            let inner = planner.shaft_candidates(nodes, elements, Some(&outer));
+            assert!(inner.iter().all(|o| outer.contains(o)));
+            let whole = planner.shaft(a, b, nodes, elements, None);
+            assert_eq!(planner.shaft(a, b, nodes, elements, Some(&inner)), whole);
+            assert_eq!(planner.shaft(a, b, nodes, elements, Some(&outer)), whole);
+            tested += 1;
+            partial += usize::from(whole == Shaft::Partial);
+            hidden += usize::from(whole == Shaft::Hidden);
+        }
+    }
+    assert!(tested > 100 && partial > 10 && hidden > 10, "{tested} {partial} {hidden}");
+}
