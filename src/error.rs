@@ -213,7 +213,7 @@ pub enum Error {
     /// A dense matrix that cannot fit in memory.
     #[error(
         "a dense {dof} x {dof} matrix needs {needed_gib:.1} GiB but only {available_gib:.1} GiB may be used \
-         (the iterative solver also keeps the matrix); use a coarser mesh (fewer refinement levels: each \
+         (--memory-limit, or 80 % of the available memory; the iterative solver also keeps the matrix); use a coarser mesh (fewer refinement levels: each \
          level multiplies the memory by 16) or a machine with more memory"
     )]
     TooLarge {
@@ -226,8 +226,8 @@ pub enum Error {
     },
     /// A compressed operator that cannot fit in memory.
     #[error(
-        "the compressed operator of {dof} unknowns needs at least {needed_gib:.1} GiB but only \
-         {available_gib:.1} GiB may be used; raise --compression-tolerance, use a coarser mesh \
+        "the compressed operator of {dof} unknowns needs at least {needed_gib:.2} GiB but only \
+         {available_gib:.2} GiB may be used (--memory-limit, or 80 % of the available memory); raise --compression-tolerance, use a coarser mesh \
          (each refinement level multiplies the memory by about 5) or a machine with more memory"
     )]
     OperatorTooLarge {

@@ -544,3 +544,27 @@ fn bench_times_the_compressed_operator_against_the_dense_one() {
     }
     assert!(v["operator_bytes"].as_u64().is_some_and(|b| b > 0));
 }
+
+#[test]
+fn a_memory_limit_refuses_before_it_is_passed_and_lets_through_what_fits() {
+    // The louvre room at refine 3 (n = 3 584): its compressed operator takes about 40 MB, its
+    // dense matrix 0.1 GB.
+    let scene = "examples/louvre-room.toml";
+    let run = |operator: &str, limit: &str| {
+        let args = ["inspect", "--scene", scene, "--refine", "3", "--operator", operator];
+        radiosity(&[&args[..], &["--memory-limit", limit, "--json", "-"]].concat())
+    };
+    for operator in ["dense", "compressed"] {
+        let (ok, _, err) = run(operator, "40M");
+        assert!(!ok && err.contains("--memory-limit") && err.contains("3584"), "{err}");
+    }
+    let (ok, out, err) = run("compressed", "1G");
+    assert!(ok, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let peak = report["peak_rss_bytes"].as_f64().unwrap();
+    assert!(peak > 0.0 && peak < (1u64 << 30) as f64, "{peak}");
+    for (limit, needle) in [("12X", "K, M, G or T"), ("manyG", "no size"), ("0", "at least one")] {
+        let (ok, _, err) = run("compressed", limit);
+        assert!(!ok && err.contains(needle), "{limit}: {err}");
+    }
+}

@@ -3,45 +3,14 @@
 use faer::Mat;
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use super::memory::check_fits;
+use crate::error::Result;
 
 /// A dense dof × dof matrix K of (2.43), including the factor rho/π; the system is (I - K) u = E.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CollocationMatrix {
     dof: usize,
     data: Vec<f64>,
-}
-
-/// Fraction of the available memory one large allocation may take.
-const MEMORY_SHARE: f64 = 0.8;
-
-/// Bytes one large structure may take: [`MEMORY_SHARE`] of the available memory, if known.
-pub fn memory_allowance() -> Option<f64> {
-    available_memory().map(|avail| MEMORY_SHARE * avail as f64)
-}
-
-/// Memory the system reports as available, in bytes (`MemAvailable` of /proc/meminfo), if known.
-pub fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-/// [`Error::TooLarge`] (naming `dof` and both sizes) when `bytes` exceed [`MEMORY_SHARE`] of the
-/// available memory: checked before a large allocation, so that a size that cannot fit is
-/// refused with a message instead of ending in the out-of-memory killer.
-pub fn check_fits(bytes: f64, dof: usize) -> Result<()> {
-    if let Some(allowed) = memory_allowance() {
-        if bytes > allowed {
-            return Err(Error::TooLarge {
-                dof,
-                needed_gib: bytes / (1u64 << 30) as f64,
-                available_gib: allowed / (1u64 << 30) as f64,
-            });
-        }
-    }
-    Ok(())
 }
 
 impl CollocationMatrix {

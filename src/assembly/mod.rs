@@ -5,11 +5,15 @@
 //! once, and elements of unobstructed faces skip all visibility work.
 
 mod matrix;
+mod memory;
 mod options;
 mod pairs;
 mod problem;
 
-pub use matrix::{CollocationMatrix, available_memory, check_fits, memory_allowance};
+pub use matrix::CollocationMatrix;
+pub use memory::{
+    available_memory, check_fits, memory_allowance, memory_limit, resident_bytes, set_memory_limit,
+};
 pub use options::{AssemblyOptions, Quadrature};
 pub use pairs::{CpuPairs, PairEvaluation, PairTask};
 pub use problem::Problem;

@@ -234,6 +234,37 @@ pub(crate) struct OperatorArgs {
     /// Relative error of each low-rank block of the compressed operator, in (0, 1)
     #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
     pub(crate) compression_tolerance: f64,
+    /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
+    /// matrix or operator that would pass it is refused before it is built [default: 80 % of
+    /// the available memory for each large structure]
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    pub(crate) memory_limit: Option<u64>,
+}
+
+/// A size in bytes: digits, optionally with K, M, G or T (powers of 1024; `B` or `iB` may
+/// follow).
+fn parse_bytes(text: &str) -> std::result::Result<u64, String> {
+    let t = text.trim();
+    let t = t.strip_suffix("iB").or_else(|| t.strip_suffix('B')).unwrap_or(t);
+    let (digits, shift) = match t.char_indices().last() {
+        Some((k, c)) if c.is_ascii_alphabetic() => {
+            let shift = match c.to_ascii_uppercase() {
+                'K' => 10,
+                'M' => 20,
+                'G' => 30,
+                'T' => 40,
+                _ => return Err(format!("'{text}': the unit must be K, M, G or T")),
+            };
+            (&t[..k], shift)
+        }
+        _ => (t, 0),
+    };
+    let value: f64 = digits.trim().parse().map_err(|_| format!("'{text}' is no size in bytes"))?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("'{text}': the limit must be at least one byte"));
+    }
+    Ok(bytes as u64)
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -252,6 +283,7 @@ impl OperatorArgs {
             OperatorArg::Compressed => OperatorChoice::Compressed,
         };
         config.compression.tolerance = self.compression_tolerance;
+        radiosity::assembly::set_memory_limit(self.memory_limit);
         config.compression.validate()
     }
 }

@@ -28,7 +28,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, Problem, memory_allowance};
+use crate::assembly::{
+    AssemblyOptions, PairEvaluation, PairIntegrator, Problem, memory_allowance, resident_bytes,
+};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -317,6 +319,16 @@ impl CompressedOperator {
 
 impl Block {
     /// Bytes of its stored values.
+    /// Frees the entries of an exact block that holds only zeros (all its pairs hidden): it
+    /// is counted empty and left out, and need not wait for that in memory.
+    fn drop_if_zero(&mut self) {
+        if let BlockData::Dense(d) = &mut self.data {
+            if d.iter().all(|&v| v == 0.0) {
+                *d = Vec::new();
+            }
+        }
+    }
+
     fn bytes(&self) -> u64 {
         8 * match &self.data {
             BlockData::Dense(d) => d.len(),
@@ -326,35 +338,79 @@ impl Block {
 }
 
 /// The memory of the blocks built so far against what may be used ([`memory_allowance`] when
-/// the build starts): a build that outgrows it stops with [`Error::OperatorTooLarge`] instead
-/// of ending in the out-of-memory killer.
+/// the build starts: what `--memory-limit` leaves, or a share of the available memory): a build
+/// that outgrows it stops with [`Error::OperatorTooLarge`] instead of ending in the
+/// out-of-memory killer. Besides the blocks it counts, it looks at the process's resident
+/// memory as they grow, so that the build's transient buffers count too.
 struct MemoryGuard {
     dof: usize,
     allowance: Option<f64>,
     stored: AtomicU64,
+    /// Resident memory when the build started.
+    resident_at_start: Option<u64>,
+    /// The most the resident memory has grown above that, at the looks so far.
+    grown: AtomicU64,
+    /// Stored bytes at the last look.
+    looked_at: AtomicU64,
 }
+
+/// The guard looks at the resident memory each time the stored blocks grow by this much.
+const LOOK_EVERY: u64 = 16 << 20;
+
+/// Share of the allowance the counted memory may reach (the rest is left to what is not
+/// counted: the blocks in flight, the build's own buffers, the solver's vectors).
+const HEADROOM: f64 = 0.9;
 
 impl MemoryGuard {
     fn new(dof: usize) -> Self {
-        Self { dof, allowance: memory_allowance(), stored: AtomicU64::new(0) }
+        Self::with_allowance(dof, memory_allowance())
+    }
+
+    fn with_allowance(dof: usize, allowance: Option<f64>) -> Self {
+        Self {
+            dof,
+            allowance,
+            stored: AtomicU64::new(0),
+            resident_at_start: resident_bytes(),
+            grown: AtomicU64::new(0),
+            looked_at: AtomicU64::new(0),
+        }
     }
 
     /// Counts `bytes` stored.
     fn add(&self, bytes: u64) {
-        self.stored.fetch_add(bytes, Ordering::Relaxed);
+        let stored = self.stored.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        let last = self.looked_at.load(Ordering::Relaxed);
+        if stored >= last + LOOK_EVERY
+            && self
+                .looked_at
+                .compare_exchange(last, stored, Ordering::Relaxed, Ordering::Relaxed)
+                .is_ok()
+        {
+            if let (Some(start), Some(now)) = (self.resident_at_start, resident_bytes()) {
+                self.grown.fetch_max(now.saturating_sub(start), Ordering::Relaxed);
+            }
+        }
     }
 
-    /// Whether what is stored exceeds the allowance.
+    /// Memory the build has taken: the blocks stored, or the growth of the resident memory
+    /// where that was more.
+    fn used(&self) -> u64 {
+        self.stored.load(Ordering::Relaxed).max(self.grown.load(Ordering::Relaxed))
+    }
+
+    /// Whether what is used exceeds the allowance.
     fn is_over(&self) -> bool {
         self.over_by(0)
     }
 
+    /// Whether what is used, with `more`, comes within the headroom of the allowance: the
+    /// blocks other threads are building and the growth since the last look are not seen yet.
     fn over_by(&self, more: u64) -> bool {
-        let stored = self.stored.load(Ordering::Relaxed) + more;
-        self.allowance.is_some_and(|a| stored as f64 > a)
+        self.allowance.is_some_and(|a| (self.used() + more + LOOK_EVERY) as f64 > HEADROOM * a)
     }
 
-    /// The error when what is stored, with `more` bytes, exceeds the allowance.
+    /// The error when what is used, with `more` bytes, exceeds the allowance.
     fn check(&self, more: u64) -> Result<()> {
         if !self.over_by(more) {
             return Ok(());
@@ -362,7 +418,7 @@ impl MemoryGuard {
         let gib = |b: f64| b / (1u64 << 30) as f64;
         Err(Error::OperatorTooLarge {
             dof: self.dof,
-            needed_gib: gib((self.stored.load(Ordering::Relaxed) + more) as f64),
+            needed_gib: gib((self.used() + more) as f64),
             available_gib: gib(self.allowance.unwrap_or(0.0)),
         })
     }
@@ -429,7 +485,8 @@ fn build_block_by_block(
             .iter()
             .filter(|_| !guard.is_over())
             .map(|&(t, s, incompressible)| {
-                let (block, stats) = entries.exact_block(t, s, &mut views);
+                let (mut block, stats) = entries.exact_block(t, s, &mut views);
+                block.drop_if_zero();
                 guard.add(block.bytes());
                 (block, stats, incompressible)
             })

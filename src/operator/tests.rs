@@ -176,16 +176,14 @@ fn bad_tolerances_are_refused_with_the_limit() {
 
 #[test]
 fn an_operator_that_outgrows_the_memory_allowance_is_refused_with_the_limit_named() {
-    let guard =
-        MemoryGuard { dof: 491_520, allowance: Some(3.0 * (1u64 << 30) as f64), stored: 0.into() };
+    let guard = MemoryGuard::with_allowance(491_520, Some(3.0 * (1u64 << 30) as f64));
     assert!(guard.check(2 << 30).is_ok());
     guard.add(2 << 30);
     assert!(!guard.is_over());
     guard.add(2 << 30);
     assert!(guard.is_over());
     let message = guard.check(0).unwrap_err().to_string();
-    for needle in ["491520 unknowns", "at least 4.0 GiB", "only 3.0 GiB", "--compression-tolerance"]
-    {
+    for needle in ["491520 unknowns", "at least 4.00 GiB", "only 3.00 GiB", "--memory-limit"] {
         assert!(message.contains(needle), "'{needle}' not in: {message}");
     }
 }

@@ -1,0 +1,67 @@
+//! How much memory a large structure may take: a limit the user sets (`--memory-limit`), or a
+//! share of what the system has available; checked before large allocations and while a
+//! compressed operator grows, so that a problem too large for the machine is refused with a
+//! message instead of ending in the out-of-memory killer.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::{Error, Result};
+
+/// Fraction of the available memory one large allocation may take when no limit is set.
+const MEMORY_SHARE: f64 = 0.8;
+
+/// The process's limit in bytes (0: none set).
+static LIMIT: AtomicU64 = AtomicU64::new(0);
+
+/// Sets the most the whole process may hold resident, in bytes (`None`: [`MEMORY_SHARE`] of
+/// the available memory). A run that would pass it is refused before the allocation that
+/// would.
+pub fn set_memory_limit(bytes: Option<u64>) {
+    LIMIT.store(bytes.unwrap_or(0), Ordering::Relaxed);
+}
+
+/// The limit set by [`set_memory_limit`], if any.
+pub fn memory_limit() -> Option<u64> {
+    Some(LIMIT.load(Ordering::Relaxed)).filter(|&l| l > 0)
+}
+
+/// Bytes one large structure may still take: what the limit leaves above the memory the
+/// process holds now, or [`MEMORY_SHARE`] of the available memory; `None` when neither is
+/// known.
+pub fn memory_allowance() -> Option<f64> {
+    match memory_limit() {
+        Some(limit) => Some(limit.saturating_sub(resident_bytes().unwrap_or(0)) as f64),
+        None => available_memory().map(|avail| MEMORY_SHARE * avail as f64),
+    }
+}
+
+/// Memory the system reports as available, in bytes (`MemAvailable` of /proc/meminfo), if known.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Memory the process holds resident now, in bytes (`VmRSS` of /proc/self/status), if known.
+pub fn resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// [`Error::TooLarge`] (naming `dof` and both sizes) when `bytes` exceed
+/// [`memory_allowance`]: checked before a large allocation.
+pub fn check_fits(bytes: f64, dof: usize) -> Result<()> {
+    if let Some(allowed) = memory_allowance() {
+        if bytes > allowed {
+            return Err(Error::TooLarge {
+                dof,
+                needed_gib: bytes / (1u64 << 30) as f64,
+                available_gib: allowed / (1u64 << 30) as f64,
+            });
+        }
+    }
+    Ok(())
+}
