@@ -772,3 +772,36 @@ fn a_triangle_soup_merged_into_faces_gives_the_solution_of_its_triangles() {
     let lit = a.iter().map(|x| x.1).fold(0.0, f64::max);
     assert!(lit > 0.5 && worst <= 1e-13, "largest difference {worst:.2e}");
 }
+
+#[test]
+fn colour_bands_on_the_compressed_operator_agree_with_the_dense_bands() {
+    use radiosity::operator::OperatorChoice;
+    use radiosity::pipeline::{RunConfig, SceneSource};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let run = |operator, tolerance: f64| {
+        let mut config = RunConfig::paper(radiosity::scene::BuiltinScene::Cube, 3);
+        config.scene = SceneSource::parse(root.join(CORNELL_BOX).to_str().unwrap()).unwrap();
+        config.solution = None;
+        config.bands = vec![0, 1, 2];
+        config.operator = operator;
+        config.compression.tolerance = tolerance;
+        config.solver.tolerance = 1e-12;
+        radiosity::pipeline::run_keeping_mesh(&config).unwrap()
+    };
+    let dense = run(OperatorChoice::Dense, 1e-6);
+    for tolerance in [1e-6, 1e-9] {
+        let compressed = run(OperatorChoice::Compressed, tolerance);
+        assert_eq!(compressed.report.operator, "compressed");
+        for (c, d) in compressed.bands.iter().zip(&dense.bands) {
+            assert_eq!((c.channel, &c.emission), (d.channel, &d.emission));
+            let scale = d.u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let worst = c.u.iter().zip(&d.u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            // The red band differs from the grey rows most: scaling must reach every product.
+            assert!(
+                worst <= 10.0 * tolerance * scale,
+                "band {}: {worst:.2e} of {scale:.2e}",
+                c.channel
+            );
+        }
+    }
+}

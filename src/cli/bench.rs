@@ -42,7 +42,7 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     let gpu_named = backends.iter().any(|b| *b != Backend::Cpu);
     let compressed_bench = match config.operator {
         OperatorChoice::Compressed => true,
-        OperatorChoice::Auto => !gpu_named && pipeline::compresses(&config, built.disc.dof()),
+        OperatorChoice::Auto => !gpu_named && pipeline::compresses(&config, &built),
         OperatorChoice::Dense => false,
     };
     if compressed_bench {

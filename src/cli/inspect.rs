@@ -60,7 +60,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
     super::output::print_notes(scene);
     let started = std::time::Instant::now();
     let dof = disc.dof();
-    let (row_sums, p, blocks) = if pipeline::compresses(&config, dof) {
+    let (row_sums, p, blocks) = if pipeline::compresses(&config, &problem) {
         let assembler =
             pipeline::Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
         let op = pipeline::build_compressed(&config, &assembler, &problem)?;

@@ -45,7 +45,8 @@ use cluster::{ClusterTree, Item};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum OperatorChoice {
-    /// Dense up to [`AUTO_COMPRESSED_ABOVE`] unknowns, compressed beyond.
+    /// Dense up to [`AUTO_COMPRESSED_ABOVE`] unknowns; beyond, compressed unless the faces are
+    /// too small for its blocks ([`OperatorChoice::decide`]).
     #[default]
     Auto,
     /// The dense matrix: every entry stored (the reference).
@@ -54,20 +55,71 @@ pub enum OperatorChoice {
     Compressed,
 }
 
+/// What the automatic choice of operator looks at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProblemShape {
+    /// Unknowns.
+    pub dof: usize,
+    /// Elements of the mesh.
+    pub elements: usize,
+    /// Faces of the scene.
+    pub faces: usize,
+}
+
+impl ProblemShape {
+    /// The shape of `problem`.
+    pub fn of(problem: &Problem) -> Self {
+        Self {
+            dof: problem.disc.dof(),
+            elements: problem.mesh.len(),
+            faces: problem.scene.faces.len(),
+        }
+    }
+}
+
 impl OperatorChoice {
-    /// Whether a system of `dof` unknowns is compressed.
-    pub fn compresses(self, dof: usize) -> bool {
+    /// Whether a problem of this shape is compressed, and for [`OperatorChoice::Auto`] above
+    /// [`AUTO_COMPRESSED_ABOVE`] unknowns, what decided it. A cluster of the compressed
+    /// operator lies on one face, so faces of few elements (a city's walls at refine 0) make
+    /// its blocks single pairs, each classified by a shaft test: slower than the dense row
+    /// walk. Such a problem stays dense while its matrix fits in memory.
+    pub fn decide(self, shape: ProblemShape) -> (bool, Option<String>) {
         match self {
-            Self::Dense => false,
-            Self::Compressed => true,
-            Self::Auto => dof > AUTO_COMPRESSED_ABOVE,
+            Self::Dense => (false, None),
+            Self::Compressed => (true, None),
+            Self::Auto if shape.dof <= AUTO_COMPRESSED_ABOVE => (false, None),
+            Self::Auto => {
+                let per_face = shape.elements as f64 / shape.faces.max(1) as f64;
+                let dense_bytes = 8.0 * (shape.dof as f64).powi(2);
+                let fits = memory_allowance().is_none_or(|a| dense_bytes <= a);
+                let gib = dense_bytes / (1u64 << 30) as f64;
+                let (compressed, why) = if !fits {
+                    (true, format!("the dense matrix would need {gib:.1} GiB"))
+                } else if per_face < MIN_ELEMENTS_PER_FACE {
+                    let why = format!(
+                        "{per_face:.1} elements per face, fewer than {MIN_ELEMENTS_PER_FACE}: \
+                         the compressed operator's blocks would be a few pairs each; the dense \
+                         matrix needs {gib:.1} GiB"
+                    );
+                    (false, why)
+                } else {
+                    (true, format!("{} unknowns, {per_face:.0} elements per face", shape.dof))
+                };
+                let name = if compressed { "compressed" } else { "dense" };
+                (compressed, Some(format!("operator auto: {name} ({why})")))
+            }
         }
     }
 }
 
 /// Above this many unknowns [`OperatorChoice::Auto`] compresses (docs/performance.md: the
-/// compressed setup is faster than the dense one from about here on).
+/// compressed setup is faster than the dense one from about here on), where faces hold at
+/// least [`MIN_ELEMENTS_PER_FACE`] elements on average.
 pub const AUTO_COMPRESSED_ABOVE: usize = 12_000;
+
+/// Mean elements per face below which [`OperatorChoice::Auto`] keeps the dense matrix while it
+/// fits (docs/performance.md: the generated cities).
+pub const MIN_ELEMENTS_PER_FACE: f64 = 16.0;
 
 /// Default relative tolerance of the low-rank blocks.
 pub const DEFAULT_TOLERANCE: f64 = 1e-6;

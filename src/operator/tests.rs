@@ -187,3 +187,20 @@ fn an_operator_that_outgrows_the_memory_allowance_is_refused_with_the_limit_name
         assert!(message.contains(needle), "'{needle}' not in: {message}");
     }
 }
+
+#[test]
+fn the_automatic_choice_keeps_small_faces_dense_and_compresses_large_ones() {
+    let shape = |dof, elements, faces| ProblemShape { dof, elements, faces };
+    // Small systems are dense, without a note.
+    assert_eq!(OperatorChoice::Auto.decide(shape(9_616, 9_616, 1_200)), (false, None));
+    // A city at refine 0: two elements per face (its dense matrix, 1.2 GiB, fits).
+    let (compressed, why) = OperatorChoice::Auto.decide(shape(12_500, 12_500, 6_250));
+    let why = why.unwrap();
+    assert!(!compressed && why.contains("dense") && why.contains("2.0 elements per face"), "{why}");
+    // The paper's surface at refine 6: thousands per face.
+    let (compressed, why) = OperatorChoice::Auto.decide(shape(40_960, 40_960, 5));
+    assert!(compressed && why.unwrap().contains("compressed"));
+    // Asked for, either is built whatever the shape.
+    assert_eq!(OperatorChoice::Compressed.decide(shape(100, 100, 50)), (true, None));
+    assert_eq!(OperatorChoice::Dense.decide(shape(40_960, 40_960, 5)), (false, None));
+}

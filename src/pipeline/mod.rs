@@ -29,7 +29,7 @@ use crate::solution::BandValues;
 use crate::solve;
 use crate::surface_error::surface_errors;
 use crate::visibility::PairPlanner;
-use bands::{mean_outcome, solve_bands};
+use bands::{mean_outcome, solve_bands, solve_bands_compressed};
 use operator::{BuiltOperator, build_operator};
 use report::range;
 
@@ -250,25 +250,34 @@ fn solve_built(
     rhs: &[f64],
 ) -> Result<(solve::SolveOutcome, Vec<BandValues>, Vec<BandReport>)> {
     let (scene, disc) = (&problem.scene, &problem.disc);
-    Ok(match built {
-        BuiltOperator::Dense(timed) if !config.bands.is_empty() => {
-            let (mut values, mut reports, mut outcomes) = (Vec::new(), Vec::new(), Vec::new());
-            for (v, r, o) in
-                solve_bands(&timed.assembled.matrix, scene, disc, &config.bands, config.solver)?
-            {
-                values.push(v);
-                reports.push(r);
-                outcomes.push(o);
-            }
-            (mean_outcome(outcomes), values, reports)
+    let tolerance = config.compression.tolerance;
+    let per_band = match built {
+        _ if config.bands.is_empty() => None,
+        BuiltOperator::Dense(timed) => {
+            Some(solve_bands(&timed.assembled.matrix, scene, disc, &config.bands, config.solver)?)
         }
+        BuiltOperator::Compressed { op, .. } => {
+            let bands = &config.bands;
+            Some(solve_bands_compressed(op, scene, disc, bands, config.solver, tolerance)?)
+        }
+    };
+    if let Some(per_band) = per_band {
+        let (mut values, mut reports, mut outcomes) = (Vec::new(), Vec::new(), Vec::new());
+        for (v, r, o) in per_band {
+            values.push(v);
+            reports.push(r);
+            outcomes.push(o);
+        }
+        return Ok((mean_outcome(outcomes), values, reports));
+    }
+    Ok(match built {
         BuiltOperator::Dense(timed) => {
             (solve::solve(&timed.assembled.matrix, rhs, config.solver)?, Vec::new(), Vec::new())
         }
         BuiltOperator::Compressed { op, .. } => {
             let rho: Vec<f64> = disc.nodes.iter().map(|n| n.rho).collect();
-            let tolerance = config.compression.tolerance;
-            let outcome = solve::solve_compressed(op, rhs, &rho, config.solver, tolerance)?;
+            let rho = (rho.as_slice(), rho.as_slice());
+            let outcome = solve::solve_compressed(op, rhs, rho, config.solver, tolerance)?;
             (outcome, Vec::new(), Vec::new())
         }
     })

@@ -7,7 +7,7 @@ use super::{Assembler, Problem, REPEAT_BELOW_SECONDS, RunConfig};
 use crate::assembly::{Assembly, PairEvaluation};
 use crate::error::{Error, Result};
 use crate::gpu;
-use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats};
+use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats, ProblemShape};
 use crate::solve;
 use crate::visibility::PairStats;
 
@@ -96,20 +96,12 @@ impl BuiltOperator {
 
 /// The compressed operator of `config` for `problem`, its entries evaluated by `assembler` (the
 /// CPU, or the GPU's pair kernel in batches); refused where the configuration needs the dense
-/// matrix (LU, colour bands).
+/// matrix (LU).
 pub fn build_compressed(
     config: &RunConfig,
     assembler: &Assembler,
     problem: &Problem,
 ) -> Result<CompressedOperator> {
-    if !config.bands.is_empty() {
-        return Err(Error::InvalidParameter {
-            name: "bands",
-            value: format!("{} bands", config.bands.len()),
-            reason: "colour bands scale the rows of the dense matrix; choose the dense operator"
-                .into(),
-        });
-    }
     if config.solver.choice == solve::SolverChoice::Lu {
         return Err(Error::InvalidParameter {
             name: "solver",
@@ -140,7 +132,7 @@ pub fn build_compressed(
 /// the dense assembly's does).
 pub(super) fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
     let disc = &problem.disc;
-    if !compresses(config, disc.dof()) {
+    if !compresses(config, problem) {
         return Ok(BuiltOperator::Dense(assemble_timed(config, problem)?));
     }
     let started = Instant::now();
@@ -152,16 +144,16 @@ pub(super) fn build_operator(config: &RunConfig, problem: &Problem) -> Result<Bu
     Ok(BuiltOperator::Compressed { op, setup_seconds, preparation_seconds })
 }
 
-/// Whether `config` stores the compressed operator for `dof` unknowns: when asked for, or under
-/// [`OperatorChoice::Auto`] above its size unless LU or colour bands (which need the dense
-/// matrix) are asked for.
-pub fn compresses(config: &RunConfig, dof: usize) -> bool {
-    match config.operator {
-        OperatorChoice::Auto => {
-            config.operator.compresses(dof)
-                && config.solver.choice != solve::SolverChoice::Lu
-                && config.bands.is_empty()
-        }
-        choice => choice.compresses(dof),
+/// Whether `config` stores the compressed operator for `problem`: when asked for, or as
+/// [`OperatorChoice::decide`] says under [`OperatorChoice::Auto`] (its reason given as a note)
+/// unless LU (which needs the dense matrix) is asked for.
+pub fn compresses(config: &RunConfig, problem: &Problem) -> bool {
+    if config.operator == OperatorChoice::Auto && config.solver.choice == solve::SolverChoice::Lu {
+        return false;
     }
+    let (compressed, why) = config.operator.decide(ProblemShape::of(problem));
+    if let Some(why) = why {
+        config.progress.note(&why);
+    }
+    compressed
 }

@@ -8,9 +8,10 @@ use super::{
 use crate::error::Result;
 use crate::operator::CompressedOperator;
 
-/// `I - K` with K compressed.
+/// `I - diag(s) K` with K compressed (s = 1 but for a colour band's rows).
 struct CompressedSystem<'a> {
     k: &'a CompressedOperator,
+    row_scale: Option<Vec<f64>>,
 }
 
 impl KrylovSystem for CompressedSystem<'_> {
@@ -19,7 +20,10 @@ impl KrylovSystem for CompressedSystem<'_> {
     }
 
     fn apply(&self, x: &[f64]) -> Vec<f64> {
-        let kx = self.k.apply(x);
+        let mut kx = self.k.apply(x);
+        if let Some(scale) = &self.row_scale {
+            kx.iter_mut().zip(scale).for_each(|(v, s)| *v *= s);
+        }
         x.iter().zip(kx).map(|(a, b)| a - b).collect()
     }
 
@@ -30,21 +34,30 @@ impl KrylovSystem for CompressedSystem<'_> {
 }
 
 /// Solves `(I - K) u = rhs` by GMRES to `options.tolerance`, which must not be below what the
-/// compression keeps (the products are exact only to `compression_tolerance`). Nodes that
-/// reflect nothing get u = E exactly. A closed surface with rho = 1 everywhere is refused as
-/// singular, as by [`super::solve`].
+/// compression keeps (the products are exact only to `compression_tolerance`). `rho` is each
+/// node's reflectivity, that of the operator's rows or, for a colour band, the band's: the
+/// rows are then scaled by it over `operator_rho` (K holds rho/π per row; rho = 0 only where
+/// every band's is), as the dense path scales its matrix. Nodes that reflect nothing get u = E
+/// exactly. A closed surface with rho = 1 everywhere is refused as singular, as by
+/// [`super::solve`].
 pub fn solve_compressed(
     k: &CompressedOperator,
     rhs: &[f64],
-    rho: &[f64],
+    (rho, operator_rho): (&[f64], &[f64]),
     options: SolverOptions,
     compression_tolerance: f64,
 ) -> Result<SolveOutcome> {
     check_tolerance(options.tolerance)?;
-    let sys = CompressedSystem { k };
+    let row_scale = (rho != operator_rho).then(|| {
+        rho.iter().zip(operator_rho).map(|(&b, &g)| if g == 0.0 { 0.0 } else { b / g }).collect()
+    });
+    let sys = CompressedSystem { k, row_scale };
     if !rho.is_empty() && rho.iter().all(|&r| r == 1.0) {
         let ones = vec![1.0; k.dof()];
-        let sums = k.apply(&ones);
+        let mut sums = k.apply(&ones);
+        if let Some(scale) = &sys.row_scale {
+            sums.iter_mut().zip(scale).for_each(|(v, s)| *v *= s);
+        }
         reject_unit_row_sums(&sums, CLOSED_ROW_TOLERANCE.max(10.0 * compression_tolerance))?;
     }
     let g = gmres::gmres(&sys, rhs, options.tolerance)?;
