@@ -163,7 +163,9 @@ fn exact_blocks(
                 for (&a, v) in at.iter().zip(&values[offset..]) {
                     data[a..a + per].copy_from_slice(&v[..per]);
                 }
-                (entries.block(t, s, BlockData::Dense(data)), *stats, incompressible)
+                let mut block = entries.block(t, s, BlockData::Dense(data));
+                block.compact();
+                (block, *stats, incompressible)
             })
             .collect();
         progress.advance(done.len());

@@ -212,7 +212,50 @@ struct Block {
 enum BlockData {
     /// Row-major, rows × (elements · per).
     Dense(Vec<f64>),
+    /// An exact block most of whose pairs are hidden: its non-zero entries row by row.
+    Sparse(SparseRows),
     LowRank(LowRank),
+}
+
+/// The non-zero entries of a block, row by row: row r's are `values[starts[r]..starts[r + 1]]`
+/// in the columns `columns[..]` of the same range.
+#[derive(Clone, Debug)]
+struct SparseRows {
+    starts: Vec<u32>,
+    columns: Vec<u32>,
+    values: Vec<f64>,
+}
+
+impl SparseRows {
+    /// The non-zero entries of a row-major block of `width` columns.
+    fn from_dense(d: &[f64], width: usize) -> Self {
+        let mut rows = Self { starts: vec![0], columns: Vec::new(), values: Vec::new() };
+        for row in d.chunks_exact(width) {
+            for (c, &v) in row.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+                rows.columns.push(c as u32);
+                rows.values.push(v);
+            }
+            rows.starts.push(rows.values.len() as u32);
+        }
+        rows
+    }
+
+    /// `y += M x`.
+    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        for (r, yi) in y.iter_mut().enumerate() {
+            let range = self.starts[r] as usize..self.starts[r + 1] as usize;
+            let columns = &self.columns[range.clone()];
+            *yi += columns
+                .iter()
+                .zip(&self.values[range])
+                .map(|(&c, v)| v * x[c as usize])
+                .sum::<f64>();
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        (4 * (self.starts.len() + self.columns.len()) + 8 * self.values.len()) as u64
+    }
 }
 
 /// K as exact near blocks and low-rank far blocks.
@@ -327,6 +370,7 @@ impl CompressedOperator {
                                 *yi += aca::dot(row, xs);
                             }
                         }
+                        BlockData::Sparse(rows) => rows.apply_add(xs, ys),
                         BlockData::LowRank(lr) => lr.apply_add(xs, ys),
                     }
                     y
@@ -370,22 +414,29 @@ impl CompressedOperator {
 }
 
 impl Block {
-    /// Bytes of its stored values.
-    /// Frees the entries of an exact block that holds only zeros (all its pairs hidden): it
-    /// is counted empty and left out, and need not wait for that in memory.
-    fn drop_if_zero(&mut self) {
-        if let BlockData::Dense(d) = &mut self.data {
-            if d.iter().all(|&v| v == 0.0) {
-                *d = Vec::new();
+    /// Stores an exact block by what it holds, as soon as it is built: nothing where every pair
+    /// is hidden (it is then counted empty and left out), its non-zero entries alone where they
+    /// are fewer than half (hidden pairs in a block seen through slats or between buildings),
+    /// so that memory follows the pairs that are seen.
+    fn compact(&mut self) {
+        if let BlockData::Dense(d) = &self.data {
+            let non_zero = d.iter().filter(|&&v| v != 0.0).count();
+            if non_zero == 0 {
+                self.data = BlockData::Dense(Vec::new());
+            } else if 2 * non_zero < d.len() && self.rows.len() < u32::MAX as usize {
+                let width = d.len() / self.rows.len();
+                self.data = BlockData::Sparse(SparseRows::from_dense(d, width));
             }
         }
     }
 
+    /// Bytes of its stored values (and of the column indices of a sparse block).
     fn bytes(&self) -> u64 {
-        8 * match &self.data {
-            BlockData::Dense(d) => d.len(),
-            BlockData::LowRank(lr) => lr.len(),
-        } as u64
+        match &self.data {
+            BlockData::Dense(d) => 8 * d.len() as u64,
+            BlockData::Sparse(rows) => rows.bytes(),
+            BlockData::LowRank(lr) => 8 * lr.len() as u64,
+        }
     }
 }
 
@@ -538,7 +589,7 @@ fn build_block_by_block(
             .filter(|_| !guard.is_over())
             .map(|&(t, s, incompressible)| {
                 let (mut block, stats) = entries.exact_block(t, s, &mut views);
-                block.drop_if_zero();
+                block.compact();
                 guard.add(block.bytes());
                 (block, stats, incompressible)
             })
@@ -550,7 +601,8 @@ fn build_block_by_block(
         let r = match entries.compressed_block(t, s, faces, tolerance) {
             Some(block) => (block, PairStats::default(), false),
             None => {
-                let (block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
+                let (mut block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
+                block.compact();
                 (block, stats, true)
             }
         };
@@ -582,6 +634,11 @@ fn kept_blocks(built: Vec<BuiltBlock>, empty: usize) -> (Vec<Block>, OperatorSta
                 stats.near_blocks += 1;
                 stats.near_entries += d.len() as u64;
                 stats.operator_bytes += 8 * d.len() as u64 + index_bytes;
+            }
+            BlockData::Sparse(rows) => {
+                stats.near_blocks += 1;
+                stats.near_entries += rows.values.len() as u64;
+                stats.operator_bytes += rows.bytes() + index_bytes;
             }
             BlockData::LowRank(lr) => {
                 stats.far_blocks += 1;

@@ -204,3 +204,33 @@ fn the_automatic_choice_keeps_small_faces_dense_and_compresses_large_ones() {
     assert_eq!(OperatorChoice::Compressed.decide(shape(100, 100, 50)), (true, None));
     assert_eq!(OperatorChoice::Dense.decide(shape(40_960, 40_960, 5)), (false, None));
 }
+
+#[test]
+fn exact_blocks_are_stored_by_what_they_hold() {
+    let block = |data: Vec<f64>| Block { rows: 0..3, cols: 0..4, data: BlockData::Dense(data) };
+    let x = [1.0, -2.0, 0.5, 3.0];
+    // Mostly hidden: sparse rows, with the dense block's product.
+    let entries = vec![0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, -1.0];
+    let mut sparse = block(entries.clone());
+    sparse.compact();
+    let BlockData::Sparse(rows) = &sparse.data else { panic!("{:?}", sparse.data) };
+    assert_eq!(
+        (rows.starts.as_slice(), rows.columns.as_slice()),
+        (&[0, 1, 1, 3][..], &[1, 0, 3][..])
+    );
+    assert!(sparse.bytes() < 8 * entries.len() as u64);
+    let mut y = vec![10.0; 3];
+    rows.apply_add(&x, &mut y);
+    let dense: Vec<f64> = entries
+        .chunks(4)
+        .map(|r| 10.0 + r.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>())
+        .collect();
+    assert_eq!(y, dense);
+    // Mostly seen: dense; all hidden: nothing stored.
+    let mut seen = block((1..=12).map(f64::from).collect());
+    seen.compact();
+    assert!(matches!(&seen.data, BlockData::Dense(d) if d.len() == 12));
+    let mut hidden = block(vec![0.0; 12]);
+    hidden.compact();
+    assert!(matches!(&hidden.data, BlockData::Dense(d) if d.is_empty()) && hidden.bytes() == 0);
+}
