@@ -37,18 +37,19 @@ pub fn memory_allowance() -> Option<f64> {
 
 /// Memory the system reports as available, in bytes (`MemAvailable` of /proc/meminfo), if known.
 pub fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    kib_field("/proc/meminfo", "MemAvailable:").map(|kib| kib * 1024)
 }
 
 /// Memory the process holds resident now, in bytes (`VmRSS` of /proc/self/status), if known.
 pub fn resident_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    kib_field("/proc/self/status", "VmRSS:").map(|kib| kib * 1024)
+}
+
+/// The number after `key` on its line of the /proc file `path` (a size in KiB there).
+fn kib_field(path: &str, key: &str) -> Option<u64> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let line = text.lines().find(|l| l.starts_with(key))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 /// [`Error::TooLarge`] (naming `dof` and both sizes) when `bytes` exceed

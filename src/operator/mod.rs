@@ -419,11 +419,12 @@ impl Block {
     /// are fewer than half (hidden pairs in a block seen through slats or between buildings),
     /// so that memory follows the pairs that are seen.
     fn compact(&mut self) {
+        // Columns and entry counts are stored as u32: a block beyond that stays dense.
         if let BlockData::Dense(d) = &self.data {
             let non_zero = d.iter().filter(|&&v| v != 0.0).count();
             if non_zero == 0 {
                 self.data = BlockData::Dense(Vec::new());
-            } else if 2 * non_zero < d.len() && self.rows.len() < u32::MAX as usize {
+            } else if 2 * non_zero < d.len() && d.len() <= u32::MAX as usize {
                 let width = d.len() / self.rows.len();
                 self.data = BlockData::Sparse(SparseRows::from_dense(d, width));
             }
@@ -626,8 +627,9 @@ fn kept_blocks(built: Vec<BuiltBlock>, empty: usize) -> (Vec<Block>, OperatorSta
         stats.incompressible_blocks += u64::from(incompressible);
         let index_bytes = std::mem::size_of::<Block>() as u64;
         match &block.data {
+            // Every exact block was compacted when built: one of zeros holds nothing.
             BlockData::Dense(d) => {
-                if d.iter().all(|&v| v == 0.0) {
+                if d.is_empty() {
                     stats.empty_blocks += 1;
                     continue;
                 }

@@ -14,7 +14,7 @@
 //! only, waits until a neighbour fills the gap, or starts another region. A region stops
 //! growing at [`MAX_OUTLINE`] outline vertices, so that a view of a face stays cheap.
 
-use std::collections::{HashMap, HashSet, VecDeque};
+use std::collections::{HashMap, VecDeque};
 
 use glam::DVec3;
 
@@ -98,8 +98,8 @@ struct Region {
     members: Vec<usize>,
     next: HashMap<Key, Key>,
     prev: HashMap<Key, Key>,
+    /// Every vertex it has, inside or on the outline.
     position: HashMap<Key, DVec3>,
-    inner_or_outline: HashSet<Key>,
     lo: DVec3,
     hi: DVec3,
 }
@@ -119,7 +119,6 @@ impl Region {
             next: HashMap::new(),
             prev: HashMap::new(),
             position: HashMap::new(),
-            inner_or_outline: HashSet::new(),
             lo: v[0].min(v[1]).min(v[2]),
             hi: v[0].max(v[1]).max(v[2]),
         };
@@ -128,7 +127,6 @@ impl Region {
             region.next.insert(a, b);
             region.prev.insert(b, a);
             region.position.insert(a, v[l]);
-            region.inner_or_outline.insert(a);
         }
         taken[seed] = true;
         let fits = |k: usize, region: &Region| -> bool {
@@ -180,12 +178,11 @@ impl Region {
             return false;
         };
         let (b, a, c) = (keys[l], keys[(l + 1) % 3], keys[(l + 2) % 3]);
-        if !self.inner_or_outline.contains(&c) {
+        if !self.position.contains_key(&c) {
             // A new vertex between a and b.
             self.link(a, c);
             self.link(c, b);
             self.position.insert(c, v[(l + 2) % 3]);
-            self.inner_or_outline.insert(c);
         } else if self.prev.get(&a) == Some(&c) && self.next.len() > 3 {
             // It fills the notch c -> a -> b: a goes inside.
             self.unlink(a);

@@ -211,7 +211,7 @@ impl PairPlanner {
         let tol = 1e-12 * fa.size.max(fb.size);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
         volume.push_box(fa.lo.min(fb.lo), fa.hi.max(fb.hi), tol);
-        let mut found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
+        let mut found: Vec<usize> = self.occluders.inside(a, b, &volume, None).collect();
         found.sort_unstable();
         found
     }
@@ -296,7 +296,7 @@ impl PairPlanner {
             Some((_, list)) => {
                 Box::new(list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])))
             }
-            None => self.occluders.inside(own_face, face, &volume),
+            None => self.occluders.inside(own_face, face, &volume, None),
         };
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };

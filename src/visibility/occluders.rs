@@ -90,32 +90,36 @@ impl OccluderIndex {
     }
 
     /// Occluders that may block a segment between faces `a` and `b` that lies in `volume`: not
-    /// part of `a` or `b`, and not wholly outside one of the volume's planes; found lazily, in
-    /// the tree's order or in index order.
+    /// part of `a` or `b`, and not wholly outside one of the volume's planes; found lazily
+    /// among `within` (a list known to hold all that can reach the volume), else in the tree's
+    /// order or in index order.
     pub(super) fn inside<'a>(
         &'a self,
         a: usize,
         b: usize,
         volume: &'a ViewVolume,
+        within: Option<&'a [usize]>,
     ) -> Box<dyn Iterator<Item = usize> + 'a> {
-        Box::new(self.reaching(volume).filter(move |&k| {
+        Box::new(self.reaching(volume, within).filter(move |&k| {
             let o = &self.pieces[k];
             !o.faces.contains(&a) && !o.faces.contains(&b)
         }))
     }
 
-    /// Occluders not wholly outside one of the volume's planes, in the tree's order or in index
-    /// order.
+    /// Occluders not wholly outside one of the volume's planes, among `within` in its order,
+    /// else in the tree's order or in index order.
     pub(super) fn reaching<'a>(
         &'a self,
         volume: &'a ViewVolume,
+        within: Option<&'a [usize]>,
     ) -> Box<dyn Iterator<Item = usize> + 'a> {
         let keep = move |&k: &usize| volume.may_hold(&self.pieces[k]);
-        match &self.tree {
-            Some(tree) => {
+        match (within, &self.tree) {
+            (Some(list), _) => Box::new(list.iter().copied().filter(keep)),
+            (None, Some(tree)) => {
                 Box::new(tree.locate_with_selection_function(volume).map(|g| g.data).filter(keep))
             }
-            None => Box::new((0..self.pieces.len()).filter(keep)),
+            (None, None) => Box::new((0..self.pieces.len()).filter(keep)),
         }
     }
 }

@@ -27,15 +27,7 @@ impl PairPlanner {
         candidates: Option<&[usize]>,
     ) -> Shaft {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let pieces = &self.occluders.pieces;
-        let mut found: Box<dyn Iterator<Item = usize>> = match candidates {
-            Some(list) => Box::new(list.iter().copied().filter(|&o| {
-                let piece = &pieces[o];
-                !piece.faces.contains(&a) && !piece.faces.contains(&b) && volume.may_hold(piece)
-            })),
-            None => self.occluders.inside(a, b, &volume),
-        };
-        let mut found = found.by_ref().peekable();
+        let mut found = self.occluders.inside(a, b, &volume, candidates).peekable();
         if found.peek().is_none() {
             return Shaft::Clear;
         }
@@ -61,11 +53,7 @@ impl PairPlanner {
     ) -> Vec<usize> {
         let mut volume = ViewVolume::default();
         push_shaft(&mut volume, nodes, elements, 0.0);
-        let pieces = &self.occluders.pieces;
-        match within {
-            Some(list) => list.iter().copied().filter(|&o| volume.may_hold(&pieces[o])).collect(),
-            None => self.occluders.reaching(&volume).collect(),
-        }
+        self.occluders.reaching(&volume, within).collect()
     }
 
     /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether one
@@ -78,7 +66,7 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
     ) -> (Vec<usize>, bool) {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
+        let found: Vec<usize> = self.occluders.inside(a, b, &volume, None).collect();
         let (from, to) = (box_corners(nodes), box_corners(elements));
         let hidden = found.iter().any(|&o| self.hides_shaft(o, &from, &to, tol));
         (found, hidden)
