@@ -276,6 +276,15 @@ pub enum Error {
         /// What is wrong, with the line where known.
         reason: String,
     },
+    /// A data file (emission cases, a saved operator) that cannot be read or does not fit the
+    /// run it is given to.
+    #[error("{path}: {reason}")]
+    DataFile {
+        /// The file.
+        path: String,
+        /// What is wrong, with the line where known.
+        reason: String,
+    },
     /// Reading or writing a file failed.
     #[error(transparent)]
     Io(#[from] std::io::Error),

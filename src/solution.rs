@@ -16,6 +16,17 @@ pub struct BandValues {
     pub emission: Vec<f64>,
 }
 
+/// An emission case's solution at the nodes, for the outputs.
+#[derive(Clone, Debug)]
+pub struct CaseValues {
+    /// The case's name.
+    pub name: String,
+    /// u at the nodes.
+    pub u: Vec<f64>,
+    /// E at the nodes.
+    pub emission: Vec<f64>,
+}
+
 /// The collocation solution u_n with the emissivity E at the nodes.
 #[derive(Clone, Copy, Debug)]
 pub struct SolutionField<'a> {
@@ -31,6 +42,8 @@ pub struct SolutionField<'a> {
     pub emission: &'a [f64],
     /// The colour bands' solutions, when solved per band (`u` is then their mean).
     pub bands: &'a [BandValues],
+    /// The emission cases' solutions, when cases were solved (`u` is then their mean).
+    pub cases: &'a [CaseValues],
 }
 
 impl SolutionField<'_> {

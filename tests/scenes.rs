@@ -805,3 +805,98 @@ fn colour_bands_on_the_compressed_operator_agree_with_the_dense_bands() {
         }
     }
 }
+
+/// Reads a CSV file of the binary's into its header and columns of numbers (by header name).
+fn csv_columns(path: &std::path::Path) -> std::collections::HashMap<String, Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let mut columns: std::collections::HashMap<String, Vec<f64>> = Default::default();
+    for line in lines {
+        for (name, field) in header.iter().zip(line.split(',')) {
+            if let Ok(v) = field.parse() {
+                columns.entry(name.clone()).or_default().push(v);
+            }
+        }
+    }
+    columns
+}
+
+#[test]
+fn emission_cases_on_one_operator_are_each_case_s_own_solve() {
+    let room = "examples/furnished-room.toml";
+    let scene = radiosity::scene::load(std::path::Path::new(room)).unwrap();
+    let lamp: Vec<f64> = scene.faces.iter().map(|f| f.emission).collect();
+    let floor: Vec<f64> = scene.faces.iter().map(|f| f64::from(f.name == "floor")).collect();
+    let dir = temp_dir("cases");
+    let file = dir.join("e.csv");
+    let mut text = String::from("lamp,floor,both\n");
+    for (l, f) in lamp.iter().zip(&floor) {
+        text += &format!("{l},{f},{}\n", 2.0 * l + f);
+    }
+    std::fs::write(&file, text).unwrap();
+
+    for (operator, solver, tolerance) in
+        [("dense", "auto", 1e-13), ("compressed", "iterative", 1e-8)]
+    {
+        let csv = dir.join(format!("{operator}.csv"));
+        let args = |extra: &[&str]| {
+            let mut args = vec!["solve", "--scene", room, "--refine", "2", "--json", "-"];
+            args.extend(["--operator", operator, "--solver", solver]);
+            args.extend(extra);
+            args.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+        };
+        let with_cases = args(&["--emission-file", file.to_str().unwrap()]);
+        let with_cases: Vec<&str> =
+            with_cases.iter().map(String::as_str).chain(["--csv", csv.to_str().unwrap()]).collect();
+        let report = json(&with_cases);
+        let cases = report["cases"].as_array().unwrap();
+        let names: Vec<&str> = cases.iter().map(|c| c["case"].as_str().unwrap()).collect();
+        assert_eq!(names, ["lamp", "floor", "both"]);
+        let plain = args(&[]);
+        let plain = json(&plain.iter().map(String::as_str).collect::<Vec<_>>());
+        // Bit for bit on the dense matrix; the compressed products' sums are not ordered.
+        let range = |r: &Value| -> Vec<f64> {
+            r["solution_range"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
+        };
+        let (a, b) = (range(&cases[0]), range(&plain));
+        let exact = if operator == "dense" { 0.0 } else { 1e-12 };
+        assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= exact * y.abs()), "{a:?} {b:?}");
+
+        // The scene's own emission gives the plain solve; the cases are linear in E.
+        let columns = csv_columns(&csv);
+        let (u_lamp, u_floor, u_both) =
+            (&columns["u_lamp"], &columns["u_floor"], &columns["u_both"]);
+        let scale = u_both.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for i in 0..u_lamp.len() {
+            let combined = 2.0 * u_lamp[i] + u_floor[i];
+            assert!((u_both[i] - combined).abs() <= tolerance * scale, "{operator}, node {i}");
+            assert_eq!(columns["E_floor"][i], columns["E_both"][i] - 2.0 * columns["E_lamp"][i]);
+        }
+        let mean: Vec<f64> =
+            (0..u_lamp.len()).map(|i| (u_lamp[i] + u_floor[i] + u_both[i]) / 3.0).collect();
+        let worst = mean.iter().zip(&columns["u"]).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst <= 1e-14 * scale, "{operator}: u is the cases' mean ({worst:.1e})");
+    }
+}
+
+#[test]
+fn emission_files_that_do_not_fit_the_run_are_refused() {
+    let dir = temp_dir("bad-cases");
+    let file = dir.join("e.csv");
+    std::fs::write(&file, "1\n2\n3\n").unwrap();
+    let file = file.to_str().unwrap();
+    let base = ["solve", "--scene", "examples/furnished-room.toml", "--refine", "0"];
+    for (extra, says) in [
+        (
+            vec!["--emission-file", file],
+            "give one row per face (36 faces in 'furnished-room') or one per node (72 nodes)",
+        ),
+        (vec!["--emission-file", file, "--bands", "rgb"], "emission cases give E themselves"),
+        (vec!["--emission-file", "/nonexistent.csv"], "/nonexistent.csv"),
+    ] {
+        let args: Vec<&str> = base.iter().copied().chain(extra).collect();
+        let (ok, _, stderr) = radiosity(&args);
+        assert!(!ok && stderr.contains(says), "{args:?}: {stderr}");
+    }
+}

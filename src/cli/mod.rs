@@ -20,7 +20,7 @@ use radiosity::gpu::Precision;
 use radiosity::mesh::{LineExtent, S5Diagonals};
 use radiosity::operator::{CompressionOptions, OperatorChoice};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
-use radiosity::problems::{EmissionOptions, TrueSolution};
+use radiosity::problems::{EmissionCases, EmissionOptions, TrueSolution};
 use radiosity::report::Tone;
 use radiosity::scene::{
     CHANNELS, Coplanar, Duplicates, ImportOptions, NonPlanar, SurfaceParameters,
@@ -311,6 +311,11 @@ pub(crate) struct SolveArgs {
     /// Relative residual ||E - (I - K) u||_2 / ||E||_2 at which the iterative solver stops
     #[arg(long, default_value_t = radiosity::solve::DEFAULT_TOLERANCE)]
     pub(crate) tolerance: f64,
+    /// Solve one emission case per column of this CSV file on the one operator (one row per
+    /// face, in the scene's order, or one per node; a header row may name the cases); outputs
+    /// get u and E per case
+    #[arg(long, value_name = "E.csv")]
+    pub(crate) emission_file: Option<String>,
     /// Also report the largest errors over all of S, of u_n and of the iterated solution E + K u_n,
     /// at the interior points of a barycentric lattice of spacing 1/M in every element
     #[arg(long, value_name = "M")]
@@ -499,6 +504,7 @@ impl GeometryArgs {
             operator: OperatorChoice::Dense,
             compression: CompressionOptions::default(),
             bands: Vec::new(),
+            cases: None,
         })
     }
 }
@@ -542,6 +548,13 @@ impl SolveArgs {
             tolerance: self.tolerance,
         };
         config.bands = self.colour.channels()?;
+        if let Some(path) = &self.emission_file {
+            config.cases = Some(EmissionCases::read_csv(std::path::Path::new(path))?);
+            // The cases give E: no true solution unless one is asked for (and then refused).
+            if self.solution.is_none() {
+                config.solution = None;
+            }
+        }
         Ok(config)
     }
 }

@@ -81,7 +81,11 @@ pub(crate) fn print_run(r: &RunReport) {
             s.points, s.interpolant, s.iterated
         );
     }
-    let of = if r.bands.is_empty() { "" } else { " (mean of the bands)" };
+    let of = match (r.bands.is_empty(), r.cases.is_empty()) {
+        (false, _) => " (mean of the bands)",
+        (_, false) => " (mean of the cases)",
+        _ => "",
+    };
     println!(
         "solution at the nodes{of}: min {:.6}, mean {:.6}, max {:.6}",
         r.solution_range[0], r.solution_range[1], r.solution_range[2]
@@ -92,6 +96,14 @@ pub(crate) fn print_run(r: &RunReport) {
             "band {}: min {lo:.6}, mean {mean:.6}, max {hi:.6}; solve {:.3} s ({}, {} iterations, \
              relative residual {:.1e})",
             b.band, b.solve_seconds, b.solver, b.iterations, b.residual
+        );
+    }
+    for c in &r.cases {
+        let [lo, mean, hi] = c.solution_range;
+        println!(
+            "case {}: min {lo:.6}, mean {mean:.6}, max {hi:.6} ({}, {} iterations, relative \
+             residual {:.1e})",
+            c.case, c.solver, c.iterations, c.residual
         );
     }
     let mut iterations = match r.condition_estimate {

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Precision;
 use crate::mesh::{LineExtent, S5Diagonals};
 use crate::operator::{CompressionOptions, OperatorChoice};
-use crate::problems::{EmissionOptions, TrueSolution};
+use crate::problems::{EmissionCases, EmissionOptions, TrueSolution};
 use crate::progress::ProgressSink;
 use crate::scene::{BuiltinScene, ImportOptions, Scene, SurfaceParameters};
 use crate::solve::SolverOptions;
@@ -190,6 +190,9 @@ pub struct RunConfig {
     /// Colour channels (indices into [`CHANNELS`]) to solve for, each with its own rho and E on
     /// the one assembled operator; empty: the grey problem (the channels' means).
     pub bands: Vec<usize>,
+    /// Emission cases solved on the one operator instead of the scene's emission (then the
+    /// solution must be `None` and the bands grey).
+    pub cases: Option<EmissionCases>,
 }
 
 /// Assemblies slower than this are not repeated for timing.
@@ -217,6 +220,7 @@ impl RunConfig {
             operator: OperatorChoice::Dense,
             compression: CompressionOptions::default(),
             bands: Vec::new(),
+            cases: None,
         }
     }
 }

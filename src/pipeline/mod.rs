@@ -7,6 +7,7 @@
 
 mod backend;
 mod bands;
+mod cases;
 mod config;
 mod operator;
 mod report;
@@ -14,8 +15,8 @@ mod report;
 pub use crate::assembly::Problem;
 pub use backend::{Assembler, assemble_on};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
-pub use operator::{build_compressed, compresses};
-pub use report::{BandReport, RunLabel, RunReport, peak_rss_bytes};
+pub use operator::{BuiltOperator, TimedAssembly, build_compressed, build_operator, compresses};
+pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
 
 use std::time::Instant;
 
@@ -25,12 +26,12 @@ use crate::mesh::{Grading, Mesh, MeshKind, Sources, paper_discontinuity_cuts, sh
 use crate::problems::emission_at;
 use crate::progress::in_stage;
 use crate::scene::{CHANNELS, Scene};
-use crate::solution::BandValues;
+use crate::solution::{BandValues, CaseValues};
 use crate::solve;
 use crate::surface_error::surface_errors;
 use crate::visibility::PairPlanner;
 use bands::{mean_outcome, solve_bands, solve_bands_compressed};
-use operator::{BuiltOperator, build_operator};
+use cases::solve_cases;
 use report::range;
 
 /// Relative error estimate of E above which `solve` warns: 1e3 times the quadrature's relative
@@ -60,8 +61,13 @@ fn mesh_of(config: &RunConfig, scene: &Scene, planner: &PairPlanner) -> Result<M
 
 /// The problem of `config`: its scene, the pair planner, the mesh and the discretization on it.
 pub fn build(config: &RunConfig) -> Result<Problem> {
+    let scene = in_stage(&*config.progress, "scene", || config.scene.build(config.params))?;
+    build_on(config, scene)
+}
+
+/// The problem of `config` on a scene built already (`config.scene` is not read).
+pub fn build_on(config: &RunConfig, scene: Scene) -> Result<Problem> {
     let progress = &*config.progress;
-    let scene = in_stage(progress, "scene", || config.scene.build(config.params))?;
     let (planner, plan_seconds) = in_stage(progress, "occluders", || Problem::plan(&scene));
     let (mesh, disc) = in_stage(progress, "mesh", || {
         let mesh = mesh_of(config, &scene, &planner)?;
@@ -86,6 +92,8 @@ pub struct Run {
     pub emission: Vec<f64>,
     /// The colour bands' solutions (empty for a grey run).
     pub bands: Vec<BandValues>,
+    /// The emission cases' solutions (empty unless cases were given).
+    pub cases: Vec<CaseValues>,
 }
 
 impl Run {
@@ -98,6 +106,7 @@ impl Run {
             u: &self.report.u,
             emission: &self.emission,
             bands: &self.bands,
+            cases: &self.cases,
         }
     }
 }
@@ -130,17 +139,26 @@ pub fn run(config: &RunConfig) -> Result<RunReport> {
 
 /// Runs one configuration and keeps the scene, mesh and emissivity.
 pub fn run_keeping_mesh(config: &RunConfig) -> Result<Run> {
-    check_bands(config)?;
+    check_lighting(config)?;
     run_problem(config, build(config)?)
 }
 
-/// Colour bands are lit by the scene's own emission, not by a true solution.
-fn check_bands(config: &RunConfig) -> Result<()> {
+/// Colour bands are lit by the scene's own emission, not by a true solution; emission cases
+/// replace both.
+fn check_lighting(config: &RunConfig) -> Result<()> {
+    let bands = || config.bands.iter().map(|&c| CHANNELS[c]).collect::<Vec<_>>().join(",");
     if !config.bands.is_empty() && config.solution.is_some() {
         return Err(Error::InvalidParameter {
             name: "bands",
-            value: config.bands.iter().map(|&c| CHANNELS[c]).collect::<Vec<_>>().join(","),
+            value: bands(),
             reason: "colour bands are lit by the scene's own emission: use --solution none".into(),
+        });
+    }
+    if config.cases.is_some() && (config.solution.is_some() || !config.bands.is_empty()) {
+        return Err(Error::InvalidParameter {
+            name: "emission-file",
+            value: if config.bands.is_empty() { "with a true solution".into() } else { bands() },
+            reason: "emission cases give E themselves: use --solution none and grey bands".into(),
         });
     }
     Ok(())
@@ -148,7 +166,11 @@ fn check_bands(config: &RunConfig) -> Result<()> {
 
 /// Runs `config` on its `problem`, built already ([`build`]).
 pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
-    check_bands(config)?;
+    check_lighting(config)?;
+    let cases = match &config.cases {
+        Some(cases) => Some(cases.at_nodes(&problem.scene, &problem.disc)?),
+        None => None,
+    };
     let u_faces = match &config.solution {
         Some(sol) => Some(sol.on_faces(&problem.scene, &config.params)?),
         None => None,
@@ -156,7 +178,11 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
     let built = build_operator(config, &problem)?;
 
     let started = Instant::now();
-    let (rhs, emission_error_estimate) = emission(config, &problem, u_faces.as_deref());
+    let (rhs, emission_error_estimate) = match &cases {
+        // The cases' mean: the emission whose solution is the cases' mean u.
+        Some(cases) => (mean(cases), None),
+        None => emission(config, &problem, u_faces.as_deref()),
+    };
     let emission_seconds = started.elapsed().as_secs_f64();
     let mut warnings = run_warnings(&problem.scene, &rhs);
     if let Some(estimate) = emission_error_estimate.filter(|&e| e > EMISSION_WARNING) {
@@ -168,8 +194,18 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
     }
 
     let started = Instant::now();
-    let (outcome, bands, band_reports) =
-        in_stage(&*config.progress, "solve", || solve_built(config, &problem, &built, &rhs))?;
+    let (outcome, bands, band_reports, cases, case_reports) =
+        in_stage(&*config.progress, "solve", || match (&config.cases, cases) {
+            (Some(given), Some(columns)) => {
+                let (outcome, values, reports) =
+                    solve_cases(config, &problem, &built, &given.names, columns)?;
+                Ok((outcome, Vec::new(), Vec::new(), values, reports))
+            }
+            _ => {
+                let (outcome, bands, reports) = solve_built(config, &problem, &built, &rhs)?;
+                Ok::<_, Error>((outcome, bands, reports, Vec::new(), Vec::new()))
+            }
+        })?;
     let solve_seconds = started.elapsed().as_secs_f64();
     let u = outcome.u;
     let summary = built.summary(config, problem.disc.dof());
@@ -200,6 +236,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         warnings,
         notes: scene.notes.clone(),
         bands: band_reports,
+        cases: case_reports,
         error,
         setup_seconds: summary.setup_seconds,
         preparation_seconds: summary.preparation_seconds,
@@ -218,7 +255,13 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         u,
     };
     let Problem { scene, mesh, disc, .. } = problem;
-    Ok(Run { report, scene, mesh, disc, emission: rhs, bands })
+    Ok(Run { report, scene, mesh, disc, emission: rhs, bands, cases })
+}
+
+/// The mean of equally long vectors.
+fn mean(columns: &[Vec<f64>]) -> Vec<f64> {
+    let count = columns.len() as f64;
+    (0..columns[0].len()).map(|i| columns.iter().map(|c| c[i]).sum::<f64>() / count).collect()
 }
 
 /// E at the nodes, from the true solution `u_faces` when there is one (with the estimate of its

@@ -40,7 +40,7 @@ fn assemble_timed(config: &RunConfig, problem: &Problem) -> Result<TimedAssembly
 }
 
 /// An assembly with its timings.
-pub(super) struct TimedAssembly {
+pub struct TimedAssembly {
     pub(super) assembled: Assembly,
     device: Option<String>,
     /// The fastest assembly (pair plan included).
@@ -49,10 +49,19 @@ pub(super) struct TimedAssembly {
     preparation_seconds: f64,
 }
 
-/// The operator a run solves with.
-pub(super) enum BuiltOperator {
+/// The operator a run solves with: the dense matrix K or the compressed operator.
+pub enum BuiltOperator {
+    /// K stored entry by entry, with its timings.
     Dense(TimedAssembly),
-    Compressed { op: CompressedOperator, setup_seconds: f64, preparation_seconds: f64 },
+    /// K in exact and low-rank blocks.
+    Compressed {
+        /// The operator.
+        op: CompressedOperator,
+        /// Its setup time (pair plan included).
+        setup_seconds: f64,
+        /// One-time preparation of the backend.
+        preparation_seconds: f64,
+    },
 }
 
 /// What a report says of the operator.
@@ -68,6 +77,45 @@ pub(super) struct OperatorSummary {
 }
 
 impl BuiltOperator {
+    /// Number of unknowns.
+    pub fn dof(&self) -> usize {
+        match self {
+            Self::Dense(t) => t.assembled.matrix.dof(),
+            Self::Compressed { op, .. } => op.dof(),
+        }
+    }
+
+    /// The product `K x`.
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        match self {
+            Self::Dense(t) => t.assembled.matrix.apply(x),
+            Self::Compressed { op, .. } => op.apply(x),
+        }
+    }
+
+    /// Solves `(I - K) u = E` for each right-hand side in `rhs` with the solver of `config`: LU
+    /// factors the dense matrix once for all of them; GMRES runs per right-hand side.
+    pub fn solve_many(
+        &self,
+        config: &RunConfig,
+        problem: &Problem,
+        rhs: &[&[f64]],
+    ) -> Result<Vec<solve::SolveOutcome>> {
+        match self {
+            Self::Dense(t) => solve::solve_many(&t.assembled.matrix, rhs, config.solver),
+            Self::Compressed { op, .. } => {
+                let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
+                let tolerance = config.compression.tolerance;
+                rhs.iter()
+                    .map(|e| {
+                        let rho = (rho.as_slice(), rho.as_slice());
+                        solve::solve_compressed(op, e, rho, config.solver, tolerance)
+                    })
+                    .collect()
+            }
+        }
+    }
+
     pub(super) fn summary(&self, config: &RunConfig, dof: usize) -> OperatorSummary {
         match self {
             Self::Dense(t) => OperatorSummary {
@@ -130,7 +178,7 @@ pub fn build_compressed(
 /// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
 /// size, the compressed operator (built once; its setup time includes the pair planner's, as
 /// the dense assembly's does).
-pub(super) fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
+pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
     let disc = &problem.disc;
     if !compresses(config, problem) {
         return Ok(BuiltOperator::Dense(assemble_timed(config, problem)?));

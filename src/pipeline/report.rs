@@ -84,6 +84,10 @@ pub struct RunReport {
     /// fields above are of the bands' mean, summed or worst over the bands).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub bands: Vec<BandReport>,
+    /// Per emission case, when cases were given (then `u`, `solution_range` and the solver's
+    /// fields above are of the cases' mean, summed or worst over the cases).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cases: Vec<CaseReport>,
     /// Max error at the nodes `max_i |u(P_i) - u_n(P_i)|`, when a true solution is known.
     pub error: Option<f64>,
     /// Time to plan and assemble the matrix.
@@ -134,6 +138,21 @@ pub struct BandReport {
     pub condition_estimate: Option<f64>,
     /// Time to solve this band.
     pub solve_seconds: f64,
+    /// Smallest, mean and largest nodal value.
+    pub solution_range: [f64; 3],
+}
+
+/// The solve of one emission case.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseReport {
+    /// Case name (the column's header, or its number from 1).
+    pub case: String,
+    /// Linear solver used.
+    pub solver: &'static str,
+    /// Iterations of the iterative solver.
+    pub iterations: usize,
+    /// Relative residual.
+    pub residual: f64,
     /// Smallest, mean and largest nodal value.
     pub solution_range: [f64; 3],
 }

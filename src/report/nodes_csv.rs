@@ -8,7 +8,8 @@ use crate::solution::SolutionField;
 
 /// Writes `node, element, face, x, y, z, rho, E, u` for every node to `path` (positions in the
 /// user's coordinates), and `rho_B, E_B, u_B` per colour band B when bands were solved (`u` is
-/// then their mean).
+/// then their mean), or `E_C, u_C` per emission case C when cases were solved (`u` is then
+/// their mean).
 pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
     let mut out = csv::Writer::from_path(path).map_err(csv_error)?;
     let mut header: Vec<String> =
@@ -16,6 +17,9 @@ pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
     for band in field.bands {
         let name = CHANNELS[band.channel];
         header.extend([format!("rho_{name}"), format!("E_{name}"), format!("u_{name}")]);
+    }
+    for case in field.cases {
+        header.extend([format!("E_{}", case.name), format!("u_{}", case.name)]);
     }
     out.write_record(&header).map_err(csv_error)?;
     for (i, node) in field.disc.nodes.iter().enumerate() {
@@ -25,6 +29,8 @@ pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
         let bands = field.bands.iter().flat_map(|b| {
             [face.channel(b.channel).0, b.emission[i], b.u[i]].map(|v| format!("{v:e}"))
         });
+        let cases =
+            field.cases.iter().flat_map(|c| [c.emission[i], c.u[i]].map(|v| format!("{v:e}")));
         out.write_record(
             [
                 i.to_string(),
@@ -38,7 +44,8 @@ pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
                 format!("{:e}", field.u[i]),
             ]
             .into_iter()
-            .chain(bands),
+            .chain(bands)
+            .chain(cases),
         )
         .map_err(csv_error)?;
     }

@@ -442,6 +442,7 @@ mod tests {
             u: &u,
             emission: &u,
             bands: &[],
+            cases: &[],
         };
         let dir = std::env::temp_dir().join(format!("radiosity-render-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -469,7 +470,15 @@ mod tests {
             let method = crate::discretization::Method::Centroid;
             let disc = crate::discretization::Discretization::new(scene, &mesh, method).unwrap();
             let u = vec![0.0; disc.dof()];
-            f(&SolutionField { scene, mesh: &mesh, disc: &disc, u: &u, emission: &u, bands: &[] });
+            f(&SolutionField {
+                scene,
+                mesh: &mesh,
+                disc: &disc,
+                u: &u,
+                emission: &u,
+                bands: &[],
+                cases: &[],
+            });
         };
         // The Cornell box (y up, open toward +z and -z): level, from +z, toward the viewer in
         // the y-up convention.

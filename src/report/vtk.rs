@@ -33,23 +33,28 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
     let cell_rho = cells(&|j| format!("{:e}", field.scene.faces[elements[j].face].rho));
     let cell_face = cells(&|j| elements[j].face.to_string());
     let (mut point_bands, mut cell_bands) = (String::new(), String::new());
-    for band in field.bands {
-        let name = CHANNELS[band.channel];
-        let values: String = (0..n)
-            .flat_map(|j| field.vertex_values_of(&band.u, j))
-            .map(|u| format!("{u:e}\n"))
-            .collect();
+    // Colour bands (with their rho) and emission cases: each its u at the vertices, u and E
+    // per cell.
+    let series = field
+        .bands
+        .iter()
+        .map(|b| (CHANNELS[b.channel].to_string(), &b.u, &b.emission, Some(b.channel)))
+        .chain(field.cases.iter().map(|c| (xml_escaped(&c.name), &c.u, &c.emission, None)));
+    for (name, u, emission, channel) in series {
+        let values: String =
+            (0..n).flat_map(|j| field.vertex_values_of(u, j)).map(|u| format!("{u:e}\n")).collect();
         let _ = writeln!(
             point_bands,
             r#"        <DataArray type="Float64" Name="u_{name}" format="ascii">
 {values}        </DataArray>"#
         );
-        let u = cells(&|j| format!("{:e}", field.element_mean(&band.u, j)));
-        let e = cells(&|j| format!("{:e}", field.element_mean(&band.emission, j)));
-        let rho = cells(&|j| {
-            format!("{:e}", field.scene.faces[elements[j].face].channel(band.channel).0)
+        let u = cells(&|j| format!("{:e}", field.element_mean(u, j)));
+        let e = cells(&|j| format!("{:e}", field.element_mean(emission, j)));
+        let rho = channel.map(|channel| {
+            cells(&|j| format!("{:e}", field.scene.faces[elements[j].face].channel(channel).0))
         });
-        for (what, text) in [("u", u), ("E", e), ("rho", rho)] {
+        for (what, text) in [("u", Some(u)), ("E", Some(e)), ("rho", rho)] {
+            let Some(text) = text else { continue };
             let _ = writeln!(
                 cell_bands,
                 r#"        <DataArray type="Float64" Name="{what}_{name}" format="ascii">{text}</DataArray>"#
@@ -88,4 +93,9 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
     );
     std::fs::write(path, text)?;
     Ok(())
+}
+
+/// `text` with the characters XML gives meaning to replaced by their entities.
+fn xml_escaped(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }

@@ -33,30 +33,53 @@ impl LuSolution {
     /// [`Error::TooLarge`] when the two dense copies LU needs (the system and its factors) would
     /// not fit in the available memory.
     pub fn of_system(sys: &ReducedSystem, rhs: &[f64], max_steps: usize) -> Result<Self> {
-        let n = rhs.len();
+        LuFactors::of_system(sys)?.solve(sys, rhs, max_steps)
+    }
+}
+
+/// The LU factors of a reduced system `I - K`, with its condition estimate: factored once, they
+/// solve any number of right-hand sides.
+pub struct LuFactors {
+    lu: faer::linalg::solvers::PartialPivLu<f64>,
+    /// Estimated 1-norm condition number of the system.
+    pub condition: f64,
+}
+
+impl LuFactors {
+    /// Factors `sys` and estimates its condition; refuses as [`LuSolution::of_system`] does.
+    pub fn of_system(sys: &ReducedSystem) -> Result<Self> {
+        let n = sys.dim();
         // LU keeps two dense copies.
         check_fits(2.0 * (n as f64) * (n as f64) * 8.0, n)?;
         let a = sys.matrix();
-        let lu = a.partial_piv_lu();
-        let solve = |b: &[f64], transpose: bool| -> Vec<f64> {
-            let b = Col::from_fn(n, |i| b[i]);
-            let x = if transpose { lu.solve_transpose(&b) } else { lu.solve(&b) };
-            (0..n).map(|i| x[i]).collect()
-        };
         let norm_a =
             (0..n).map(|j| (0..n).map(|i| a[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-        let condition = norm_a * inverse_norm_1_estimate(n, &solve);
+        let factors = Self { lu: a.partial_piv_lu(), condition: 0.0 };
+        let condition = norm_a * inverse_norm_1_estimate(n, &|b, t| factors.apply(b, t));
         if condition.is_nan() || condition > CONDITION_LIMIT {
             return Err(Error::SingularSystem {
                 condition,
                 reason: format!("LU condition estimate above {CONDITION_LIMIT:.1e}"),
             });
         }
-        let mut u = solve(rhs, false);
+        Ok(Self { condition, ..factors })
+    }
+
+    /// `A⁻¹ b`, or `A⁻ᵀ b` when `transpose`.
+    fn apply(&self, b: &[f64], transpose: bool) -> Vec<f64> {
+        let n = b.len();
+        let b = Col::from_fn(n, |i| b[i]);
+        let x = if transpose { self.lu.solve_transpose(&b) } else { self.lu.solve(&b) };
+        (0..n).map(|i| x[i]).collect()
+    }
+
+    /// The solution for the reduced right-hand side `rhs`, refined up to `max_steps` times.
+    pub fn solve(&self, sys: &ReducedSystem, rhs: &[f64], max_steps: usize) -> Result<LuSolution> {
+        let mut u = self.apply(rhs, false);
         let mut refinement_steps = 0;
         for _ in 0..max_steps {
             let r = sys.compensated_residual(&u, rhs);
-            let d = solve(&r, false);
+            let d = self.apply(&r, false);
             let (dn, un) = (max_abs(&d), max_abs(&u));
             u.iter_mut().zip(&d).for_each(|(x, dx)| *x += dx);
             refinement_steps += 1;
@@ -70,7 +93,7 @@ impl LuSolution {
                 reason: "the LU solution is not finite".into(),
             });
         }
-        Ok(Self { u, condition, refinement_steps })
+        Ok(LuSolution { u, condition: self.condition, refinement_steps })
     }
 }
 

@@ -18,7 +18,7 @@ use serde::Serialize;
 
 pub use compressed::solve_compressed;
 pub use gmres::{KrylovSystem, MAX_ITERATIONS, RESTART};
-pub use lu::{LuSolution, inverse_norm_1_estimate};
+pub use lu::{LuFactors, LuSolution, inverse_norm_1_estimate};
 pub use system::ReducedSystem;
 
 use crate::assembly::CollocationMatrix;
@@ -96,41 +96,59 @@ pub const CONDITION_LIMIT: f64 = 1e-2 / f64::EPSILON;
 /// [`Error::SingularSystem`]; GMRES that stagnates or runs out of iterations as
 /// [`Error::NotConverged`], with the residual it reached.
 pub fn solve(k: &CollocationMatrix, rhs: &[f64], options: SolverOptions) -> Result<SolveOutcome> {
+    let mut outcomes = solve_many(k, std::slice::from_ref(&rhs), options)?;
+    Ok(outcomes.pop().expect("one outcome per right-hand side"))
+}
+
+/// Solves `(I - K) u = E` for each right-hand side in `rhs` on one matrix, as [`solve`] does
+/// for one: the zero rows are taken out and LU factors once for all of them (GMRES runs per
+/// right-hand side; its products are what it costs).
+pub fn solve_many(
+    k: &CollocationMatrix,
+    rhs: &[&[f64]],
+    options: SolverOptions,
+) -> Result<Vec<SolveOutcome>> {
     reject_constant_null_vector(k)?;
     check_tolerance(options.tolerance)?;
     let sys = ReducedSystem::without_zero_rows(k);
-    let reduced_rhs = sys.reduce_rhs(rhs);
     let use_lu = match options.choice {
         SolverChoice::Lu => true,
         SolverChoice::Iterative => false,
         SolverChoice::Auto => sys.dim() <= LU_LIMIT,
     };
-    let outcome = if use_lu {
-        let lu = LuSolution::of_system(&sys, &reduced_rhs, REFINEMENT_STEPS)?;
-        let u = sys.expand(&lu.u, rhs);
-        SolveOutcome {
-            residual: relative_residual(k, &u, rhs),
-            u,
-            solver: "lu",
-            iterations: 0,
-            condition_estimate: Some(lu.condition),
-            refinement_steps: lu.refinement_steps,
-            rows_eliminated: sys.eliminated(),
-        }
-    } else {
-        let g = gmres::gmres(&sys, &reduced_rhs, options.tolerance)?;
-        let u = sys.expand(&g.x, rhs);
-        SolveOutcome {
-            residual: relative_residual(k, &u, rhs),
-            u,
-            solver: "gmres",
-            iterations: g.iterations,
-            condition_estimate: None,
-            refinement_steps: 0,
-            rows_eliminated: sys.eliminated(),
-        }
+    let factors = if use_lu { Some(LuFactors::of_system(&sys)?) } else { None };
+    let outcome = |rhs: &[f64]| -> Result<SolveOutcome> {
+        let reduced_rhs = sys.reduce_rhs(rhs);
+        Ok(match &factors {
+            Some(factors) => {
+                let lu = factors.solve(&sys, &reduced_rhs, REFINEMENT_STEPS)?;
+                let u = sys.expand(&lu.u, rhs);
+                SolveOutcome {
+                    residual: relative_residual(k, &u, rhs),
+                    u,
+                    solver: "lu",
+                    iterations: 0,
+                    condition_estimate: Some(lu.condition),
+                    refinement_steps: lu.refinement_steps,
+                    rows_eliminated: sys.eliminated(),
+                }
+            }
+            None => {
+                let g = gmres::gmres(&sys, &reduced_rhs, options.tolerance)?;
+                let u = sys.expand(&g.x, rhs);
+                SolveOutcome {
+                    residual: relative_residual(k, &u, rhs),
+                    u,
+                    solver: "gmres",
+                    iterations: g.iterations,
+                    condition_estimate: None,
+                    refinement_steps: 0,
+                    rows_eliminated: sys.eliminated(),
+                }
+            }
+        })
     };
-    Ok(outcome)
+    rhs.iter().map(|rhs| outcome(rhs)).collect()
 }
 
 /// Refuses a residual tolerance outside (0, 1).
