@@ -15,13 +15,12 @@ use super::*;
 const ROUNDING_FLOOR: f64 = 1e-14;
 
 pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
-    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "tolerance",
-            value: args.tolerance.to_string(),
-            reason: "must be positive".into(),
-        });
-    }
+    let options = ViewFactorOptions {
+        tolerance: args.tolerance,
+        max_depth: args.max_depth,
+        ..Default::default()
+    };
+    options.validate()?;
     if args.tolerance < ROUNDING_FLOOR {
         // Rounding in the closed forms and the sums of a pair's cells alone is about this: the
         // adaptive rule would split every cell to the limit and still miss it.
@@ -37,34 +36,11 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     let Problem { scene, mesh, planner, .. } = &problem;
     super::output::print_notes(scene);
     let started = std::time::Instant::now();
-    if args.max_depth > 6 {
-        return Err(Error::InvalidParameter {
-            name: "max-depth",
-            value: args.max_depth.to_string(),
-            reason: "at most 6 (4^6 parts of an element)".into(),
-        });
-    }
-    let options = ViewFactorOptions {
-        tolerance: args.tolerance,
-        max_depth: args.max_depth,
-        ..Default::default()
-    };
     let progress = super::progress::on_stderr();
     progress.start("viewfactors", mesh.len());
     let f = view_factors(scene, mesh, planner, &options, &*progress)?;
     progress.finish();
-    let (row_sum_min, row_sum_max) = f.row_sum_range();
-    let summary = ViewFactorSummary {
-        surface: scene.name.clone(),
-        n: f.len(),
-        row_sum_min,
-        row_sum_max,
-        reciprocity_error: f.reciprocity_error(),
-        error_estimate: f.error_estimate,
-        evaluations: f.evaluations,
-        nonzeros: f.nonzeros(),
-        seconds: problem.plan_seconds + started.elapsed().as_secs_f64(),
-    };
+    let summary = f.summary(&scene.name, problem.plan_seconds + started.elapsed().as_secs_f64());
     if summary.error_estimate > args.tolerance {
         // Cells deeper than the split limit are settled with the error they have.
         eprintln!(

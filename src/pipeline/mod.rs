@@ -15,7 +15,9 @@ mod report;
 pub use crate::assembly::Problem;
 pub use backend::{Assembler, assemble_on};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
-pub use operator::{BuiltOperator, TimedAssembly, build_compressed, build_operator, compresses};
+pub use operator::{
+    BuiltOperator, OperatorSummary, TimedAssembly, build_compressed, build_operator, compresses,
+};
 pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
 
 use std::time::Instant;

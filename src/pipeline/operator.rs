@@ -3,6 +3,8 @@
 
 use std::time::Instant;
 
+use serde::Serialize;
+
 use super::{Assembler, Problem, REPEAT_BELOW_SECONDS, RunConfig};
 use crate::assembly::{Assembly, PairEvaluation};
 use crate::error::{Error, Result};
@@ -64,16 +66,26 @@ pub enum BuiltOperator {
     },
 }
 
-/// What a report says of the operator.
-pub(super) struct OperatorSummary {
-    pub(super) operator: &'static str,
-    pub(super) device: Option<String>,
-    pub(super) setup_seconds: f64,
-    pub(super) preparation_seconds: f64,
-    pub(super) pairs: PairStats,
-    pub(super) compression_tolerance: Option<f64>,
-    pub(super) operator_bytes: u64,
-    pub(super) blocks: Option<OperatorStats>,
+/// What a report says of the operator (the keys of `solve --json` that concern it).
+#[derive(Clone, Debug, Serialize)]
+pub struct OperatorSummary {
+    /// `dense` or `compressed`.
+    pub operator: &'static str,
+    /// The GPU adapter, when the GPU evaluated the entries.
+    pub device: Option<String>,
+    /// Time to plan and assemble (or build) the operator.
+    pub setup_seconds: f64,
+    /// One-time preparation of the backend.
+    pub preparation_seconds: f64,
+    /// Pair classes.
+    pub pairs: PairStats,
+    /// Relative tolerance of the low-rank blocks (compressed operator).
+    pub compression_tolerance: Option<f64>,
+    /// Memory of the stored operator, in bytes.
+    pub operator_bytes: u64,
+    /// Block statistics of the compressed operator.
+    #[serde(flatten)]
+    pub blocks: Option<OperatorStats>,
 }
 
 impl BuiltOperator {
@@ -116,7 +128,8 @@ impl BuiltOperator {
         }
     }
 
-    pub(super) fn summary(&self, config: &RunConfig, dof: usize) -> OperatorSummary {
+    /// What a report says of this operator, built for `config` with `dof` unknowns.
+    pub fn summary(&self, config: &RunConfig, dof: usize) -> OperatorSummary {
         match self {
             Self::Dense(t) => OperatorSummary {
                 operator: "dense",

@@ -11,8 +11,8 @@ pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece
 pub use city::{city, lit_city};
 pub use face::{CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA};
 pub use file::{
-    Coplanar, Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, is_scene_file, load,
-    load_with, parse_toml,
+    Coplanar, Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, from_triangles,
+    is_scene_file, load, load_with, parse_toml,
 };
 pub use merge::{Merged, merge_coplanar};
 

@@ -39,7 +39,7 @@ use serde::Serialize;
 
 use crate::assembly::{AssemblyOptions, PairIntegrator};
 use crate::discretization::{Discretization, Method};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::mesh::{Element, Mesh};
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -68,6 +68,27 @@ pub struct ViewFactorOptions {
 impl Default for ViewFactorOptions {
     fn default() -> Self {
         Self { tolerance: 1e-10, max_level: 3, max_depth: 0 }
+    }
+}
+
+impl ViewFactorOptions {
+    /// Refuses a tolerance that is not positive and a split depth beyond 6.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "tolerance",
+                value: self.tolerance.to_string(),
+                reason: "must be positive".into(),
+            });
+        }
+        if self.max_depth > 6 {
+            return Err(Error::InvalidParameter {
+                name: "max-depth",
+                value: self.max_depth.to_string(),
+                reason: "at most 6 (4^6 parts of an element)".into(),
+            });
+        }
+        Ok(())
     }
 }
 
@@ -118,6 +139,22 @@ impl ViewFactors {
     /// Number of elements.
     pub fn len(&self) -> usize {
         self.areas.len()
+    }
+
+    /// The summary of these view factors of scene `surface`, computed in `seconds`.
+    pub fn summary(&self, surface: &str, seconds: f64) -> ViewFactorSummary {
+        let (row_sum_min, row_sum_max) = self.row_sum_range();
+        ViewFactorSummary {
+            surface: surface.to_string(),
+            n: self.len(),
+            row_sum_min,
+            row_sum_max,
+            reciprocity_error: self.reciprocity_error(),
+            error_estimate: self.error_estimate,
+            evaluations: self.evaluations,
+            nonzeros: self.nonzeros(),
+            seconds,
+        }
     }
 
     /// Entries that are not zero.

@@ -142,6 +142,50 @@ pub fn load_with(path: &Path, options: ImportOptions) -> Result<Scene> {
     }
 }
 
+/// A scene from a triangle mesh given as arrays (as a mesh file is read: non-planar faces cannot
+/// occur, exact repeats are dropped, coplanar triangles merged unless `options` say otherwise):
+/// `triangles[k]` indexes `vertices`, with reflectivity `rho[k]` and emissivity `emission[k]`.
+/// Triangle k is named `NAME/k`.
+pub fn from_triangles(
+    name: &str,
+    vertices: &[DVec3],
+    triangles: &[[usize; 3]],
+    rho: &[f64],
+    emission: &[f64],
+    options: ImportOptions,
+) -> Result<Scene> {
+    let per_triangle = |what: &'static str, len: usize| Error::InvalidParameter {
+        name: what,
+        value: format!("{len} values"),
+        reason: format!("give one per triangle ({} triangles)", triangles.len()),
+    };
+    if rho.len() != triangles.len() {
+        return Err(per_triangle("rho", rho.len()));
+    }
+    if emission.len() != triangles.len() {
+        return Err(per_triangle("emission", emission.len()));
+    }
+    let mut builder = Builder::new(options.for_meshes());
+    for (k, (triangle, (&rho, &emission))) in
+        triangles.iter().zip(rho.iter().zip(emission)).enumerate()
+    {
+        let corners = triangle.iter().map(|&i| {
+            vertices.get(i).copied().ok_or_else(|| Error::InvalidParameter {
+                name: "triangles",
+                value: format!("triangle {k}: vertex {i}"),
+                reason: format!("there are {} vertices", vertices.len()),
+            })
+        });
+        let properties = Properties {
+            rho: Some(Channels::Grey(rho)),
+            emission: Some(Channels::Grey(emission)),
+            radiates: None,
+        };
+        builder.push(&format!("{name}/{k}"), corners.collect::<Result<_>>()?, properties, None)?;
+    }
+    builder.finish(name.to_string())
+}
+
 /// A clear error for a path that is not there, instead of the reader's own ("open file failed").
 fn check_readable(path: &Path) -> Result<()> {
     if path.is_file() {

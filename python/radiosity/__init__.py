@@ -1,0 +1,189 @@
+"""Collocation solver for the occluded radiosity equation on polyhedral surfaces.
+
+The same runs as the ``radiosity`` command line, in NumPy and SciPy::
+
+    import radiosity
+    scene = radiosity.Scene.builtin("five-piece")
+    run = radiosity.solve(scene, refine=4)
+    run.error, run.u, run.nodes            # as `radiosity solve --json` reports them
+
+    op = radiosity.operator(radiosity.Scene.load("room.toml"), refine=3)
+    u = op.solve(E)                        # E per face or per node; one column per case
+    F = radiosity.view_factors(scene, refine=1)   # scipy.sparse.csr_matrix
+
+Options take the command line's names and defaults (``--compression-tolerance`` is
+``compression_tolerance``). Errors are raised as :class:`RadiosityError` with the library's
+message.
+"""
+
+import json
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
+
+from . import _native
+from ._native import RadiosityError, Scene
+
+__all__ = [
+    "RadiosityError",
+    "Scene",
+    "Solution",
+    "Operator",
+    "ViewFactors",
+    "solve",
+    "operator",
+    "view_factors",
+    "from_arrays",
+    "tqdm_progress",
+]
+
+# The command line's defaults (radiosity solve --help).
+_DEFAULTS = dict(
+    refine=2,
+    method="centroid",
+    alpha=None,
+    mesh="uniform",
+    shadow_lines="segments",
+    solution=None,
+    beta=None,
+    gamma=None,
+    backend="cpu",
+    precision="f64",
+    operator="auto",
+    compression_tolerance=_native.DEFAULT_COMPRESSION_TOLERANCE,
+    solver="auto",
+    tolerance=_native.DEFAULT_SOLVER_TOLERANCE,
+)
+
+
+def _options(given):
+    unknown = sorted(set(given) - set(_DEFAULTS))
+    if unknown:
+        raise TypeError(f"unknown options {unknown}; known: {sorted(_DEFAULTS)}")
+    options = dict(_DEFAULTS)
+    options.update(given)
+    return options
+
+
+def from_arrays(vertices, triangles, rho, emission=0.0, name="mesh", coplanar=None):
+    """A scene from a triangle mesh: ``vertices`` (m x 3), ``triangles`` (t x 3 indices into
+    them), ``rho`` and ``emission`` per triangle or one value for all. Read as an STL file is:
+    coplanar triangles that share edges and properties are merged into faces for visibility
+    (``coplanar="keep"`` keeps them apart); the triangles stay the elements."""
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+    count = len(triangles)
+    rho = np.ascontiguousarray(np.broadcast_to(np.asarray(rho, dtype=np.float64), (count,)))
+    emission = np.ascontiguousarray(
+        np.broadcast_to(np.asarray(emission, dtype=np.float64), (count,))
+    )
+    return Scene.from_arrays(vertices, triangles, rho, emission, name, coplanar)
+
+
+class Solution:
+    """One run: ``u`` at the nodes, their positions ``nodes`` (dof x 3) and faces ``faces``,
+    E at the nodes ``emission``, and every key of ``radiosity solve --json`` as an attribute
+    (``error``, ``setup_seconds``, ``iterations``, ...; ``report`` holds them all). With
+    emission cases, ``cases_u`` holds one column of u per case and ``u`` is their mean."""
+
+    def __init__(self, raw):
+        self.u = raw["u"]
+        self.nodes = raw["nodes"]
+        self.faces = raw["faces"]
+        self.emission = raw["emission"]
+        self.cases_u = raw.get("cases_u")
+        self.report = json.loads(raw["report"])
+
+    def __getattr__(self, name):
+        report = self.__dict__.get("report", {})
+        if name in report:
+            return report[name]
+        raise AttributeError(f"a solution has no '{name}'; its report has {sorted(report)}")
+
+    def __repr__(self):
+        r = self.report
+        return f"Solution({r['surface']!r}, n={r['n']}, dof={r['dof']}, error={r['error']})"
+
+
+def solve(scene, emission=None, progress=None, **options):
+    """Solves the radiosity equation on ``scene`` as ``radiosity solve`` does, with its
+    options (``refine``, ``method``, ``operator``, ``solver``, ``solution``, ``backend``, ...).
+    ``emission`` replaces the scene's emission: per face (``scene.face_names`` order) or per
+    node, one column per case for many cases. ``progress`` is a callable
+    ``progress(stage, done, total)`` (see :func:`tqdm_progress`)."""
+    if emission is not None:
+        emission = np.ascontiguousarray(emission, dtype=np.float64)
+    raw = _native.solve(scene, _options(options), emission, progress)
+    return Solution(raw)
+
+
+class Operator(scipy.sparse.linalg.LinearOperator):
+    """The collocation operator K of one problem, built once (dense or compressed, as
+    ``operator=`` chooses), as a SciPy ``LinearOperator`` (``op @ x`` is ``K x``).
+    ``solve(E)`` solves ``(I - K) u = E`` for E per face or per node, a vector or one column
+    per case (LU factors once for all of them; GMRES runs per case). ``nodes`` (dof x 3),
+    ``faces`` and ``rho`` describe the unknowns; ``report`` the operator (as in
+    ``solve --json``)."""
+
+    def __init__(self, native):
+        self._native = native
+        self.report = json.loads(native.report)
+        self.nodes, self.faces, self.rho = native.nodes()
+        super().__init__(dtype=np.float64, shape=(native.dof, native.dof))
+
+    def _matvec(self, x):
+        x = np.ascontiguousarray(np.ravel(x), dtype=np.float64)
+        return self._native.matvec(x)
+
+    def solve(self, emission):
+        """u with ``(I - K) u = E`` for each column of ``emission``; ``self.last_reports``
+        then holds each case's solver report (solver, iterations, residual)."""
+        emission = np.ascontiguousarray(emission, dtype=np.float64)
+        u, reports = self._native.solve(emission)
+        self.last_reports = [json.loads(r) for r in reports]
+        return u
+
+
+def operator(scene, progress=None, **options):
+    """The operator of ``scene`` for the run ``options`` describe (as :func:`solve` takes
+    them), built once for products and many solves."""
+    return Operator(_native.operator(scene, _options(options), progress))
+
+
+class ViewFactors(scipy.sparse.csr_matrix):
+    """Element-to-element view factors F_ij as a SciPy CSR matrix of the non-zero entries,
+    with the element ``areas`` and the ``summary`` of ``radiosity viewfactors --json``
+    (reciprocity, row sums, error estimate)."""
+
+
+def view_factors(scene, refine=0, tolerance=1e-10, max_depth=0, progress=None):
+    """View factors between the elements of the scene's uniform mesh at ``refine``, each to
+    the absolute ``tolerance``, as ``radiosity viewfactors`` computes them."""
+    indptr, indices, data, n, areas, summary = _native.view_factors(
+        scene, refine, tolerance, max_depth, progress
+    )
+    f = ViewFactors((data, indices, indptr), shape=(n, n))
+    f.areas = areas
+    f.summary = json.loads(summary)
+    return f
+
+
+def tqdm_progress():
+    """A progress callable that draws one tqdm bar per stage (``pip install tqdm``)."""
+    from tqdm import tqdm
+
+    bars = {}
+
+    def progress(stage, done, total):
+        if stage.startswith("note: "):
+            tqdm.write(stage)
+            return
+        bar = bars.get(stage)
+        if bar is None:
+            bar = bars[stage] = tqdm(total=total or None, desc=stage)
+        bar.update(done - bar.n)
+        if total and done >= total:
+            bar.close()
+
+    return progress

@@ -1,0 +1,583 @@
+//! `radiosity._native`: the library's scenes, solves, operators and view factors for Python
+//! (PyO3, NumPy arrays in and out). The package `radiosity` (python/radiosity) wraps it in the
+//! classes users see: results as objects, the operator as a SciPy `LinearOperator`, view
+//! factors as a SciPy sparse matrix.
+//!
+//! Options are the command line's, by the same names and defaults (`refine`, `method`,
+//! `operator`, ...), so that a Python run and a `radiosity solve` run are the same run.
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::DVec3;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use radiosity::discretization::Method;
+use radiosity::gpu::Precision;
+use radiosity::mesh::{LineExtent, S5Diagonals};
+use radiosity::operator::OperatorChoice;
+use radiosity::pipeline::{
+    self, Backend, BuiltOperator, MeshChoice, Problem, RunConfig, SceneSource,
+};
+use radiosity::problems::{EmissionCases, TrueSolution};
+use radiosity::progress::{Progress, ProgressSink};
+use radiosity::scene::{BuiltinScene, Coplanar, Duplicates, ImportOptions, NonPlanar};
+use radiosity::scene::{Scene, SurfaceParameters};
+use radiosity::solve::{SolverChoice, SolverOptions};
+use radiosity::viewfactors::{ViewFactorOptions, view_factors as compute_view_factors};
+
+create_exception!(
+    _native,
+    RadiosityError,
+    PyValueError,
+    "What the library refused or could not do, with its message (the culprit named)."
+);
+
+/// The library's error as a Python exception.
+fn raised(e: radiosity::Error) -> PyErr {
+    RadiosityError::new_err(e.to_string())
+}
+
+/// An option given a name it does not know.
+fn unknown(option: &'static str, value: &str, expected: &str) -> PyErr {
+    RadiosityError::new_err(format!("{option} '{value}' is not known: expected {expected}"))
+}
+
+/// A scene, from a file, a built-in name or arrays.
+#[pyclass(name = "Scene", module = "radiosity", frozen)]
+struct PyScene {
+    scene: Scene,
+    /// Whether it is one of the paper's surfaces (then `solve` defaults to its x2y2 solution).
+    paper_surface: bool,
+    params: SurfaceParameters,
+}
+
+#[pymethods]
+impl PyScene {
+    /// A scene file (.toml, .obj, .stl), read as `radiosity solve --scene PATH` reads it.
+    #[staticmethod]
+    #[pyo3(signature = (path, nonplanar=None, duplicates=None, coplanar=None))]
+    fn load(
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        nonplanar: Option<&str>,
+        duplicates: Option<&str>,
+        coplanar: Option<&str>,
+    ) -> PyResult<Self> {
+        let options = import_options(nonplanar, duplicates, coplanar)?;
+        let scene = py.detach(|| radiosity::scene::load_with(&path, options)).map_err(raised)?;
+        Ok(Self { scene, paper_surface: false, params: SurfaceParameters::default() })
+    }
+
+    /// A built-in scene (four-piece, five-piece, cube, baffled-box) or a generated city
+    /// (`city:NXxNY`, `city:NXxNY:lit`); `params` are (A, B, C) of the paper's surfaces.
+    #[staticmethod]
+    #[pyo3(signature = (name, params=(5.0, 2.0, 1.0)))]
+    fn builtin(py: Python<'_>, name: &str, params: (f64, f64, f64)) -> PyResult<Self> {
+        let source = match SceneSource::parse(name).map_err(raised)? {
+            SceneSource::File(..) => {
+                return Err(unknown("built-in scene", name, "a built-in name; files: Scene.load"));
+            }
+            source => source,
+        };
+        let params = SurfaceParameters { a: params.0, b: params.1, c: params.2 };
+        params.validate().map_err(raised)?;
+        let scene = py.detach(|| source.build(params)).map_err(raised)?;
+        Ok(Self { scene, paper_surface: source.is_paper_surface(), params })
+    }
+
+    /// A triangle mesh: `vertices` (m x 3), `triangles` (t x 3 vertex indices), `rho` and
+    /// `emission` per triangle; read as an STL file is (coplanar triangles merged into faces
+    /// for visibility unless `coplanar="keep"`).
+    #[staticmethod]
+    #[pyo3(signature = (vertices, triangles, rho, emission, name="mesh", coplanar=None))]
+    fn from_arrays(
+        py: Python<'_>,
+        vertices: PyReadonlyArray2<'_, f64>,
+        triangles: PyReadonlyArray2<'_, i64>,
+        rho: PyReadonlyArray1<'_, f64>,
+        emission: PyReadonlyArray1<'_, f64>,
+        name: &str,
+        coplanar: Option<&str>,
+    ) -> PyResult<Self> {
+        let (vertices, triangles) = (vertices.as_array(), triangles.as_array());
+        if vertices.ncols() != 3 || triangles.ncols() != 3 {
+            return Err(RadiosityError::new_err(format!(
+                "vertices must be m x 3 and triangles t x 3; got {:?} and {:?}",
+                vertices.shape(),
+                triangles.shape()
+            )));
+        }
+        let points: Vec<DVec3> =
+            vertices.rows().into_iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect();
+        let mut corners = Vec::with_capacity(triangles.nrows());
+        for (k, t) in triangles.rows().into_iter().enumerate() {
+            let index = |i: i64| {
+                usize::try_from(i).map_err(|_| {
+                    RadiosityError::new_err(format!("triangle {k}: negative vertex index {i}"))
+                })
+            };
+            corners.push([index(t[0])?, index(t[1])?, index(t[2])?]);
+        }
+        let (rho, emission) = (rho.as_array().to_vec(), emission.as_array().to_vec());
+        let options = import_options(None, None, coplanar)?;
+        let scene = py
+            .detach(|| {
+                radiosity::scene::from_triangles(name, &points, &corners, &rho, &emission, options)
+            })
+            .map_err(raised)?;
+        Ok(Self { scene, paper_surface: false, params: SurfaceParameters::default() })
+    }
+
+    /// The scene's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.scene.name.clone()
+    }
+
+    /// The faces' names, in the order of per-face arrays (emission cases).
+    #[getter]
+    fn face_names(&self) -> Vec<String> {
+        self.scene.faces.iter().map(|f| f.name.clone()).collect()
+    }
+
+    /// What the loader repaired or merged (the notes `solve` prints).
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.scene.notes.clone()
+    }
+
+    fn __len__(&self) -> usize {
+        self.scene.faces.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Scene('{}', {} faces)", self.scene.name, self.scene.faces.len())
+    }
+}
+
+/// How imperfect meshes are read, by the command line's names.
+fn import_options(
+    nonplanar: Option<&str>,
+    duplicates: Option<&str>,
+    coplanar: Option<&str>,
+) -> PyResult<ImportOptions> {
+    Ok(ImportOptions {
+        nonplanar: match nonplanar {
+            None => None,
+            Some("split") => Some(NonPlanar::Split),
+            Some("refuse") => Some(NonPlanar::Refuse),
+            Some(other) => return Err(unknown("nonplanar", other, "split or refuse")),
+        },
+        duplicates: match duplicates {
+            None => None,
+            Some("drop") => Some(Duplicates::Drop),
+            Some("refuse") => Some(Duplicates::Refuse),
+            Some(other) => return Err(unknown("duplicates", other, "drop or refuse")),
+        },
+        coplanar: match coplanar {
+            None => None,
+            Some("merge") => Some(Coplanar::Merge),
+            Some("keep") => Some(Coplanar::Keep),
+            Some(other) => return Err(unknown("coplanar", other, "merge or keep")),
+        },
+    })
+}
+
+/// The run options `solve` and `operator` take, by the command line's names and defaults.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct RunOptions {
+    refine: u32,
+    method: String,
+    alpha: Option<f64>,
+    mesh: String,
+    shadow_lines: String,
+    solution: Option<String>,
+    beta: Option<f64>,
+    gamma: Option<f64>,
+    backend: String,
+    precision: String,
+    operator: String,
+    compression_tolerance: f64,
+    solver: String,
+    tolerance: f64,
+}
+
+impl RunOptions {
+    /// The configuration of these options on `scene`, progress going to `progress`.
+    fn config(&self, scene: &PyScene, progress: ProgressSink) -> PyResult<RunConfig> {
+        let mut config = RunConfig::paper(BuiltinScene::Cube, self.refine);
+        config.params = scene.params;
+        config.method = match (self.method.as_str(), self.alpha) {
+            ("centroid", None) => Method::Centroid,
+            ("centroid", Some(_)) => {
+                return Err(RadiosityError::new_err("alpha belongs to method='linear'"));
+            }
+            ("linear", alpha) => {
+                Method::linear(alpha.unwrap_or(Method::PAPER_ALPHA)).map_err(raised)?
+            }
+            (other, _) => return Err(unknown("method", other, "centroid or linear")),
+        };
+        let extent = match self.shadow_lines.as_str() {
+            "segments" => LineExtent::Segments,
+            "chords" => LineExtent::Chords,
+            other => return Err(unknown("shadow_lines", other, "segments or chords")),
+        };
+        config.mesh = match self.mesh.as_str() {
+            "uniform" => MeshChoice::Uniform,
+            "discontinuity" => MeshChoice::Discontinuity(S5Diagonals::Paper),
+            "discontinuity-uniform-diagonals" => MeshChoice::Discontinuity(S5Diagonals::AsUniform),
+            "auto-discontinuity" => MeshChoice::AutoDiscontinuity(extent),
+            other => {
+                return Err(unknown(
+                    "mesh",
+                    other,
+                    "uniform, discontinuity, discontinuity-uniform-diagonals or auto-discontinuity",
+                ));
+            }
+        };
+        config.solution = match self.solution.as_deref() {
+            None if scene.paper_surface => Some(TrueSolution::X2Y2),
+            None | Some("none") => None,
+            Some(name) => Some(TrueSolution::parse(name, self.beta, self.gamma).map_err(raised)?),
+        };
+        let precision = match self.precision.as_str() {
+            "f64" => Precision::F64,
+            "f32" => Precision::F32,
+            other => return Err(unknown("precision", other, "f64 or f32")),
+        };
+        config.backend = match self.backend.as_str() {
+            "cpu" => Backend::Cpu,
+            "gpu" => Backend::Gpu(precision),
+            other => return Err(unknown("backend", other, "cpu or gpu")),
+        };
+        config.operator = match self.operator.as_str() {
+            "auto" => OperatorChoice::Auto,
+            "dense" => OperatorChoice::Dense,
+            "compressed" => OperatorChoice::Compressed,
+            other => return Err(unknown("operator", other, "auto, dense or compressed")),
+        };
+        config.compression.tolerance = self.compression_tolerance;
+        config.compression.validate().map_err(raised)?;
+        let choice = match self.solver.as_str() {
+            "auto" => SolverChoice::Auto,
+            "lu" => SolverChoice::Lu,
+            "iterative" => SolverChoice::Iterative,
+            other => return Err(unknown("solver", other, "auto, lu or iterative")),
+        };
+        config.solver = SolverOptions { choice, tolerance: self.tolerance };
+        config.progress = progress;
+        Ok(config)
+    }
+}
+
+/// Progress reported to a Python callable `callback(stage, done, total)` (total 0: a stage
+/// whose length is not known; a note comes as `callback("note: TEXT", 0, 0)`), about a hundred
+/// calls per stage. An exception in the callback is printed and not raised again.
+struct Callback {
+    callback: Py<PyAny>,
+    stage: Mutex<(String, usize)>,
+    done: AtomicUsize,
+    reported: AtomicUsize,
+}
+
+impl Callback {
+    fn call(&self, stage: &str, done: usize, total: usize) {
+        Python::attach(|py| {
+            if let Err(e) = self.callback.call1(py, (stage, done, total)) {
+                e.print(py);
+            }
+        });
+    }
+}
+
+impl Progress for Callback {
+    fn start(&self, stage: &str, len: usize) {
+        *self.stage.lock().expect("progress lock") = (stage.to_string(), len);
+        self.done.store(0, Ordering::Relaxed);
+        self.reported.store(0, Ordering::Relaxed);
+        self.call(stage, 0, len);
+    }
+
+    fn advance(&self, steps: usize) {
+        let done = self.done.fetch_add(steps, Ordering::Relaxed) + steps;
+        let (stage, len) = self.stage.lock().expect("progress lock").clone();
+        let step = (len / 100).max(1);
+        let last = self.reported.load(Ordering::Relaxed);
+        if done >= last + step
+            && self
+                .reported
+                .compare_exchange(last, done, Ordering::Relaxed, Ordering::Relaxed)
+                .is_ok()
+        {
+            self.call(&stage, done, len);
+        }
+    }
+
+    fn finish(&self) {
+        let (stage, len) = self.stage.lock().expect("progress lock").clone();
+        self.call(&stage, len, len);
+    }
+
+    fn note(&self, text: &str) {
+        self.call(&format!("note: {text}"), 0, 0);
+    }
+}
+
+/// Progress to `callback`, or nowhere.
+fn progress_to(callback: Option<Py<PyAny>>) -> ProgressSink {
+    match callback {
+        None => ProgressSink::default(),
+        Some(callback) => ProgressSink(std::sync::Arc::new(Callback {
+            callback,
+            stage: Mutex::new((String::new(), 0)),
+            done: AtomicUsize::new(0),
+            reported: AtomicUsize::new(0),
+        })),
+    }
+}
+
+/// Columns of emission values (one per face or per node) from a 1-D or 2-D array: a 2-D array
+/// holds one case per column.
+fn emission_columns(emission: &Bound<'_, PyAny>) -> PyResult<(Vec<Vec<f64>>, bool)> {
+    if let Ok(one) = emission.extract::<PyReadonlyArray1<'_, f64>>() {
+        return Ok((vec![one.as_array().to_vec()], false));
+    }
+    let many: PyReadonlyArray2<'_, f64> = emission.extract().map_err(|_| {
+        RadiosityError::new_err(
+            "emission must be a 1-D or 2-D array of float64 (one column per case)",
+        )
+    })?;
+    let many = many.as_array();
+    Ok((many.columns().into_iter().map(|c| c.to_vec()).collect(), true))
+}
+
+/// The positions of `nodes` in the user's coordinates (the scene's local frame moved back by
+/// `origin`) as a dof x 3 array, and their faces.
+fn nodes_array<'py>(
+    py: Python<'py>,
+    nodes: &[radiosity::discretization::Node],
+    origin: DVec3,
+) -> (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<usize>>) {
+    let positions = Array2::from_shape_fn((nodes.len(), 3), |(i, k)| {
+        (nodes[i].position + origin).to_array()[k]
+    });
+    let faces: Vec<usize> = nodes.iter().map(|n| n.face).collect();
+    (positions.into_pyarray(py), faces.into_pyarray(py))
+}
+
+/// One run, as `radiosity solve` does it; `emission` (1-D or 2-D: one case per column, one row
+/// per face or per node) replaces the scene's emission. Returns a dict with `u`, `nodes`,
+/// `faces`, `emission` (E at the nodes), `report` (the JSON of `solve --json`), and with
+/// cases `cases_u` (dof x cases).
+#[pyfunction]
+#[pyo3(signature = (scene, options, emission=None, progress=None))]
+fn solve<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    options: RunOptions,
+    emission: Option<&Bound<'py, PyAny>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let mut config = options.config(scene, progress_to(progress))?;
+    if let Some(emission) = emission {
+        let (columns, _) = emission_columns(emission)?;
+        config.cases = Some(EmissionCases::from_columns(columns).map_err(raised)?);
+        if options.solution.is_none() {
+            config.solution = None;
+        }
+    }
+    let run = py
+        .detach(|| {
+            pipeline::run_problem(&config, pipeline::build_on(&config, scene.scene.clone())?)
+        })
+        .map_err(raised)?;
+    let out = pyo3::types::PyDict::new(py);
+    let (positions, faces) = nodes_array(py, &run.disc.nodes, run.scene.origin);
+    out.set_item("nodes", positions)?;
+    out.set_item("faces", faces)?;
+    let report = serde_json::to_string(&run.report).expect("the report is JSON");
+    out.set_item("report", report)?;
+    out.set_item("emission", run.emission.into_pyarray(py))?;
+    if !run.cases.is_empty() {
+        let (dof, count) = (run.report.u.len(), run.cases.len());
+        let cases = Array2::from_shape_fn((dof, count), |(i, c)| run.cases[c].u[i]);
+        out.set_item("cases_u", cases.into_pyarray(py))?;
+    }
+    out.set_item("u", run.report.u.into_pyarray(py))?;
+    Ok(out)
+}
+
+/// The collocation operator K of one run's problem, built once: products `K x` and solves of
+/// `(I - K) u = E` for any number of right-hand sides.
+#[pyclass(name = "NativeOperator", module = "radiosity", frozen)]
+struct PyOperator {
+    config: RunConfig,
+    problem: Problem,
+    built: BuiltOperator,
+}
+
+#[pymethods]
+impl PyOperator {
+    /// Number of unknowns.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.built.dof()
+    }
+
+    /// The operator's summary (JSON): `operator`, `setup_seconds`, `operator_bytes`, blocks.
+    #[getter]
+    fn report(&self) -> String {
+        let summary = self.built.summary(&self.config, self.built.dof());
+        serde_json::to_string(&summary).expect("the summary is JSON")
+    }
+
+    /// The nodes' positions (dof x 3, the user's coordinates), faces and reflectivities.
+    #[allow(clippy::type_complexity)]
+    fn nodes<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<usize>>, Bound<'py, PyArray1<f64>>) {
+        let nodes = &self.problem.disc.nodes;
+        let (positions, faces) = nodes_array(py, nodes, self.problem.scene.origin);
+        let rho: Vec<f64> = nodes.iter().map(|n| n.rho).collect();
+        (positions, faces, rho.into_pyarray(py))
+    }
+
+    /// `K x`.
+    fn matvec<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let x = x.as_array().to_vec();
+        if x.len() != self.built.dof() {
+            return Err(RadiosityError::new_err(format!(
+                "x has {} values; the operator has {} unknowns",
+                x.len(),
+                self.built.dof()
+            )));
+        }
+        Ok(py.detach(|| self.built.apply(&x)).into_pyarray(py))
+    }
+
+    /// Solves `(I - K) u = E` for E per face or per node, 1-D or one case per column (2-D);
+    /// returns u (dof, or dof x cases) and each case's report (JSON).
+    fn solve<'py>(
+        &self,
+        py: Python<'py>,
+        emission: &Bound<'py, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Vec<String>)> {
+        let (columns, two_d) = emission_columns(emission)?;
+        let cases = EmissionCases::from_columns(columns).map_err(raised)?;
+        let outcomes = py
+            .detach(|| {
+                let columns = cases.at_nodes(&self.problem.scene, &self.problem.disc)?;
+                let rhs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+                self.built.solve_many(&self.config, &self.problem, &rhs)
+            })
+            .map_err(raised)?;
+        let reports = outcomes
+            .iter()
+            .map(|o| serde_json::to_string(o).expect("the outcome is JSON"))
+            .collect();
+        let u = if two_d {
+            let (dof, count) = (self.built.dof(), outcomes.len());
+            Array2::from_shape_fn((dof, count), |(i, c)| outcomes[c].u[i])
+                .into_pyarray(py)
+                .into_any()
+        } else {
+            let outcome = outcomes.into_iter().next().expect("one case");
+            outcome.u.into_pyarray(py).into_any()
+        };
+        Ok((u, reports))
+    }
+}
+
+/// Builds the operator of one run (as `solve` would, without solving).
+#[pyfunction]
+#[pyo3(signature = (scene, options, progress=None))]
+fn operator(
+    py: Python<'_>,
+    scene: &PyScene,
+    options: RunOptions,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyOperator> {
+    let mut config = options.config(scene, progress_to(progress))?;
+    config.solution = None;
+    py.detach(|| {
+        let problem = pipeline::build_on(&config, scene.scene.clone())?;
+        let built = pipeline::build_operator(&config, &problem)?;
+        Ok(PyOperator { config, problem, built })
+    })
+    .map_err(raised)
+}
+
+/// Element-to-element view factors of the scene's uniform mesh at `refine`, as `radiosity
+/// viewfactors` computes them: (indptr, indices, data, n, areas, summary JSON) of the CSR
+/// matrix of its non-zero entries.
+#[pyfunction]
+#[pyo3(signature = (scene, refine, tolerance, max_depth, progress=None))]
+#[allow(clippy::type_complexity)]
+fn view_factors<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    refine: u32,
+    tolerance: f64,
+    max_depth: u32,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+    usize,
+    Bound<'py, PyArray1<f64>>,
+    String,
+)> {
+    let options = ViewFactorOptions { tolerance, max_depth, ..Default::default() };
+    options.validate().map_err(raised)?;
+    let mut config = RunConfig::paper(BuiltinScene::Cube, refine);
+    config.progress = progress_to(progress);
+    let (f, summary) = py
+        .detach(|| {
+            let started = std::time::Instant::now();
+            let problem = pipeline::build_on(&config, scene.scene.clone())?;
+            let Problem { scene, mesh, planner, .. } = &problem;
+            config.progress.start("viewfactors", mesh.len());
+            let f = compute_view_factors(scene, mesh, planner, &options, &*config.progress)?;
+            config.progress.finish();
+            let summary = f.summary(&scene.name, started.elapsed().as_secs_f64());
+            Ok::<_, radiosity::Error>((f, summary))
+        })
+        .map_err(raised)?;
+    let csr = radiosity::report::Csr::from_dense(f.len(), f.len(), &f.matrix);
+    let summary = serde_json::to_string(&summary).expect("the summary is JSON");
+    Ok((
+        csr.indptr.into_pyarray(py),
+        csr.indices.into_pyarray(py),
+        csr.data.into_pyarray(py),
+        f.len(),
+        f.areas.into_pyarray(py),
+        summary,
+    ))
+}
+
+/// The native part of the `radiosity` package.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScene>()?;
+    m.add_class::<PyOperator>()?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(operator, m)?)?;
+    m.add_function(wrap_pyfunction!(view_factors, m)?)?;
+    m.add("RadiosityError", m.py().get_type::<RadiosityError>())?;
+    // The command line's defaults that the package's options take.
+    m.add("DEFAULT_COMPRESSION_TOLERANCE", radiosity::operator::DEFAULT_TOLERANCE)?;
+    m.add("DEFAULT_SOLVER_TOLERANCE", radiosity::solve::DEFAULT_TOLERANCE)?;
+    Ok(())
+}
