@@ -568,3 +568,119 @@ fn a_memory_limit_refuses_before_it_is_passed_and_lets_through_what_fits() {
         assert!(!ok && err.contains(needle), "{limit}: {err}");
     }
 }
+
+#[test]
+fn a_saved_operator_reloads_to_the_same_solution_and_only_for_its_problem() {
+    let dir = std::env::temp_dir().join(format!("radiosity-saved-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let solve = |extra: &[&str]| {
+        let mut args = vec!["solve", "--scene", "five-piece", "--refine", "3", "--json", "-"];
+        args.extend(extra);
+        json(&args)
+    };
+    for (operator, exact) in [("dense", true), ("compressed", false)] {
+        let file = path(&format!("{operator}.bin"));
+        let (ok, _, stderr) = radiosity(&[
+            "assemble",
+            "--scene",
+            "five-piece",
+            "--refine",
+            "3",
+            "--operator",
+            operator,
+            "--save",
+            &file,
+        ]);
+        assert!(ok && stderr.contains(&format!("saved the {operator} operator")), "{stderr}");
+        let loaded = solve(&["--operator-file", &file, "--solver", "iterative"]);
+        let built = solve(&["--operator", operator, "--solver", "iterative"]);
+        assert_eq!(loaded["operator"], operator);
+        assert_eq!(loaded["operator_bytes"], built["operator_bytes"]);
+        let (a, b) = (loaded["error"].as_f64().unwrap(), built["error"].as_f64().unwrap());
+        // The compressed product's parallel sums are not ordered from run to run.
+        assert!(if exact { a == b } else { (a - b).abs() <= 1e-12 * b }, "{operator}: {a} {b}");
+
+        // Another problem, another kind or tolerance: refused, naming what differs.
+        for (args, says) in [
+            (
+                vec!["--scene", "five-piece", "--refine", "2"],
+                "refine 3 (this run: uniform refine 2)",
+            ),
+            (
+                vec!["--scene", "four-piece", "--refine", "3"],
+                "scene five-piece (this run: four-piece)",
+            ),
+            (
+                vec!["--scene", "five-piece", "--refine", "3", "--method", "linear"],
+                "(this run: linear",
+            ),
+            (vec!["--scene", "five-piece", "--refine", "3", "--imt-nodes", "64"], "integrals"),
+        ] {
+            let mut all = vec!["solve"];
+            all.extend(args);
+            all.extend(["--operator-file", file.as_str()]);
+            let (ok, _, stderr) = radiosity(&all);
+            assert!(!ok && stderr.contains(says), "{operator} {all:?}: {stderr}");
+        }
+        let other = if exact { "compressed" } else { "dense" };
+        let (ok, _, stderr) = radiosity(&[
+            "solve",
+            "--scene",
+            "five-piece",
+            "--refine",
+            "3",
+            "--operator",
+            other,
+            "--operator-file",
+            &file,
+        ]);
+        assert!(!ok && stderr.contains(&format!("this run asks for the {other} one")), "{stderr}");
+
+        // Cut anywhere, or damaged: refused with what is wrong, never a panic or a wrong answer.
+        let bytes = std::fs::read(&file).unwrap();
+        let cut = path("cut.bin");
+        for k in 1..=24 {
+            let at = bytes.len() * k / 25;
+            std::fs::write(&cut, &bytes[..at]).unwrap();
+            let (ok, _, stderr) = radiosity(&[
+                "solve",
+                "--scene",
+                "five-piece",
+                "--refine",
+                "3",
+                "--operator-file",
+                &cut,
+            ]);
+            assert!(
+                !ok && stderr.starts_with("error: ")
+                    && ["truncated", "damaged", "not an operator file"]
+                        .iter()
+                        .any(|s| stderr.contains(s)),
+                "{operator} cut at {at}: {stderr}"
+            );
+        }
+    }
+    let (ok, _, stderr) = radiosity(&[
+        "solve",
+        "--scene",
+        "five-piece",
+        "--refine",
+        "3",
+        "--operator-file",
+        "README.md",
+    ]);
+    assert!(!ok && stderr.contains("README.md: not an operator file of radiosity"), "{stderr}");
+    let (ok, _, stderr) = radiosity(&["assemble", "--scene", "five-piece", "--refine", "1"]);
+    assert!(!ok && stderr.contains("give --output K.npy"), "{stderr}");
+    let (ok, _, stderr) = radiosity(&[
+        "assemble",
+        "--scene",
+        "five-piece",
+        "--operator",
+        "compressed",
+        "--output",
+        "k.npy",
+    ]);
+    assert!(!ok && stderr.contains("the .npy file holds the dense matrix"), "{stderr}");
+}

@@ -54,6 +54,7 @@ _DEFAULTS = dict(
     compression_tolerance=_native.DEFAULT_COMPRESSION_TOLERANCE,
     solver="auto",
     tolerance=_native.DEFAULT_SOLVER_TOLERANCE,
+    operator_file=None,
 )
 
 
@@ -136,6 +137,11 @@ class Operator(scipy.sparse.linalg.LinearOperator):
         x = np.ascontiguousarray(np.ravel(x), dtype=np.float64)
         return self._native.matvec(x)
 
+    def save(self, path):
+        """Saves the operator for ``operator(scene, operator_file=path, ...)`` (the same
+        scene and options) and ``radiosity solve --operator-file``."""
+        self._native.save(str(path))
+
     def solve(self, emission):
         """u with ``(I - K) u = E`` for each column of ``emission``; ``self.last_reports``
         then holds each case's solver report (solver, iterations, residual)."""
@@ -147,7 +153,9 @@ class Operator(scipy.sparse.linalg.LinearOperator):
 
 def operator(scene, progress=None, **options):
     """The operator of ``scene`` for the run ``options`` describe (as :func:`solve` takes
-    them), built once for products and many solves."""
+    them), built once for products and many solves; or read from ``operator_file`` (saved by
+    :meth:`Operator.save` or ``radiosity assemble --save``), which must have been built for the
+    same scene, mesh, method and tolerance."""
     return Operator(_native.operator(scene, _options(options), progress))
 
 

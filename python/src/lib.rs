@@ -206,6 +206,7 @@ struct RunOptions {
     compression_tolerance: f64,
     solver: String,
     tolerance: f64,
+    operator_file: Option<std::path::PathBuf>,
 }
 
 impl RunOptions {
@@ -271,6 +272,7 @@ impl RunOptions {
             other => return Err(unknown("solver", other, "auto, lu or iterative")),
         };
         config.solver = SolverOptions { choice, tolerance: self.tolerance };
+        config.operator_file = self.operator_file.clone();
         config.progress = progress;
         Ok(config)
     }
@@ -447,6 +449,13 @@ impl PyOperator {
         let (positions, faces) = nodes_array(py, nodes, self.problem.scene.origin);
         let rho: Vec<f64> = nodes.iter().map(|n| n.rho).collect();
         (positions, faces, rho.into_pyarray(py))
+    }
+
+    /// Saves the operator (as `assemble --save` does) for `operator(..., operator_file=path)`
+    /// and `solve --operator-file`.
+    fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        py.detach(|| pipeline::save_operator(&path, &self.built, &self.config, &self.problem))
+            .map_err(raised)
     }
 
     /// `K x`.

@@ -151,3 +151,26 @@ def test_progress_reaches_the_callback():
     assert {"assembly", "solve"} <= stages, stages
     assembly = [(d, t) for s, d, t in seen if s == "assembly"]
     assert assembly[-1][0] == assembly[-1][1] > 0
+
+
+def test_a_saved_operator_reloads_and_refuses_another_problem(tmp_path):
+    scene = radiosity.Scene.load(ROOM)
+    e = np.random.default_rng(2).random(len(scene))
+    for kind in ["dense", "compressed"]:
+        path = tmp_path / f"{kind}.bin"
+        options = dict(refine=2, operator=kind, solver="iterative")
+        op = radiosity.operator(scene, **options)
+        op.save(path)
+        loaded = radiosity.operator(scene, operator_file=str(path), **options)
+        assert loaded.report["operator"] == kind
+        tolerance = 0.0 if kind == "dense" else 1e-12
+        assert relative_max(loaded.solve(e), op.solve(e)) <= tolerance
+        # The CLI reads what Python saved.
+        report = json.loads(cli("solve", "--scene", ROOM, "--refine", "2", "--solver",
+                                "iterative", "--operator-file", str(path), "--json", "-"))
+        assert report["operator"] == kind
+        with pytest.raises(radiosity.RadiosityError, match="saved for another problem"):
+            radiosity.operator(scene, refine=1, operator_file=str(path))
+    path.write_bytes(path.read_bytes()[:-100])
+    with pytest.raises(radiosity.RadiosityError, match="truncated"):
+        radiosity.operator(scene, refine=2, operator_file=str(path))

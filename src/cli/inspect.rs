@@ -54,6 +54,19 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
             reason: "inspect solves nothing; the colour bands belong to solve".into(),
         });
     }
+    for (given, flag) in
+        [(&args.emission_file, "emission-file"), (&args.operator_file, "operator-file")]
+    {
+        if let Some(value) = given {
+            return Err(Error::InvalidParameter {
+                name: flag,
+                value: value.clone(),
+                reason: format!(
+                    "inspect builds its operator and solves nothing; --{flag} belongs to solve"
+                ),
+            });
+        }
+    }
     let config = args.config()?;
     let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, disc, planner, .. } = &problem;

@@ -311,6 +311,10 @@ pub(crate) struct SolveArgs {
     /// Relative residual ||E - (I - K) u||_2 / ||E||_2 at which the iterative solver stops
     #[arg(long, default_value_t = radiosity::solve::DEFAULT_TOLERANCE)]
     pub(crate) tolerance: f64,
+    /// Read the operator from this file (written by `assemble --save`) instead of building it;
+    /// refused if it was built for another scene, mesh, method or tolerance
+    #[arg(long, value_name = "OP.bin")]
+    pub(crate) operator_file: Option<String>,
     /// Solve one emission case per column of this CSV file on the one operator (one row per
     /// face, in the scene's order, or one per node; a header row may name the cases); outputs
     /// get u and E per case
@@ -402,9 +406,16 @@ pub(crate) struct AssembleArgs {
     pub(crate) geometry: GeometryArgs,
     #[command(flatten)]
     pub(crate) device: DeviceArgs,
-    /// Output file (NumPy .npy, float64, row-major dof x dof)
+    #[command(flatten)]
+    pub(crate) operator: OperatorArgs,
+    /// Write the dense matrix K to this NumPy file (.npy, float64, row-major dof x dof)
     #[arg(long, value_name = "FILE.npy")]
-    pub(crate) output: String,
+    pub(crate) output: Option<String>,
+    /// Save the operator (dense or compressed, as --operator chooses) for `solve
+    /// --operator-file`: a versioned binary file that records the scene, mesh and method it
+    /// was built for
+    #[arg(long, value_name = "OP.bin")]
+    pub(crate) save: Option<String>,
 }
 
 pub(crate) fn parse_params(text: &str) -> Result<SurfaceParameters> {
@@ -505,6 +516,7 @@ impl GeometryArgs {
             compression: CompressionOptions::default(),
             bands: Vec::new(),
             cases: None,
+            operator_file: None,
         })
     }
 }
@@ -548,6 +560,7 @@ impl SolveArgs {
             tolerance: self.tolerance,
         };
         config.bands = self.colour.channels()?;
+        config.operator_file = self.operator_file.as_ref().map(std::path::PathBuf::from);
         if let Some(path) = &self.emission_file {
             config.cases = Some(EmissionCases::read_csv(std::path::Path::new(path))?);
             // The cases give E: no true solution unless one is asked for (and then refused).

@@ -21,6 +21,9 @@ pub mod aca;
 mod batched;
 mod blocks;
 pub mod cluster;
+mod saved;
+
+pub use saved::{BinaryReader, BinaryWriter};
 
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -263,8 +266,10 @@ impl SparseRows {
 pub struct CompressedOperator {
     dof: usize,
     per: usize,
-    nodes: ClusterTree,
-    elements: ClusterTree,
+    /// `node_order[k]`: the node at row k of the blocks (the node cluster tree's order).
+    node_order: Vec<usize>,
+    /// `element_order[k]`: the element at column group k (the element cluster tree's order).
+    element_order: Vec<usize>,
     blocks: Vec<Block>,
     /// Statistics of the blocks.
     pub stats: OperatorStats,
@@ -331,8 +336,8 @@ impl CompressedOperator {
         Ok(Self {
             dof: disc.dof(),
             per,
-            nodes,
-            elements,
+            node_order: nodes.order,
+            element_order: elements.order,
             blocks,
             stats,
             pairs,
@@ -351,7 +356,7 @@ impl CompressedOperator {
         let per = self.per;
         // x in the element order.
         let mut xp = vec![0.0; self.dof];
-        for (k, &e) in self.elements.order.iter().enumerate() {
+        for (k, &e) in self.element_order.iter().enumerate() {
             xp[k * per..(k + 1) * per].copy_from_slice(&x[e * per..(e + 1) * per]);
         }
         let yp = self
@@ -384,7 +389,7 @@ impl CompressedOperator {
                 },
             );
         let mut y = vec![0.0; self.dof];
-        for (k, &i) in self.nodes.order.iter().enumerate() {
+        for (k, &i) in self.node_order.iter().enumerate() {
             y[i] = yp[k];
         }
         y

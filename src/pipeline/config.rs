@@ -193,6 +193,8 @@ pub struct RunConfig {
     /// Emission cases solved on the one operator instead of the scene's emission (then the
     /// solution must be `None` and the bands grey).
     pub cases: Option<EmissionCases>,
+    /// Read the operator from this file (`assemble --save`) instead of building it.
+    pub operator_file: Option<PathBuf>,
 }
 
 /// Assemblies slower than this are not repeated for timing.
@@ -221,6 +223,7 @@ impl RunConfig {
             compression: CompressionOptions::default(),
             bands: Vec::new(),
             cases: None,
+            operator_file: None,
         }
     }
 }

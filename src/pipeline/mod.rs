@@ -11,6 +11,7 @@ mod cases;
 mod config;
 mod operator;
 mod report;
+mod saved;
 
 pub use crate::assembly::Problem;
 pub use backend::{Assembler, assemble_on};
@@ -19,6 +20,7 @@ pub use operator::{
     BuiltOperator, OperatorSummary, TimedAssembly, build_compressed, build_operator, compresses,
 };
 pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
+pub use saved::{OperatorHeader, load_operator, save_operator};
 
 use std::time::Instant;
 

@@ -51,6 +51,13 @@ pub struct TimedAssembly {
     preparation_seconds: f64,
 }
 
+impl TimedAssembly {
+    /// A matrix read from a file in `setup_seconds`.
+    pub(super) fn loaded(assembled: Assembly, setup_seconds: f64) -> Self {
+        Self { assembled, device: None, setup_seconds, preparation_seconds: 0.0 }
+    }
+}
+
 /// The operator a run solves with: the dense matrix K or the compressed operator.
 pub enum BuiltOperator {
     /// K stored entry by entry, with its timings.
@@ -94,6 +101,14 @@ impl BuiltOperator {
         match self {
             Self::Dense(t) => t.assembled.matrix.dof(),
             Self::Compressed { op, .. } => op.dof(),
+        }
+    }
+
+    /// The dense matrix, when this is it.
+    pub fn matrix(&self) -> Option<&crate::assembly::CollocationMatrix> {
+        match self {
+            Self::Dense(t) => Some(&t.assembled.matrix),
+            Self::Compressed { .. } => None,
         }
     }
 
@@ -192,6 +207,9 @@ pub fn build_compressed(
 /// size, the compressed operator (built once; its setup time includes the pair planner's, as
 /// the dense assembly's does).
 pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
+    if let Some(path) = &config.operator_file {
+        return super::load_operator(path, config, problem);
+    }
     let disc = &problem.disc;
     if !compresses(config, problem) {
         return Ok(BuiltOperator::Dense(assemble_timed(config, problem)?));

@@ -1,0 +1,384 @@
+//! The compressed operator in a file: its orders and blocks in a little-endian binary layout,
+//! and the reader and writer that layout (and the dense matrix's, `pipeline::saved`) is made
+//! of. The reader checks every length against what the file still holds and every index
+//! against the operator's size, and a checksum of everything at the end, so that a truncated
+//! or damaged file is refused with what is wrong, never read past or trusted.
+
+use std::io::{Read, Write};
+
+use super::aca::LowRank;
+use super::{Block, BlockData, CompressedOperator, OperatorStats, SparseRows};
+use crate::error::{Error, Result};
+use crate::visibility::PairStats;
+
+/// A checksum of a byte stream, word by word (FNV-1a's step on 64-bit words, with a rotation
+/// so that every bit reaches every other), the same however the stream is cut into calls.
+#[derive(Clone, Copy, Debug)]
+struct Checksum {
+    state: u64,
+    pending: [u8; 8],
+    filled: usize,
+}
+
+impl Checksum {
+    fn new() -> Self {
+        Self { state: 0xcbf2_9ce4_8422_2325, pending: [0; 8], filled: 0 }
+    }
+
+    fn word(&mut self, w: u64) {
+        self.state = (self.state ^ w).wrapping_mul(0x0000_0100_0000_01b3).rotate_left(27);
+    }
+
+    fn update(&mut self, mut bytes: &[u8]) {
+        while self.filled > 0 && !bytes.is_empty() {
+            self.pending[self.filled] = bytes[0];
+            self.filled = (self.filled + 1) % 8;
+            bytes = &bytes[1..];
+            if self.filled == 0 {
+                self.word(u64::from_le_bytes(self.pending));
+            }
+        }
+        let words = bytes.chunks_exact(8);
+        let rest = words.remainder();
+        for w in words {
+            self.word(u64::from_le_bytes(w.try_into().expect("eight bytes")));
+        }
+        self.pending[..rest.len()].copy_from_slice(rest);
+        self.filled = rest.len();
+    }
+
+    fn value(mut self) -> u64 {
+        let filled = self.filled as u64;
+        self.pending[self.filled..].fill(0);
+        self.word(u64::from_le_bytes(self.pending));
+        self.word(filled);
+        self.state
+    }
+}
+
+/// Writes numbers little-endian, arrays with their length first, and at the end a checksum of
+/// all it wrote.
+pub struct BinaryWriter<W: Write> {
+    out: W,
+    sum: Checksum,
+}
+
+impl<W: Write> BinaryWriter<W> {
+    /// A writer into `out`.
+    pub fn new(out: W) -> Self {
+        Self { out, sum: Checksum::new() }
+    }
+
+    /// Writes the checksum; the output, flushed.
+    pub fn finish(mut self) -> Result<W> {
+        self.out.write_all(&self.sum.value().to_le_bytes())?;
+        self.out.flush()?;
+        Ok(self.out)
+    }
+
+    /// Raw bytes, no length.
+    pub fn raw(&mut self, bytes: &[u8]) -> Result<()> {
+        self.sum.update(bytes);
+        Ok(self.out.write_all(bytes)?)
+    }
+
+    /// One number.
+    pub fn u64(&mut self, v: u64) -> Result<()> {
+        self.raw(&v.to_le_bytes())
+    }
+
+    /// Bytes with their length.
+    pub fn bytes(&mut self, v: &[u8]) -> Result<()> {
+        self.u64(v.len() as u64)?;
+        self.raw(v)
+    }
+
+    /// Numbers with their length.
+    pub fn f64s(&mut self, v: &[f64]) -> Result<()> {
+        self.u64(v.len() as u64)?;
+        // Large arrays in chunks: one copy of a chunk, not of the array.
+        for chunk in v.chunks(1 << 16) {
+            let bytes: Vec<u8> = chunk.iter().flat_map(|x| x.to_le_bytes()).collect();
+            self.raw(&bytes)?;
+        }
+        Ok(())
+    }
+
+    /// Indices with their length.
+    pub fn u32s(&mut self, v: &[u32]) -> Result<()> {
+        self.u64(v.len() as u64)?;
+        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.raw(&bytes)
+    }
+
+    /// Indices with their length, as u64.
+    pub fn usizes(&mut self, v: &[usize]) -> Result<()> {
+        self.u64(v.len() as u64)?;
+        let bytes: Vec<u8> = v.iter().flat_map(|&x| (x as u64).to_le_bytes()).collect();
+        self.raw(&bytes)
+    }
+}
+
+/// Reads what [`BinaryWriter`] wrote from a file of known length, refusing any length the file
+/// cannot hold (a truncated or damaged file) before allocating for it.
+pub struct BinaryReader<R: Read> {
+    input: R,
+    path: String,
+    left: u64,
+    sum: Checksum,
+}
+
+impl<R: Read> BinaryReader<R> {
+    /// A reader of `len` bytes from `input`, the file `path` (for messages).
+    pub fn new(input: R, len: u64, path: &str) -> Self {
+        Self { input, path: path.to_string(), left: len, sum: Checksum::new() }
+    }
+
+    /// Reads the checksum [`BinaryWriter::finish`] wrote and refuses a file whose bytes do not
+    /// give it, or that goes on after it.
+    pub fn finish(mut self) -> Result<()> {
+        let expected = self.sum.value();
+        let bytes = self.raw(8, "the checksum")?;
+        let found = u64::from_le_bytes(bytes.try_into().expect("eight bytes"));
+        if found != expected {
+            return Err(self.error("damaged: the checksum does not match the contents".into()));
+        }
+        if self.left != 0 {
+            return Err(self.error(format!("damaged: {} bytes after the checksum", self.left)));
+        }
+        Ok(())
+    }
+
+    /// An error about this file.
+    pub fn error(&self, reason: String) -> Error {
+        Error::DataFile { path: self.path.clone(), reason }
+    }
+
+    /// `n` raw bytes of `what`.
+    pub fn raw(&mut self, n: u64, what: &str) -> Result<Vec<u8>> {
+        if n > self.left {
+            return Err(self.error(format!(
+                "truncated: {what} needs {n} bytes, the file has {} left",
+                self.left
+            )));
+        }
+        let mut bytes = vec![0; n as usize];
+        self.input.read_exact(&mut bytes)?;
+        self.left -= n;
+        self.sum.update(&bytes);
+        Ok(bytes)
+    }
+
+    /// One number.
+    pub fn u64(&mut self, what: &str) -> Result<u64> {
+        let bytes = self.raw(8, what)?;
+        Ok(u64::from_le_bytes(bytes.try_into().expect("eight bytes")))
+    }
+
+    /// A length of `what`, each item `item_bytes` long, that the file can hold.
+    fn len(&mut self, what: &str, item_bytes: u64) -> Result<usize> {
+        let len = self.u64(what)?;
+        if len.saturating_mul(item_bytes) > self.left {
+            return Err(self.error(format!(
+                "truncated or damaged: {what} claims {len} items, the file has {} bytes left",
+                self.left
+            )));
+        }
+        Ok(len as usize)
+    }
+
+    /// Bytes with their length.
+    pub fn bytes(&mut self, what: &str) -> Result<Vec<u8>> {
+        let len = self.len(what, 1)?;
+        self.raw(len as u64, what)
+    }
+
+    /// Numbers with their length.
+    pub fn f64s(&mut self, what: &str) -> Result<Vec<f64>> {
+        let len = self.len(what, 8)?;
+        let mut values = Vec::with_capacity(len);
+        let mut left = len;
+        while left > 0 {
+            let chunk = left.min(1 << 16);
+            let bytes = self.raw(8 * chunk as u64, what)?;
+            values.extend(
+                bytes.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8"))),
+            );
+            left -= chunk;
+        }
+        Ok(values)
+    }
+
+    /// Indices with their length.
+    pub fn u32s(&mut self, what: &str) -> Result<Vec<u32>> {
+        let len = self.len(what, 4)?;
+        let bytes = self.raw(4 * len as u64, what)?;
+        Ok(bytes.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().expect("4"))).collect())
+    }
+
+    /// Indices with their length, each below `bound`.
+    pub fn usizes(&mut self, what: &str, bound: usize) -> Result<Vec<usize>> {
+        let len = self.len(what, 8)?;
+        let bytes = self.raw(8 * len as u64, what)?;
+        let values: Vec<u64> =
+            bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8"))).collect();
+        match values.iter().find(|&&v| v >= bound as u64) {
+            Some(v) => Err(self.error(format!("damaged: {what} holds {v}, beyond {bound}"))),
+            None => Ok(values.into_iter().map(|v| v as usize).collect()),
+        }
+    }
+}
+
+const DENSE: u64 = 0;
+const SPARSE: u64 = 1;
+const LOW_RANK: u64 = 2;
+
+impl CompressedOperator {
+    /// Writes the operator (its statistics, orders and blocks).
+    pub fn write<W: Write>(&self, out: &mut BinaryWriter<W>) -> Result<()> {
+        let s = &self.stats;
+        let p = &self.pairs;
+        for v in [self.dof as u64, self.per as u64, self.zero_rows as u64] {
+            out.u64(v)?;
+        }
+        for v in [
+            s.operator_bytes,
+            s.near_entries,
+            s.near_blocks,
+            s.far_blocks,
+            s.far_entries,
+            s.max_rank as u64,
+            s.empty_blocks,
+            s.incompressible_blocks,
+        ] {
+            out.u64(v)?;
+        }
+        for v in
+            [p.total, p.same_plane, p.facing_away, p.hidden, p.not_reflecting, p.full, p.partial]
+        {
+            out.u64(v)?;
+        }
+        out.usizes(&self.node_order)?;
+        out.usizes(&self.element_order)?;
+        out.u64(self.blocks.len() as u64)?;
+        for b in &self.blocks {
+            for v in [b.rows.start, b.rows.end, b.cols.start, b.cols.end] {
+                out.u64(v as u64)?;
+            }
+            match &b.data {
+                BlockData::Dense(values) => {
+                    out.u64(DENSE)?;
+                    out.f64s(values)?;
+                }
+                BlockData::Sparse(rows) => {
+                    out.u64(SPARSE)?;
+                    out.u32s(&rows.starts)?;
+                    out.u32s(&rows.columns)?;
+                    out.f64s(&rows.values)?;
+                }
+                BlockData::LowRank(lr) => {
+                    out.u64(LOW_RANK)?;
+                    out.u64(lr.k as u64)?;
+                    out.f64s(&lr.u)?;
+                    out.f64s(&lr.v)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads an operator [`CompressedOperator::write`] wrote, checking every block against its
+    /// size.
+    pub fn read<R: Read>(input: &mut BinaryReader<R>) -> Result<Self> {
+        let dof = input.u64("the number of unknowns")? as usize;
+        let per = input.u64("the nodes per element")? as usize;
+        if !(per == 1 || per == 3) || !dof.is_multiple_of(per) {
+            return Err(input.error(format!("damaged: {dof} unknowns with {per} per element")));
+        }
+        let zero_rows = input.u64("the zero rows")? as usize;
+        let mut next = |what: &str| input.u64(what);
+        let stats = OperatorStats {
+            operator_bytes: next("statistics")?,
+            near_entries: next("statistics")?,
+            near_blocks: next("statistics")?,
+            far_blocks: next("statistics")?,
+            far_entries: next("statistics")?,
+            max_rank: next("statistics")? as usize,
+            empty_blocks: next("statistics")?,
+            incompressible_blocks: next("statistics")?,
+        };
+        let pairs = PairStats {
+            total: next("pair classes")?,
+            same_plane: next("pair classes")?,
+            facing_away: next("pair classes")?,
+            hidden: next("pair classes")?,
+            not_reflecting: next("pair classes")?,
+            full: next("pair classes")?,
+            partial: next("pair classes")?,
+        };
+        let node_order = input.usizes("the node order", dof)?;
+        let element_order = input.usizes("the element order", dof / per)?;
+        if node_order.len() != dof || element_order.len() != dof / per {
+            return Err(input.error("damaged: the orders do not cover the unknowns".into()));
+        }
+        let count = input.u64("the number of blocks")?;
+        let mut blocks = Vec::new();
+        for _ in 0..count {
+            let mut range = |bound: usize| -> Result<std::ops::Range<usize>> {
+                let (start, end) = (input.u64("a block")? as usize, input.u64("a block")? as usize);
+                if start > end || end > bound {
+                    return Err(input.error(format!("damaged: a block spans {start}..{end}")));
+                }
+                Ok(start..end)
+            };
+            let rows = range(dof)?;
+            let cols = range(dof / per)?;
+            let (m, c) = (rows.len(), cols.len() * per);
+            let data = match input.u64("a block's kind")? {
+                DENSE => BlockData::Dense(input.f64s("a dense block")?),
+                SPARSE => BlockData::Sparse(SparseRows {
+                    starts: input.u32s("a sparse block")?,
+                    columns: input.u32s("a sparse block")?,
+                    values: input.f64s("a sparse block")?,
+                }),
+                LOW_RANK => {
+                    let k = input.u64("a rank")? as usize;
+                    let (u, v) = (input.f64s("a low-rank block")?, input.f64s("a low-rank block")?);
+                    BlockData::LowRank(LowRank { m, c, k, u, v })
+                }
+                other => return Err(input.error(format!("damaged: block kind {other}"))),
+            };
+            if !fits(&data, m, c) {
+                return Err(input.error(format!("damaged: a block of {m} x {c} holds other sizes")));
+            }
+            blocks.push(Block { rows, cols, data });
+        }
+        Ok(Self {
+            dof,
+            per,
+            node_order,
+            element_order,
+            blocks,
+            stats,
+            pairs,
+            zero_rows,
+            device: None,
+        })
+    }
+}
+
+/// Whether block data matches an m × c block (so that its product stays inside it).
+fn fits(data: &BlockData, m: usize, c: usize) -> bool {
+    match data {
+        BlockData::Dense(values) => values.len() == m * c,
+        BlockData::Sparse(rows) => {
+            rows.starts.len() == m + 1
+                && rows.starts.first() == Some(&0)
+                && rows.starts.windows(2).all(|w| w[0] <= w[1])
+                && *rows.starts.last().expect("m + 1 starts") as usize == rows.values.len()
+                && rows.columns.len() == rows.values.len()
+                && rows.columns.iter().all(|&col| (col as usize) < c)
+        }
+        BlockData::LowRank(lr) => lr.u.len() == m * lr.k && lr.v.len() == c * lr.k,
+    }
+}
