@@ -574,6 +574,9 @@ fn a_saved_operator_reloads_to_the_same_solution_and_only_for_its_problem() {
     let dir = std::env::temp_dir().join(format!("radiosity-saved-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let solve_from = |file: &str| {
+        radiosity(&["solve", "--scene", "five-piece", "--refine", "3", "--operator-file", file])
+    };
     let solve = |extra: &[&str]| {
         let mut args = vec!["solve", "--scene", "five-piece", "--refine", "3", "--json", "-"];
         args.extend(extra);
@@ -643,15 +646,7 @@ fn a_saved_operator_reloads_to_the_same_solution_and_only_for_its_problem() {
         for k in 1..=24 {
             let at = bytes.len() * k / 25;
             std::fs::write(&cut, &bytes[..at]).unwrap();
-            let (ok, _, stderr) = radiosity(&[
-                "solve",
-                "--scene",
-                "five-piece",
-                "--refine",
-                "3",
-                "--operator-file",
-                &cut,
-            ]);
+            let (ok, _, stderr) = solve_from(&cut);
             assert!(
                 !ok && stderr.starts_with("error: ")
                     && ["truncated", "damaged", "not an operator file"]
@@ -661,15 +656,7 @@ fn a_saved_operator_reloads_to_the_same_solution_and_only_for_its_problem() {
             );
         }
     }
-    let (ok, _, stderr) = radiosity(&[
-        "solve",
-        "--scene",
-        "five-piece",
-        "--refine",
-        "3",
-        "--operator-file",
-        "README.md",
-    ]);
+    let (ok, _, stderr) = solve_from("README.md");
     assert!(!ok && stderr.contains("README.md: not an operator file of radiosity"), "{stderr}");
     let (ok, _, stderr) = radiosity(&["assemble", "--scene", "five-piece", "--refine", "1"]);
     assert!(!ok && stderr.contains("give --output K.npy"), "{stderr}");

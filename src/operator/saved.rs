@@ -11,22 +11,33 @@ use super::{Block, BlockData, CompressedOperator, OperatorStats, SparseRows};
 use crate::error::{Error, Result};
 use crate::visibility::PairStats;
 
-/// A checksum of a byte stream, word by word (FNV-1a's step on 64-bit words, with a rotation
-/// so that every bit reaches every other), the same however the stream is cut into calls.
+/// A checksum of a byte stream, word by word in four interleaved lanes (FNV-1a's step on
+/// 64-bit words, with a rotation so that every bit reaches every other; four lanes so that the
+/// multiplications do not wait on each other), the same however the stream is cut into calls.
 #[derive(Clone, Copy, Debug)]
 struct Checksum {
-    state: u64,
+    lanes: [u64; 4],
+    /// Words taken so far: the next goes to lane `words % 4`.
+    words: u64,
     pending: [u8; 8],
     filled: usize,
 }
 
+const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+
+fn mix(state: u64, word: u64) -> u64 {
+    (state ^ word).wrapping_mul(FNV_PRIME).rotate_left(27)
+}
+
 impl Checksum {
     fn new() -> Self {
-        Self { state: 0xcbf2_9ce4_8422_2325, pending: [0; 8], filled: 0 }
+        Self { lanes: [0xcbf2_9ce4_8422_2325; 4], words: 0, pending: [0; 8], filled: 0 }
     }
 
     fn word(&mut self, w: u64) {
-        self.state = (self.state ^ w).wrapping_mul(0x0000_0100_0000_01b3).rotate_left(27);
+        let lane = (self.words % 4) as usize;
+        self.lanes[lane] = mix(self.lanes[lane], w);
+        self.words += 1;
     }
 
     fn update(&mut self, mut bytes: &[u8]) {
@@ -38,10 +49,33 @@ impl Checksum {
                 self.word(u64::from_le_bytes(self.pending));
             }
         }
-        let words = bytes.chunks_exact(8);
+        if bytes.is_empty() {
+            return;
+        }
+        let word = |b: &[u8]| u64::from_le_bytes(b.try_into().expect("eight bytes"));
+        while self.words % 4 != 0 && bytes.len() >= 8 {
+            self.word(word(&bytes[..8]));
+            bytes = &bytes[8..];
+        }
+        let (body, tail) = bytes.split_at(bytes.len() / 32 * 32);
+        // Four words at a time; straight from the buffer where it is aligned (the arrays read
+        // into their own memory are).
+        let mut block = |b: [u64; 4]| {
+            for (lane, w) in self.lanes.iter_mut().zip(b) {
+                *lane = mix(*lane, u64::from_le(w));
+            }
+        };
+        match bytemuck::try_cast_slice::<u8, [u64; 4]>(body) {
+            Ok(blocks) => blocks.iter().for_each(|&b| block(b)),
+            Err(_) => body.chunks_exact(32).for_each(|b| {
+                block(bytemuck::pod_read_unaligned::<[u64; 4]>(b));
+            }),
+        }
+        self.words += (body.len() / 8) as u64;
+        let words = tail.chunks_exact(8);
         let rest = words.remainder();
         for w in words {
-            self.word(u64::from_le_bytes(w.try_into().expect("eight bytes")));
+            self.word(word(w));
         }
         self.pending[..rest.len()].copy_from_slice(rest);
         self.filled = rest.len();
@@ -51,8 +85,36 @@ impl Checksum {
         let filled = self.filled as u64;
         self.pending[self.filled..].fill(0);
         self.word(u64::from_le_bytes(self.pending));
-        self.word(filled);
-        self.state
+        self.lanes.iter().fold(mix(0, filled), |s, &lane| mix(s, lane))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Checksum;
+
+    #[test]
+    fn the_checksum_does_not_depend_on_how_the_stream_is_cut() {
+        let bytes: Vec<u8> = (0..1000u32).map(|i| (i * 7 + i / 13) as u8).collect();
+        let whole = {
+            let mut c = Checksum::new();
+            c.update(&bytes);
+            c.value()
+        };
+        for cuts in [[1, 2, 3], [7, 8, 9], [31, 33, 500], [0, 64, 999]] {
+            let mut c = Checksum::new();
+            let mut from = 0;
+            for to in cuts.into_iter().chain([bytes.len()]) {
+                c.update(&bytes[from..to]);
+                from = to;
+            }
+            assert_eq!(c.value(), whole, "{cuts:?}");
+        }
+        let mut changed = bytes.clone();
+        changed[500] ^= 1;
+        let mut c = Checksum::new();
+        c.update(&changed);
+        assert_ne!(c.value(), whole);
     }
 }
 
@@ -96,7 +158,10 @@ impl<W: Write> BinaryWriter<W> {
     /// Numbers with their length.
     pub fn f64s(&mut self, v: &[f64]) -> Result<()> {
         self.u64(v.len() as u64)?;
-        // Large arrays in chunks: one copy of a chunk, not of the array.
+        if cfg!(target_endian = "little") {
+            // The values' own bytes: no copy of a large array.
+            return self.raw(bytemuck::cast_slice(v));
+        }
         for chunk in v.chunks(1 << 16) {
             let bytes: Vec<u8> = chunk.iter().flat_map(|x| x.to_le_bytes()).collect();
             self.raw(&bytes)?;
@@ -156,17 +221,30 @@ impl<R: Read> BinaryReader<R> {
 
     /// `n` raw bytes of `what`.
     pub fn raw(&mut self, n: u64, what: &str) -> Result<Vec<u8>> {
+        self.check_left(n, what)?;
+        let mut bytes = vec![0; n as usize];
+        self.fill(&mut bytes, what)?;
+        Ok(bytes)
+    }
+
+    /// Refuses to read `n` bytes of `what` where fewer are left.
+    fn check_left(&self, n: u64, what: &str) -> Result<()> {
         if n > self.left {
             return Err(self.error(format!(
                 "truncated: {what} needs {n} bytes, the file has {} left",
                 self.left
             )));
         }
-        let mut bytes = vec![0; n as usize];
-        self.input.read_exact(&mut bytes)?;
-        self.left -= n;
-        self.sum.update(&bytes);
-        Ok(bytes)
+        Ok(())
+    }
+
+    /// Fills `bytes` from the file.
+    fn fill(&mut self, bytes: &mut [u8], what: &str) -> Result<()> {
+        self.check_left(bytes.len() as u64, what)?;
+        self.input.read_exact(bytes)?;
+        self.left -= bytes.len() as u64;
+        self.sum.update(bytes);
+        Ok(())
     }
 
     /// One number.
@@ -196,15 +274,11 @@ impl<R: Read> BinaryReader<R> {
     /// Numbers with their length.
     pub fn f64s(&mut self, what: &str) -> Result<Vec<f64>> {
         let len = self.len(what, 8)?;
-        let mut values = Vec::with_capacity(len);
-        let mut left = len;
-        while left > 0 {
-            let chunk = left.min(1 << 16);
-            let bytes = self.raw(8 * chunk as u64, what)?;
-            values.extend(
-                bytes.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8"))),
-            );
-            left -= chunk;
+        // Read into the values' own bytes: no second copy of a large array.
+        let mut values = vec![0.0f64; len];
+        self.fill(bytemuck::cast_slice_mut(&mut values), what)?;
+        if cfg!(target_endian = "big") {
+            values.iter_mut().for_each(|v| *v = f64::from_bits(u64::from_le(v.to_bits())));
         }
         Ok(values)
     }
