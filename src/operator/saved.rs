@@ -53,7 +53,7 @@ impl Checksum {
             return;
         }
         let word = |b: &[u8]| u64::from_le_bytes(b.try_into().expect("eight bytes"));
-        while self.words % 4 != 0 && bytes.len() >= 8 {
+        while !self.words.is_multiple_of(4) && bytes.len() >= 8 {
             self.word(word(&bytes[..8]));
             bytes = &bytes[8..];
         }
@@ -86,35 +86,6 @@ impl Checksum {
         self.pending[self.filled..].fill(0);
         self.word(u64::from_le_bytes(self.pending));
         self.lanes.iter().fold(mix(0, filled), |s, &lane| mix(s, lane))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Checksum;
-
-    #[test]
-    fn the_checksum_does_not_depend_on_how_the_stream_is_cut() {
-        let bytes: Vec<u8> = (0..1000u32).map(|i| (i * 7 + i / 13) as u8).collect();
-        let whole = {
-            let mut c = Checksum::new();
-            c.update(&bytes);
-            c.value()
-        };
-        for cuts in [[1, 2, 3], [7, 8, 9], [31, 33, 500], [0, 64, 999]] {
-            let mut c = Checksum::new();
-            let mut from = 0;
-            for to in cuts.into_iter().chain([bytes.len()]) {
-                c.update(&bytes[from..to]);
-                from = to;
-            }
-            assert_eq!(c.value(), whole, "{cuts:?}");
-        }
-        let mut changed = bytes.clone();
-        changed[500] ^= 1;
-        let mut c = Checksum::new();
-        c.update(&changed);
-        assert_ne!(c.value(), whole);
     }
 }
 
@@ -454,5 +425,34 @@ fn fits(data: &BlockData, m: usize, c: usize) -> bool {
                 && rows.columns.iter().all(|&col| (col as usize) < c)
         }
         BlockData::LowRank(lr) => lr.u.len() == m * lr.k && lr.v.len() == c * lr.k,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Checksum;
+
+    #[test]
+    fn the_checksum_does_not_depend_on_how_the_stream_is_cut() {
+        let bytes: Vec<u8> = (0..1000u32).map(|i| (i * 7 + i / 13) as u8).collect();
+        let whole = {
+            let mut c = Checksum::new();
+            c.update(&bytes);
+            c.value()
+        };
+        for cuts in [[1, 2, 3], [7, 8, 9], [31, 33, 500], [0, 64, 999]] {
+            let mut c = Checksum::new();
+            let mut from = 0;
+            for to in cuts.into_iter().chain([bytes.len()]) {
+                c.update(&bytes[from..to]);
+                from = to;
+            }
+            assert_eq!(c.value(), whole, "{cuts:?}");
+        }
+        let mut changed = bytes.clone();
+        changed[500] ^= 1;
+        let mut c = Checksum::new();
+        c.update(&changed);
+        assert_ne!(c.value(), whole);
     }
 }
