@@ -282,3 +282,26 @@ fn a_written_operator_reads_back_block_for_block() {
         assert!(read.is_err(), "byte {at} of {}", bytes.len());
     }
 }
+
+#[test]
+fn products_of_many_vectors_are_each_vector_s_product() {
+    // Linear method (three columns per element) on the five-piece surface: dense and low-rank
+    // blocks, and one block stored sparse.
+    let c =
+        case(five_piece(SurfaceParameters::default()).unwrap(), Method::Linear { alpha: 0.2 }, 2);
+    let mut op = compressed(&c, 1e-8, 8);
+    let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
+    let BlockData::Dense(d) = &b.data else { unreachable!() };
+    b.data = BlockData::Sparse(SparseRows::from_dense(d, b.cols.len() * op.per));
+    assert!(op.blocks.iter().any(|b| matches!(b.data, BlockData::LowRank(_))));
+    let n = op.dof();
+    let xs: Vec<Vec<f64>> =
+        (0..5).map(|v| (0..n).map(|i| ((i * (v + 2)) as f64 * 0.37).cos()).collect()).collect();
+    let refs: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
+    for (x, y) in xs.iter().zip(op.apply_many(&refs)) {
+        let single = op.apply(x);
+        let scale = single.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = y.iter().zip(&single).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst <= 1e-14 * scale, "{worst:.1e} of {scale:.1e}");
+    }
+}

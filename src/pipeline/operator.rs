@@ -121,7 +121,8 @@ impl BuiltOperator {
     }
 
     /// Solves `(I - K) u = E` for each right-hand side in `rhs` with the solver of `config`: LU
-    /// factors the dense matrix once for all of them; GMRES runs per right-hand side.
+    /// factors the dense matrix once for all of them; on the compressed operator the GMRES
+    /// solves advance together, each round's products computed in one pass over the blocks.
     pub fn solve_many(
         &self,
         config: &RunConfig,
@@ -133,12 +134,8 @@ impl BuiltOperator {
             Self::Compressed { op, .. } => {
                 let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
                 let tolerance = config.compression.tolerance;
-                rhs.iter()
-                    .map(|e| {
-                        let rho = (rho.as_slice(), rho.as_slice());
-                        solve::solve_compressed(op, e, rho, config.solver, tolerance)
-                    })
-                    .collect()
+                let rho = (rho.as_slice(), rho.as_slice());
+                solve::solve_compressed_many(op, rhs, rho, config.solver, tolerance)
             }
         }
     }

@@ -1,7 +1,7 @@
 //! Solving `(I - K) u = E` with K the compressed operator ([`crate::operator`]): GMRES on
 //! products alone, since no matrix is there to factor.
 
-use super::gmres::{self, KrylovSystem};
+use super::gmres::{Gmres, Need};
 use super::{
     CLOSED_ROW_TOLERANCE, SolveOutcome, SolverOptions, check_tolerance, reject_unit_row_sums,
 };
@@ -14,24 +14,23 @@ struct CompressedSystem<'a> {
     row_scale: Option<Vec<f64>>,
 }
 
-impl KrylovSystem for CompressedSystem<'_> {
-    fn dim(&self) -> usize {
-        self.k.dof()
-    }
-
-    fn apply(&self, x: &[f64]) -> Vec<f64> {
-        let mut kx = self.k.apply(x);
-        if let Some(scale) = &self.row_scale {
-            kx.iter_mut().zip(scale).for_each(|(v, s)| *v *= s);
+impl CompressedSystem<'_> {
+    /// `A x` for every `x` in `xs`, the operator read once for all of them.
+    fn apply_many(&self, xs: &[&[f64]]) -> Vec<Vec<f64>> {
+        let mut kxs = self.k.apply_many(xs);
+        for (x, kx) in xs.iter().zip(&mut kxs) {
+            if let Some(scale) = &self.row_scale {
+                kx.iter_mut().zip(scale).for_each(|(v, s)| *v *= s);
+            }
+            kx.iter_mut().zip(x.iter()).for_each(|(v, a)| *v = a - *v);
         }
-        x.iter().zip(kx).map(|(a, b)| a - b).collect()
-    }
-
-    /// In plain arithmetic: the compression's tolerance is far above its rounding.
-    fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64> {
-        self.apply(x).iter().zip(b).map(|(ax, bi)| bi - ax).collect()
+        kxs
     }
 }
+
+/// Most bytes of the interleaved vectors of one round of products (each of the product's
+/// parallel parts holds that much): the solves advance in groups that fit.
+const ROUND_BYTES: usize = 64 << 20;
 
 /// Solves `(I - K) u = rhs` by GMRES to `options.tolerance`, which must not be below what the
 /// compression keeps (the products are exact only to `compression_tolerance`). `rho` is each
@@ -43,10 +42,24 @@ impl KrylovSystem for CompressedSystem<'_> {
 pub fn solve_compressed(
     k: &CompressedOperator,
     rhs: &[f64],
-    (rho, operator_rho): (&[f64], &[f64]),
+    rho: (&[f64], &[f64]),
     options: SolverOptions,
     compression_tolerance: f64,
 ) -> Result<SolveOutcome> {
+    let mut outcomes = solve_compressed_many(k, &[rhs], rho, options, compression_tolerance)?;
+    Ok(outcomes.pop().expect("one outcome per right-hand side"))
+}
+
+/// As [`solve_compressed`], for each right-hand side of `rhs`: the GMRES solves advance in
+/// lockstep, each round's products computed together ([`CompressedOperator::apply_many`]), so
+/// that many emission cases read the operator once per round instead of once per case.
+pub fn solve_compressed_many(
+    k: &CompressedOperator,
+    rhs: &[&[f64]],
+    (rho, operator_rho): (&[f64], &[f64]),
+    options: SolverOptions,
+    compression_tolerance: f64,
+) -> Result<Vec<SolveOutcome>> {
     check_tolerance(options.tolerance)?;
     let row_scale = (rho != operator_rho).then(|| {
         rho.iter().zip(operator_rho).map(|(&b, &g)| if g == 0.0 { 0.0 } else { b / g }).collect()
@@ -60,24 +73,65 @@ pub fn solve_compressed(
         }
         reject_unit_row_sums(&sums, CLOSED_ROW_TOLERANCE.max(10.0 * compression_tolerance))?;
     }
-    let g = gmres::gmres(&sys, rhs, options.tolerance)?;
-    let mut u = g.x;
-    let mut fixed = 0;
-    for ((ui, &r), &e) in u.iter_mut().zip(rho).zip(rhs) {
-        if r == 0.0 {
-            *ui = e;
-            fixed += 1;
+    let round = (ROUND_BYTES / (8 * k.dof()).max(1)).max(1);
+    let mut solvers: Vec<Gmres> = rhs.iter().map(|b| Gmres::new(b, options.tolerance)).collect();
+    loop {
+        let asking: Vec<usize> =
+            (0..solvers.len()).filter(|&i| solvers[i].need().is_some()).collect();
+        if asking.is_empty() {
+            break;
+        }
+        for group in asking.chunks(round) {
+            let (mut xs, mut residual) = (Vec::new(), Vec::new());
+            for &i in group {
+                let (x, is_residual) = match solvers[i].need().expect("asking") {
+                    Need::Product(x) => (x, false),
+                    Need::Residual(x) => (x, true),
+                };
+                xs.push(x);
+                residual.push(is_residual);
+            }
+            let products = sys.apply_many(&xs);
+            for ((&i, ax), is_residual) in group.iter().zip(products).zip(residual) {
+                let given = match is_residual {
+                    false => ax,
+                    // In plain arithmetic: the compression's tolerance is far above its rounding.
+                    true => rhs[i].iter().zip(&ax).map(|(b, ax)| b - ax).collect(),
+                };
+                solvers[i].give(given);
+            }
         }
     }
-    let r = sys.residual(&u, rhs);
-    let scale = rhs.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
-    Ok(SolveOutcome {
-        residual: r.iter().fold(0.0f64, |m, v| m.max(v.abs())) / scale,
-        u,
-        solver: "gmres",
-        iterations: g.iterations,
-        condition_estimate: None,
-        refinement_steps: 0,
-        rows_eliminated: fixed,
-    })
+    let mut solutions = Vec::with_capacity(rhs.len());
+    for (solver, b) in solvers.into_iter().zip(rhs) {
+        let g = solver.finish()?;
+        let mut u = g.x;
+        let mut fixed = 0;
+        for ((ui, &r), &e) in u.iter_mut().zip(rho).zip(b.iter()) {
+            if r == 0.0 {
+                *ui = e;
+                fixed += 1;
+            }
+        }
+        solutions.push((u, g.iterations, fixed));
+    }
+    let mut outcomes = Vec::with_capacity(rhs.len());
+    for group in solutions.chunks(round) {
+        let us: Vec<&[f64]> = group.iter().map(|(u, ..)| u.as_slice()).collect();
+        for ((u, iterations, fixed), au) in group.iter().zip(sys.apply_many(&us)) {
+            let b = rhs[outcomes.len()];
+            let r = b.iter().zip(&au).fold(0.0f64, |m, (b, au)| m.max((b - au).abs()));
+            let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+            outcomes.push(SolveOutcome {
+                residual: r / scale,
+                u: u.clone(),
+                solver: "gmres",
+                iterations: *iterations,
+                condition_estimate: None,
+                refinement_steps: 0,
+                rows_eliminated: *fixed,
+            });
+        }
+    }
+    Ok(outcomes)
 }

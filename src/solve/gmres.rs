@@ -58,64 +58,177 @@ pub struct GmresSolution {
 /// Solves `sys x = b` to `||b - A x||_2 <= tolerance ||b||_2`, starting from `x = b` (the first
 /// term of the Neumann series of `(I - K)^-1`).
 pub fn gmres(sys: &impl KrylovSystem, b: &[f64], tolerance: f64) -> Result<GmresSolution> {
-    let n = sys.dim();
-    let b_norm = norm(b);
-    if b_norm == 0.0 {
-        return Ok(GmresSolution { x: vec![0.0; n], iterations: 0 });
+    let mut solver = Gmres::new(b, tolerance);
+    loop {
+        let given = match solver.need() {
+            None => return solver.finish(),
+            Some(Need::Product(x)) => sys.apply(x),
+            Some(Need::Residual(x)) => sys.residual(x, b),
+        };
+        solver.give(given);
     }
-    let target = tolerance * b_norm;
-    let mut x = b.to_vec();
-    // The start needs no extra precision: every restart recomputes the residual compensated.
-    let mut r: Vec<f64> = sys.apply(&x).iter().zip(b).map(|(ax, bi)| bi - ax).collect();
-    let mut r_norm = norm(&r);
-    let mut iterations = 0;
-    while r_norm > target {
-        if iterations >= MAX_ITERATIONS {
-            return Err(failure(IterationFailure::IterationLimit, r_norm / b_norm, iterations));
+}
+
+/// What a [`Gmres`] solve needs next from its system.
+#[derive(Debug)]
+pub enum Need<'a> {
+    /// `A x`.
+    Product(&'a [f64]),
+    /// `b - A x`, as accurately as the system can give it.
+    Residual(&'a [f64]),
+}
+
+/// One GMRES solve as a sequence of requests ([`Gmres::need`], answered by [`Gmres::give`]), so
+/// that many solves on one operator can have their products computed together, each matrix
+/// entry read once for all of them.
+#[derive(Debug)]
+pub struct Gmres {
+    b_norm: f64,
+    target: f64,
+    x: Vec<f64>,
+    /// Norm of the residual at the start of the current cycle.
+    r_norm: f64,
+    iterations: usize,
+    state: State,
+}
+
+#[derive(Debug)]
+enum State {
+    /// Waiting for `A x` of the start `x = b` (its residual starts the first cycle).
+    Start { b: Vec<f64> },
+    /// Waiting for the product with the cycle's newest basis vector.
+    Arnoldi(Cycle),
+    /// Waiting for the residual of `x` after a cycle.
+    Restart,
+    /// Finished: the error, if it failed.
+    Done(Option<Error>),
+}
+
+impl Gmres {
+    /// A solve of `A x = b` to `||b - A x||_2 <= tolerance ||b||_2`, from `x = b`.
+    pub fn new(b: &[f64], tolerance: f64) -> Self {
+        let b_norm = norm(b);
+        let mut solver = Self {
+            b_norm,
+            target: tolerance * b_norm,
+            x: b.to_vec(),
+            r_norm: 0.0,
+            iterations: 0,
+            state: State::Start { b: b.to_vec() },
+        };
+        if b_norm == 0.0 {
+            solver.x.iter_mut().for_each(|v| *v = 0.0);
+            solver.state = State::Done(None);
         }
-        let steps = cycle(sys, &mut x, &r, r_norm, target, MAX_ITERATIONS - iterations);
-        iterations += steps;
-        r = sys.residual(&x, b);
-        let new_norm = norm(&r);
-        if !new_norm.is_finite() {
-            return Err(failure(IterationFailure::NotFinite, new_norm, iterations));
-        }
-        if new_norm > target && new_norm > STAGNATION_FACTOR * r_norm {
-            return Err(failure(IterationFailure::Stagnation, new_norm / b_norm, iterations));
-        }
-        r_norm = new_norm;
+        solver
     }
-    Ok(GmresSolution { x, iterations })
+
+    /// What the solve needs next, or `None` once it has finished.
+    pub fn need(&self) -> Option<Need<'_>> {
+        match &self.state {
+            // The start needs no extra precision: every restart recomputes the residual
+            // compensated.
+            State::Start { .. } => Some(Need::Product(&self.x)),
+            State::Arnoldi(cycle) => Some(Need::Product(cycle.basis.last().expect("a vector"))),
+            State::Restart => Some(Need::Residual(&self.x)),
+            State::Done(_) => None,
+        }
+    }
+
+    /// Gives what [`Gmres::need`] asked for.
+    pub fn give(&mut self, given: Vec<f64>) {
+        match std::mem::replace(&mut self.state, State::Done(None)) {
+            State::Start { b } => {
+                let r: Vec<f64> = given.iter().zip(&b).map(|(ax, bi)| bi - ax).collect();
+                self.r_norm = norm(&r);
+                self.state = self.next_cycle(r);
+            }
+            State::Arnoldi(mut cycle) => {
+                self.state = match cycle.step(given, self.target) {
+                    false => State::Arnoldi(cycle),
+                    true => {
+                        self.iterations += cycle.finish(&mut self.x);
+                        State::Restart
+                    }
+                };
+            }
+            State::Restart => {
+                let new_norm = norm(&given);
+                let (b_norm, iterations) = (self.b_norm, self.iterations);
+                self.state = if !new_norm.is_finite() {
+                    State::Done(Some(failure(IterationFailure::NotFinite, new_norm, iterations)))
+                } else if new_norm > self.target && new_norm > STAGNATION_FACTOR * self.r_norm {
+                    let residual = new_norm / b_norm;
+                    State::Done(Some(failure(IterationFailure::Stagnation, residual, iterations)))
+                } else {
+                    self.r_norm = new_norm;
+                    self.next_cycle(given)
+                };
+            }
+            State::Done(_) => panic!("a finished GMRES solve was given a vector"),
+        }
+    }
+
+    /// A cycle from residual `r` (norm `self.r_norm`), or the end where it is small enough or
+    /// the iterations are spent.
+    fn next_cycle(&self, r: Vec<f64>) -> State {
+        if self.r_norm <= self.target {
+            State::Done(None)
+        } else if self.iterations >= MAX_ITERATIONS {
+            let residual = self.r_norm / self.b_norm;
+            State::Done(Some(failure(IterationFailure::IterationLimit, residual, self.iterations)))
+        } else {
+            State::Arnoldi(Cycle::new(r, self.r_norm, MAX_ITERATIONS - self.iterations))
+        }
+    }
+
+    /// The solution, or why the solve stopped short.
+    pub fn finish(self) -> Result<GmresSolution> {
+        match self.state {
+            State::Done(None) => Ok(GmresSolution { x: self.x, iterations: self.iterations }),
+            State::Done(Some(e)) => Err(e),
+            _ => panic!("GMRES finished before it was done"),
+        }
+    }
 }
 
 fn failure(reason: IterationFailure, residual: f64, iterations: usize) -> Error {
     Error::NotConverged { reason, residual, iterations }
 }
 
-/// One GMRES cycle from residual `r` (norm `r_norm`): at most [`RESTART`] and `budget` Arnoldi
-/// steps, stopping early once the recurrence's residual is below `target`; adds the correction to
-/// `x` and returns the number of steps.
-fn cycle(
-    sys: &impl KrylovSystem,
-    x: &mut [f64],
-    r: &[f64],
-    r_norm: f64,
-    target: f64,
-    budget: usize,
-) -> usize {
-    let m = RESTART.min(budget).max(1);
-    let mut basis: Vec<Vec<f64>> = vec![r.iter().map(|v| v / r_norm).collect()];
-    // Hessenberg columns, already rotated to upper triangular form.
-    let mut h: Vec<Vec<f64>> = Vec::with_capacity(m);
-    let mut rotations: Vec<(f64, f64)> = Vec::with_capacity(m);
-    let mut g = vec![r_norm];
-    for j in 0..m {
-        let mut w = sys.apply(&basis[j]);
+/// One GMRES cycle: at most [`RESTART`] (and the iterations left) Arnoldi steps from a
+/// residual, stopping early once the recurrence's residual is below the target.
+#[derive(Debug)]
+struct Cycle {
+    /// Most steps.
+    m: usize,
+    basis: Vec<Vec<f64>>,
+    /// Hessenberg columns, already rotated to upper triangular form.
+    h: Vec<Vec<f64>>,
+    rotations: Vec<(f64, f64)>,
+    g: Vec<f64>,
+}
+
+impl Cycle {
+    fn new(r: Vec<f64>, r_norm: f64, budget: usize) -> Self {
+        let m = RESTART.min(budget).max(1);
+        Self {
+            m,
+            basis: vec![r.iter().map(|v| v / r_norm).collect()],
+            h: Vec::with_capacity(m),
+            rotations: Vec::with_capacity(m),
+            g: vec![r_norm],
+        }
+    }
+
+    /// One Arnoldi step with `w` = A times the newest basis vector; whether the cycle ends.
+    fn step(&mut self, mut w: Vec<f64>, target: f64) -> bool {
+        let j = self.h.len();
         let w_norm_before = norm(&w);
         let mut column = vec![0.0; j + 2];
         // Modified Gram–Schmidt, twice ("twice is enough": Giraud, Langou, Rozložník 2005).
         for _ in 0..2 {
-            for (i, v) in basis.iter().enumerate() {
+            for (i, v) in self.basis.iter().enumerate() {
                 let hij = dot(&w, v);
                 column[i] += hij;
                 w.iter_mut().zip(v).for_each(|(wk, vk)| *wk -= hij * vk);
@@ -123,7 +236,7 @@ fn cycle(
         }
         let w_norm = norm(&w);
         column[j + 1] = w_norm;
-        for (i, &(c, s)) in rotations.iter().enumerate() {
+        for (i, &(c, s)) in self.rotations.iter().enumerate() {
             let (a, b) = (column[i], column[i + 1]);
             column[i] = c * a + s * b;
             column[i + 1] = -s * a + c * b;
@@ -133,30 +246,35 @@ fn cycle(
         let (c, s) = if d == 0.0 { (1.0, 0.0) } else { (a / d, b / d) };
         column[j] = d;
         column[j + 1] = 0.0;
-        rotations.push((c, s));
-        let gj = g[j];
-        g[j] = c * gj;
-        g.push(-s * gj);
+        self.rotations.push((c, s));
+        let gj = self.g[j];
+        self.g[j] = c * gj;
+        self.g.push(-s * gj);
         column.truncate(j + 1);
-        h.push(column);
+        self.h.push(column);
         // An invariant Krylov space (to rounding): the solution in it is exact, nothing to add.
         let exhausted = w_norm <= f64::EPSILON * w_norm_before;
-        if exhausted || g[j + 1].abs() <= target || j + 1 == m {
-            break;
+        if exhausted || self.g[j + 1].abs() <= target || j + 1 == self.m {
+            return true;
         }
-        basis.push(w.iter().map(|v| v / w_norm).collect());
+        self.basis.push(w.iter().map(|v| v / w_norm).collect());
+        false
     }
-    // Back substitution: R y = g.
-    let k = h.len();
-    let mut y = vec![0.0; k];
-    for i in (0..k).rev() {
-        let s: f64 = (i + 1..k).map(|l| h[l][i] * y[l]).sum();
-        y[i] = if h[i][i] == 0.0 { 0.0 } else { (g[i] - s) / h[i][i] };
+
+    /// Adds the cycle's correction to `x` (back substitution, R y = g); the steps taken.
+    fn finish(&self, x: &mut [f64]) -> usize {
+        let (h, g) = (&self.h, &self.g);
+        let k = h.len();
+        let mut y = vec![0.0; k];
+        for i in (0..k).rev() {
+            let s: f64 = (i + 1..k).map(|l| h[l][i] * y[l]).sum();
+            y[i] = if h[i][i] == 0.0 { 0.0 } else { (g[i] - s) / h[i][i] };
+        }
+        for (yi, v) in y.iter().zip(&self.basis) {
+            x.iter_mut().zip(v).for_each(|(xk, vk)| *xk += yi * vk);
+        }
+        k
     }
-    for (yi, v) in y.iter().zip(&basis) {
-        x.iter_mut().zip(v).for_each(|(xk, vk)| *xk += yi * vk);
-    }
-    k
 }
 
 fn norm(a: &[f64]) -> f64 {

@@ -16,8 +16,8 @@ mod system;
 
 use serde::Serialize;
 
-pub use compressed::solve_compressed;
-pub use gmres::{KrylovSystem, MAX_ITERATIONS, RESTART};
+pub use compressed::{solve_compressed, solve_compressed_many};
+pub use gmres::{Gmres, KrylovSystem, MAX_ITERATIONS, Need, RESTART};
 pub use lu::{LuFactors, LuSolution, inverse_norm_1_estimate};
 pub use system::ReducedSystem;
 
