@@ -123,7 +123,8 @@ class Operator(scipy.sparse.linalg.LinearOperator):
     """The collocation operator K of one problem, built once (dense or compressed, as
     ``operator=`` chooses), as a SciPy ``LinearOperator`` (``op @ x`` is ``K x``).
     ``solve(E)`` solves ``(I - K) u = E`` for E per face or per node, a vector or one column
-    per case (LU factors once for all of them; GMRES runs per case). ``nodes`` (dof x 3),
+    per case (LU factors once for all of them; on the compressed operator the cases advance
+    together through GMRES, one pass over the blocks per round of products). ``nodes`` (dof x 3),
     ``faces`` and ``rho`` describe the unknowns; ``report`` the operator (as in
     ``solve --json``)."""
 

@@ -1,7 +1,7 @@
 //! Solving `(I - K) u = E` with K the compressed operator ([`crate::operator`]): GMRES on
 //! products alone, since no matrix is there to factor.
 
-use super::gmres::{Gmres, Need};
+use super::gmres::{Gmres, Need, RESTART};
 use super::{
     CLOSED_ROW_TOLERANCE, SolveOutcome, SolverOptions, check_tolerance, reject_unit_row_sums,
 };
@@ -31,6 +31,10 @@ impl CompressedSystem<'_> {
 /// Most bytes of the interleaved vectors of one round of products (each of the product's
 /// parallel parts holds that much): the solves advance in groups that fit.
 const ROUND_BYTES: usize = 64 << 20;
+
+/// Most bytes of the Krylov bases of the solves that advance together (each holds
+/// `RESTART + 1` vectors); more right-hand sides are solved group after group.
+const SOLVES_BYTES: usize = 512 << 20;
 
 /// Solves `(I - K) u = rhs` by GMRES to `options.tolerance`, which must not be below what the
 /// compression keeps (the products are exact only to `compression_tolerance`). `rho` is each
@@ -73,8 +77,25 @@ pub fn solve_compressed_many(
         }
         reject_unit_row_sums(&sums, CLOSED_ROW_TOLERANCE.max(10.0 * compression_tolerance))?;
     }
-    let round = (ROUND_BYTES / (8 * k.dof()).max(1)).max(1);
-    let mut solvers: Vec<Gmres> = rhs.iter().map(|b| Gmres::new(b, options.tolerance)).collect();
+    // Each solve holds its Krylov basis: as many at once as fit in the budget.
+    let together = (SOLVES_BYTES / (8 * (RESTART + 2) * k.dof()).max(1)).max(1);
+    let mut outcomes = Vec::with_capacity(rhs.len());
+    for group in rhs.chunks(together) {
+        outcomes.extend(solve_together(&sys, group, rho, options.tolerance)?);
+    }
+    Ok(outcomes)
+}
+
+/// GMRES for each right-hand side of `rhs` on `sys`, in lockstep: each round's products in one
+/// pass over the blocks.
+fn solve_together(
+    sys: &CompressedSystem,
+    rhs: &[&[f64]],
+    rho: &[f64],
+    tolerance: f64,
+) -> Result<Vec<SolveOutcome>> {
+    let round = (ROUND_BYTES / (8 * sys.k.dof()).max(1)).max(1);
+    let mut solvers: Vec<Gmres> = rhs.iter().map(|b| Gmres::new(b, tolerance)).collect();
     loop {
         let asking: Vec<usize> =
             (0..solvers.len()).filter(|&i| solvers[i].need().is_some()).collect();
