@@ -10,6 +10,8 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
 fi
 "$venv/bin/python" -m pip install -q --upgrade pip
+started=$SECONDS
 "$venv/bin/python" -m pip install -q "./python[test]"
+echo "python/test.sh: the package built and installed in $((SECONDS - started)) s"
 cargo build --release --bin radiosity
 "$venv/bin/python" -m pytest -q python/tests

@@ -55,6 +55,7 @@ _DEFAULTS = dict(
     solver="auto",
     tolerance=_native.DEFAULT_SOLVER_TOLERANCE,
     operator_file=None,
+    bands="grey",
 )
 
 
@@ -86,7 +87,8 @@ class Solution:
     """One run: ``u`` at the nodes, their positions ``nodes`` (dof x 3) and faces ``faces``,
     E at the nodes ``emission``, and every key of ``radiosity solve --json`` as an attribute
     (``error``, ``setup_seconds``, ``iterations``, ...; ``report`` holds them all). With
-    emission cases, ``cases_u`` holds one column of u per case and ``u`` is their mean."""
+    emission cases, ``cases_u`` holds one column of u per case and ``u`` is their mean; with
+    colour bands (``bands="rgb"``), ``bands_u`` one column per band."""
 
     def __init__(self, raw):
         self.u = raw["u"]
@@ -94,6 +96,7 @@ class Solution:
         self.faces = raw["faces"]
         self.emission = raw["emission"]
         self.cases_u = raw.get("cases_u")
+        self.bands_u = raw.get("bands_u")
         self.report = json.loads(raw["report"])
 
     def __getattr__(self, name):

@@ -207,6 +207,7 @@ struct RunOptions {
     solver: String,
     tolerance: f64,
     operator_file: Option<std::path::PathBuf>,
+    bands: String,
 }
 
 impl RunOptions {
@@ -273,6 +274,7 @@ impl RunOptions {
         };
         config.solver = SolverOptions { choice, tolerance: self.tolerance };
         config.operator_file = self.operator_file.clone();
+        config.bands = radiosity::scene::parse_bands(&self.bands).map_err(raised)?;
         config.progress = progress;
         Ok(config)
     }
@@ -375,8 +377,8 @@ fn nodes_array<'py>(
 
 /// One run, as `radiosity solve` does it; `emission` (1-D or 2-D: one case per column, one row
 /// per face or per node) replaces the scene's emission. Returns a dict with `u`, `nodes`,
-/// `faces`, `emission` (E at the nodes), `report` (the JSON of `solve --json`), and with
-/// cases `cases_u` (dof x cases).
+/// `faces`, `emission` (E at the nodes), `report` (the JSON of `solve --json`), with cases
+/// `cases_u` (dof x cases), with colour bands `bands_u` (dof x bands).
 #[pyfunction]
 #[pyo3(signature = (scene, options, emission=None, progress=None))]
 fn solve<'py>(
@@ -406,6 +408,11 @@ fn solve<'py>(
     let report = serde_json::to_string(&run.report).expect("the report is JSON");
     out.set_item("report", report)?;
     out.set_item("emission", run.emission.into_pyarray(py))?;
+    if !run.bands.is_empty() {
+        let (dof, count) = (run.report.u.len(), run.bands.len());
+        let bands = Array2::from_shape_fn((dof, count), |(i, c)| run.bands[c].u[i]);
+        out.set_item("bands_u", bands.into_pyarray(py))?;
+    }
     if !run.cases.is_empty() {
         let (dof, count) = (run.report.u.len(), run.cases.len());
         let cases = Array2::from_shape_fn((dof, count), |(i, c)| run.cases[c].u[i]);
@@ -519,6 +526,11 @@ fn operator(
 ) -> PyResult<PyOperator> {
     let mut config = options.config(scene, progress_to(progress))?;
     config.solution = None;
+    if !config.bands.is_empty() {
+        return Err(RadiosityError::new_err(
+            "an operator is grey: solve colour bands with radiosity.solve(..., bands=...)",
+        ));
+    }
     py.detach(|| {
         let problem = pipeline::build_on(&config, scene.scene.clone())?;
         let built = pipeline::build_operator(&config, &problem)?;

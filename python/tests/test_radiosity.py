@@ -174,3 +174,19 @@ def test_a_saved_operator_reloads_and_refuses_another_problem(tmp_path):
     path.write_bytes(path.read_bytes()[:-100])
     with pytest.raises(radiosity.RadiosityError, match="truncated"):
         radiosity.operator(scene, refine=2, operator_file=str(path))
+
+
+def test_colour_bands_equal_the_command_line(tmp_path):
+    box = str(ROOT / "examples" / "cornell-box" / "CornellBox-Original.obj")
+    run = radiosity.solve(radiosity.Scene.load(box), refine=1, bands="rgb")
+    table = tmp_path / "bands.csv"
+    report = json.loads(cli("solve", "--scene", box, "--refine", "1", "--bands", "rgb",
+                            "--json", "-", "--csv", str(table)))
+    with open(table) as f:
+        rows = list(csv.DictReader(f))
+    assert [b["band"] for b in run.bands] == [b["band"] for b in report["bands"]]
+    for k, band in enumerate("rgb"):
+        expected = np.array([float(r[f"u_{band}"]) for r in rows])
+        assert relative_max(run.bands_u[:, k], expected) <= 1e-14
+    with pytest.raises(radiosity.RadiosityError, match="band 'x'"):
+        radiosity.solve(radiosity.Scene.load(box), refine=0, bands="r,x")

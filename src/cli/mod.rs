@@ -22,9 +22,7 @@ use radiosity::operator::{CompressionOptions, OperatorChoice};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
 use radiosity::problems::{EmissionCases, EmissionOptions, TrueSolution};
 use radiosity::report::Tone;
-use radiosity::scene::{
-    CHANNELS, Coplanar, Duplicates, ImportOptions, NonPlanar, SurfaceParameters,
-};
+use radiosity::scene::{Coplanar, Duplicates, ImportOptions, NonPlanar, SurfaceParameters};
 use radiosity::solve::{SolverChoice, SolverOptions};
 
 #[derive(Parser)]
@@ -656,7 +654,7 @@ pub(crate) struct ColourArgs {
 impl ColourArgs {
     /// The channels of --bands (empty: grey).
     pub(crate) fn channels(&self) -> Result<Vec<usize>> {
-        parse_bands(&self.bands)
+        radiosity::scene::parse_bands(&self.bands)
     }
 
     /// The tone map of --tone.
@@ -683,31 +681,4 @@ impl ColourArgs {
         }
         Ok(up)
     }
-}
-
-/// `rgb`, `grey`, or comma-separated channel names (each once).
-pub(crate) fn parse_bands(text: &str) -> Result<Vec<usize>> {
-    if text == "grey" {
-        return Ok(Vec::new());
-    }
-    let names: Vec<&str> =
-        if text == "rgb" { CHANNELS.to_vec() } else { text.split(',').map(str::trim).collect() };
-    let mut channels = Vec::new();
-    for name in names {
-        let channel =
-            CHANNELS.iter().position(|&c| c == name).ok_or_else(|| Error::UnknownName {
-                kind: "band",
-                name: name.into(),
-                expected: "rgb, grey, or a comma-separated list of r, g, b".into(),
-            })?;
-        if channels.contains(&channel) {
-            return Err(Error::InvalidParameter {
-                name: "bands",
-                value: text.into(),
-                reason: format!("band '{name}' is named twice"),
-            });
-        }
-        channels.push(channel);
-    }
-    Ok(channels)
 }

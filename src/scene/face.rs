@@ -63,6 +63,33 @@ pub struct Colour {
 /// The names of the colour channels, in order.
 pub const CHANNELS: [&str; 3] = ["r", "g", "b"];
 
+/// `rgb`, `grey`, or comma-separated channel names (each once).
+pub fn parse_bands(text: &str) -> Result<Vec<usize>> {
+    if text == "grey" {
+        return Ok(Vec::new());
+    }
+    let names: Vec<&str> =
+        if text == "rgb" { CHANNELS.to_vec() } else { text.split(',').map(str::trim).collect() };
+    let mut channels = Vec::new();
+    for name in names {
+        let channel =
+            CHANNELS.iter().position(|&c| c == name).ok_or_else(|| Error::UnknownName {
+                kind: "band",
+                name: name.into(),
+                expected: "rgb, grey, or a comma-separated list of r, g, b".into(),
+            })?;
+        if channels.contains(&channel) {
+            return Err(Error::InvalidParameter {
+                name: "bands",
+                value: text.into(),
+                reason: format!("band '{name}' is named twice"),
+            });
+        }
+        channels.push(channel);
+    }
+    Ok(channels)
+}
+
 /// Largest coordinate magnitude accepted. The pair plan and the face checks work with fourth
 /// powers of lengths (squared lengths of vector areas, cross products of cross products), which
 /// must stay inside f64's normal range: lengths within [1e-50, 1e50] keep them there.

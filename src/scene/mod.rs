@@ -9,7 +9,9 @@ mod merge;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use city::{city, lit_city};
-pub use face::{CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA};
+pub use face::{
+    CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA, parse_bands,
+};
 pub use file::{
     Coplanar, Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, from_triangles,
     is_scene_file, load, load_with, parse_toml,
