@@ -190,3 +190,15 @@ def test_colour_bands_equal_the_command_line(tmp_path):
         assert relative_max(run.bands_u[:, k], expected) <= 1e-14
     with pytest.raises(radiosity.RadiosityError, match="band 'x'"):
         radiosity.solve(radiosity.Scene.load(box), refine=0, bands="r,x")
+
+
+def test_the_gpu_backend_equals_the_cpu():
+    # Without an adapter the library's error says how to install one (lavapipe); only
+    # RADIOSITY_GPU=skip skips, as for the Rust GPU tests.
+    if os.environ.get("RADIOSITY_GPU") == "skip":
+        pytest.skip("RADIOSITY_GPU=skip")
+    scene = radiosity.Scene.builtin("five-piece")
+    gpu = radiosity.solve(scene, refine=3, backend="gpu")
+    cpu = radiosity.solve(scene, refine=3)
+    assert gpu.backend == "gpu" and gpu.device
+    assert relative_max(gpu.u, cpu.u) <= 1e-12
