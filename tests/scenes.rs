@@ -840,6 +840,7 @@ fn emission_cases_on_one_operator_are_each_case_s_own_solve() {
         [("dense", "auto", 1e-13), ("compressed", "iterative", 1e-8)]
     {
         let csv = dir.join(format!("{operator}.csv"));
+        let vtu = dir.join(format!("{operator}.vtu"));
         let args = |extra: &[&str]| {
             let mut args = vec!["solve", "--scene", room, "--refine", "2", "--json", "-"];
             args.extend(["--operator", operator, "--solver", solver]);
@@ -849,10 +850,19 @@ fn emission_cases_on_one_operator_are_each_case_s_own_solve() {
         let with_cases = args(&["--emission-file", file.to_str().unwrap()]);
         let with_cases: Vec<&str> =
             with_cases.iter().map(String::as_str).chain(["--csv", csv.to_str().unwrap()]).collect();
+        let with_cases: Vec<&str> =
+            with_cases.into_iter().chain(["--vtu", vtu.to_str().unwrap()]).collect();
         let report = json(&with_cases);
         let cases = report["cases"].as_array().unwrap();
         let names: Vec<&str> = cases.iter().map(|c| c["case"].as_str().unwrap()).collect();
         assert_eq!(names, ["lamp", "floor", "both"]);
+        // The VTK file carries u per case at the vertices, u and E per case in the cells.
+        let vtk = std::fs::read_to_string(&vtu).unwrap();
+        for case in names {
+            for (array, count) in [(format!("u_{case}"), 2), (format!("E_{case}"), 1)] {
+                assert_eq!(vtk.matches(&format!("Name=\"{array}\"")).count(), count, "{array}");
+            }
+        }
         let plain = args(&[]);
         let plain = json(&plain.iter().map(String::as_str).collect::<Vec<_>>());
         // Bit for bit on the dense matrix; the compressed products' sums are not ordered.

@@ -442,7 +442,7 @@ impl PyOperator {
     /// The operator's summary (JSON): `operator`, `setup_seconds`, `operator_bytes`, blocks.
     #[getter]
     fn report(&self) -> String {
-        let summary = self.built.summary(&self.config, self.built.dof());
+        let summary = self.built.summary(&self.config);
         serde_json::to_string(&summary).expect("the summary is JSON")
     }
 

@@ -41,7 +41,7 @@ pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
     }
     if let Some(path) = &args.save {
         pipeline::save_operator(std::path::Path::new(path), &built, &config, &problem)?;
-        let summary = built.summary(&config, problem.disc.dof());
+        let summary = built.summary(&config);
         eprintln!(
             "saved the {} operator ({} unknowns, {:.1} MB, built in {:.2} s) to {path}",
             summary.operator,

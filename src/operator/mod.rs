@@ -221,6 +221,19 @@ enum BlockData {
 }
 
 impl BlockData {
+    /// `y += B x`.
+    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        match self {
+            BlockData::Dense(d) => {
+                for (yi, row) in y.iter_mut().zip(d.chunks_exact(x.len())) {
+                    *yi += aca::dot(row, x);
+                }
+            }
+            BlockData::Sparse(rows) => rows.apply_add(x, y),
+            BlockData::LowRank(lr) => lr.apply_add(x, y),
+        }
+    }
+
     /// `y += B x` for `m` vectors interleaved: `x[c * m + v]`, `y[r * m + v]`.
     fn apply_add_many(&self, x: &[f64], y: &mut [f64], m: usize) {
         let c = x.len() / m;
@@ -394,46 +407,8 @@ impl CompressedOperator {
 
     /// `K x`: the blocks in parallel, each adding into its rows.
     pub fn apply(&self, x: &[f64]) -> Vec<f64> {
-        let per = self.per;
-        // x in the element order.
-        let mut xp = vec![0.0; self.dof];
-        for (k, &e) in self.element_order.iter().enumerate() {
-            xp[k * per..(k + 1) * per].copy_from_slice(&x[e * per..(e + 1) * per]);
-        }
-        let yp = self
-            .blocks
-            .par_iter()
-            .with_min_len(16)
-            .fold(
-                || vec![0.0; self.dof],
-                |mut y, b| {
-                    let xs = &xp[b.cols.start * per..b.cols.end * per];
-                    let ys = &mut y[b.rows.clone()];
-                    match &b.data {
-                        BlockData::Dense(d) => {
-                            let c = xs.len();
-                            for (yi, row) in ys.iter_mut().zip(d.chunks_exact(c)) {
-                                *yi += aca::dot(row, xs);
-                            }
-                        }
-                        BlockData::Sparse(rows) => rows.apply_add(xs, ys),
-                        BlockData::LowRank(lr) => lr.apply_add(xs, ys),
-                    }
-                    y
-                },
-            )
-            .reduce(
-                || vec![0.0; self.dof],
-                |mut a, b| {
-                    a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
-                    a
-                },
-            );
-        let mut y = vec![0.0; self.dof];
-        for (k, &i) in self.node_order.iter().enumerate() {
-            y[i] = yp[k];
-        }
-        y
+        let mut y = self.products(&[x], |data, x, y| data.apply_add(x, y));
+        y.pop().expect("one product")
     }
 }
 
@@ -442,11 +417,22 @@ impl CompressedOperator {
     /// right-hand sides cost the operator's memory traffic once per round, not once per
     /// vector). Each product equals [`CompressedOperator::apply`]'s up to the order of sums.
     pub fn apply_many(&self, xs: &[&[f64]]) -> Vec<Vec<f64>> {
-        let (m, per, dof) = (xs.len(), self.per, self.dof);
+        let m = xs.len();
         if m <= 1 {
             return xs.iter().map(|x| self.apply(x)).collect();
         }
-        // The vectors interleaved, in the element order: xp[k * m + v] is x_v at column k.
+        self.products(xs, |data, x, y| data.apply_add_many(x, y, m))
+    }
+
+    /// `K x` for every `x` in `xs`, the vectors interleaved in the blocks' orders (`x[k * m +
+    /// v]`: vector v at column k, m vectors) and each block adding its part by `add(data, x, y)`
+    /// into its rows, the blocks in parallel.
+    fn products(
+        &self,
+        xs: &[&[f64]],
+        add: impl Fn(&BlockData, &[f64], &mut [f64]) + Sync,
+    ) -> Vec<Vec<f64>> {
+        let (m, per, dof) = (xs.len(), self.per, self.dof);
         let mut xp = vec![0.0; dof * m];
         for (k, &e) in self.element_order.iter().enumerate() {
             for q in 0..per {
@@ -464,8 +450,7 @@ impl CompressedOperator {
                 || vec![0.0; dof * m],
                 |mut y, b| {
                     let xs = &xp[b.cols.start * per * m..b.cols.end * per * m];
-                    let ys = &mut y[b.rows.start * m..b.rows.end * m];
-                    b.data.apply_add_many(xs, ys, m);
+                    add(&b.data, xs, &mut y[b.rows.start * m..b.rows.end * m]);
                     y
                 },
             )

@@ -212,7 +212,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         })?;
     let solve_seconds = started.elapsed().as_secs_f64();
     let u = outcome.u;
-    let summary = built.summary(config, problem.disc.dof());
+    let summary = built.summary(config);
 
     let Problem { scene, disc, .. } = &problem;
     let error = u_faces.as_ref().map(|uf| {
@@ -317,15 +317,6 @@ fn solve_built(
         }
         return Ok((mean_outcome(outcomes), values, reports));
     }
-    Ok(match built {
-        BuiltOperator::Dense(timed) => {
-            (solve::solve(&timed.assembled.matrix, rhs, config.solver)?, Vec::new(), Vec::new())
-        }
-        BuiltOperator::Compressed { op, .. } => {
-            let rho: Vec<f64> = disc.nodes.iter().map(|n| n.rho).collect();
-            let rho = (rho.as_slice(), rho.as_slice());
-            let outcome = solve::solve_compressed(op, rhs, rho, config.solver, tolerance)?;
-            (outcome, Vec::new(), Vec::new())
-        }
-    })
+    let outcome = built.solve_many(config, problem, &[rhs])?.pop().expect("one outcome");
+    Ok((outcome, Vec::new(), Vec::new()))
 }

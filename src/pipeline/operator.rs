@@ -140,8 +140,9 @@ impl BuiltOperator {
         }
     }
 
-    /// What a report says of this operator, built for `config` with `dof` unknowns.
-    pub fn summary(&self, config: &RunConfig, dof: usize) -> OperatorSummary {
+    /// What a report says of this operator, built for `config`.
+    pub fn summary(&self, config: &RunConfig) -> OperatorSummary {
+        let dof = self.dof();
         match self {
             Self::Dense(t) => OperatorSummary {
                 operator: "dense",

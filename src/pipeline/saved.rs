@@ -3,8 +3,9 @@
 //!
 //! The file: the magic line `radiosity operator\n`, a format version, a JSON header that says
 //! what the operator was built for (scene, geometry hash, mesh, method, integrals, size), the
-//! operator in little-endian binary, and a checksum of all before it. A file built for another problem is refused, naming
-//! what differs; a truncated or foreign file is refused, saying so.
+//! operator in little-endian binary, and a checksum of all before it. A file built for another
+//! problem is refused, naming what differs; a truncated, damaged or foreign file is refused,
+//! saying so.
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter};
@@ -144,7 +145,7 @@ pub fn save_operator(
     config: &RunConfig,
     problem: &Problem,
 ) -> Result<()> {
-    let kind = operator.summary(config, problem.disc.dof()).operator;
+    let kind = operator.summary(config).operator;
     let header = OperatorHeader::of(config, problem, kind);
     let mut out = BinaryWriter::new(BufWriter::new(File::create(path)?));
     out.raw(MAGIC)?;
@@ -167,12 +168,9 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
         .map_err(|e| Error::DataFile { path: name.clone(), reason: e.to_string() })?;
     let len = file.metadata()?.len();
     let mut input = BinaryReader::new(BufReader::with_capacity(1 << 20, file), len, &name);
-    let foreign = || Error::DataFile {
-        path: name.clone(),
-        reason: "not an operator file of radiosity (write one with `assemble --save`)".into(),
-    };
     if input.raw(MAGIC.len() as u64, "the magic line").ok().as_deref() != Some(MAGIC) {
-        return Err(foreign());
+        return Err(input
+            .error("not an operator file of radiosity (write one with `assemble --save`)".into()));
     }
     let version = input.u64("the version")?;
     if version != VERSION {

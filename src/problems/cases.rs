@@ -20,8 +20,7 @@ impl EmissionCases {
     /// Cases from columns of values (one per face or per node), named `1`, `2`, ...; every value
     /// must be finite and non-negative.
     pub fn from_columns(values: Vec<Vec<f64>>) -> Result<Self> {
-        let names = (1..=values.len()).map(|c| c.to_string()).collect();
-        Self::named(names, values, "emission cases")
+        Self::named(numbered(values.len()), values, "emission cases")
     }
 
     /// Checks the cases: at least one, all of one length, values finite and non-negative.
@@ -86,7 +85,7 @@ impl EmissionCases {
             }
         }
         // The reader refuses rows of unequal length, so a header names every column.
-        let names = names.unwrap_or_else(|| (1..=columns.len()).map(|c| c.to_string()).collect());
+        let names = names.unwrap_or_else(|| numbered(columns.len()));
         Self::named(names, columns, &name)
     }
 
@@ -115,6 +114,11 @@ impl EmissionCases {
             })
         }
     }
+}
+
+/// The names of `count` cases without a header: `1`, `2`, ...
+fn numbered(count: usize) -> Vec<String> {
+    (1..=count).map(|c| c.to_string()).collect()
 }
 
 #[cfg(test)]

@@ -119,33 +119,25 @@ pub fn solve_many(
     let factors = if use_lu { Some(LuFactors::of_system(&sys)?) } else { None };
     let outcome = |rhs: &[f64]| -> Result<SolveOutcome> {
         let reduced_rhs = sys.reduce_rhs(rhs);
-        Ok(match &factors {
+        let (x, solver, iterations, condition_estimate, refinement_steps) = match &factors {
             Some(factors) => {
                 let lu = factors.solve(&sys, &reduced_rhs, REFINEMENT_STEPS)?;
-                let u = sys.expand(&lu.u, rhs);
-                SolveOutcome {
-                    residual: relative_residual(k, &u, rhs),
-                    u,
-                    solver: "lu",
-                    iterations: 0,
-                    condition_estimate: Some(lu.condition),
-                    refinement_steps: lu.refinement_steps,
-                    rows_eliminated: sys.eliminated(),
-                }
+                (lu.u, "lu", 0, Some(lu.condition), lu.refinement_steps)
             }
             None => {
                 let g = gmres::gmres(&sys, &reduced_rhs, options.tolerance)?;
-                let u = sys.expand(&g.x, rhs);
-                SolveOutcome {
-                    residual: relative_residual(k, &u, rhs),
-                    u,
-                    solver: "gmres",
-                    iterations: g.iterations,
-                    condition_estimate: None,
-                    refinement_steps: 0,
-                    rows_eliminated: sys.eliminated(),
-                }
+                (g.x, "gmres", g.iterations, None, 0)
             }
+        };
+        let u = sys.expand(&x, rhs);
+        Ok(SolveOutcome {
+            residual: relative_residual(k, &u, rhs),
+            u,
+            solver,
+            iterations,
+            condition_estimate,
+            refinement_steps,
+            rows_eliminated: sys.eliminated(),
         })
     };
     rhs.iter().map(|rhs| outcome(rhs)).collect()
