@@ -36,7 +36,8 @@ pub mod solution;
 pub mod solve;
 pub mod surface_error;
 
-// One run from a configuration, end to end.
+// Runs over several processes (MPI), and one run from a configuration, end to end.
+pub mod distributed;
 pub mod pipeline;
 
 // Whole-run benchmarks and the paper's studies.

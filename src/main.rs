@@ -11,6 +11,13 @@ use cli::{Cli, Command};
 use radiosity::error::Result;
 
 fn run(cli: Cli) -> Result<()> {
+    if cli::world().is_some() && !matches!(cli.command, Command::Solve(_) | Command::Inspect(_)) {
+        return Err(radiosity::error::Error::InvalidParameter {
+            name: "command",
+            value: "under mpirun with several ranks".into(),
+            reason: "solve and inspect run distributed; run the others in one process".into(),
+        });
+    }
     match cli.command {
         Command::Study { id, max_n, backend, precision, figures, json, markdown } => {
             cli::study::run(&id, max_n, backend, precision, &figures, json.as_deref(), markdown)
@@ -30,11 +37,36 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn main() -> ExitCode {
+    #[cfg(feature = "mpi")]
+    let _mpi = start_mpi();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
+        Err(e) => match cli::world() {
+            // The other ranks may be waiting in a collective: stop them all.
+            Some(w) => w.abort(&format!("error (rank {}): {e}", w.rank()), 1),
+            None => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
     }
+}
+
+/// Initializes MPI; under `mpirun -np N` with N > 1 the runs are spread over the ranks, and a
+/// rank that panics stops all of them. MPI is finalized when the returned session is dropped.
+#[cfg(feature = "mpi")]
+fn start_mpi() -> Option<radiosity::distributed::MpiSession> {
+    use radiosity::distributed::Collective;
+    use std::sync::Arc;
+    let (session, world) = radiosity::distributed::MpiWorld::init()?;
+    if world.size() > 1 {
+        let world = Arc::new(world);
+        cli::set_world(world.clone());
+        let report = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            report(info);
+            world.abort(&format!("rank {} panicked", world.rank()), 101);
+        }));
+    }
+    Some(session)
 }

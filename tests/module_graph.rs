@@ -150,7 +150,7 @@ fn the_modules_of_src_import_each_other_without_a_cycle() {
 
 /// The layers of src/, lowest first: a module names only modules of lower layers.
 const LAYERS: &[&[&str]] = &[
-    &["error", "progress", "geometry", "quadrature"],
+    &["error", "progress", "distributed", "geometry", "quadrature"],
     &["kernels", "scene"],
     &["visibility"],
     &["mesh"],

@@ -36,6 +36,8 @@ pub(crate) struct Inspection {
     #[serde(flatten)]
     blocks: Option<radiosity::operator::OperatorStats>,
     peak_rss_bytes: Option<u64>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    distributed: Option<radiosity::distributed::DistributedReport>,
 }
 
 pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
@@ -73,17 +75,22 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
     super::output::print_notes(scene);
     let started = std::time::Instant::now();
     let dof = disc.dof();
-    let (row_sums, p, blocks) = if pipeline::compresses(&config, &problem) {
+    let (row_sums, p, blocks, op) = if pipeline::compresses(&config, &problem) {
         let assembler =
             pipeline::Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
         let op = pipeline::build_compressed(&config, &assembler, &problem)?;
-        (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats))
+        (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats), Some(op))
     } else {
         let assembled = assemble_without_progress(&config, &problem)?;
         let sums = (0..dof).map(|i| assembled.matrix.row(i).iter().sum::<f64>()).collect();
-        (sums, assembled.stats, None)
+        (sums, assembled.stats, None, None)
     };
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
+    let distributed = op.and_then(|op| pipeline::distributed_report(&op, setup_seconds));
+    // Every rank of a distributed run holds the row sums; rank 0 prints them.
+    if !super::is_root() {
+        return Ok(());
+    }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (node, sum) in disc.nodes.iter().zip(&row_sums) {
         if node.rho > 0.0 {
@@ -116,6 +123,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         operator_bytes: blocks.map_or(8 * (dof as u64) * (dof as u64), |b| b.operator_bytes),
         blocks,
         peak_rss_bytes: pipeline::peak_rss_bytes(),
+        distributed,
     };
     match &args.json {
         Some(target) => report::write_json(&out, target),

@@ -13,8 +13,11 @@ pub(crate) mod viewfactors;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use std::sync::OnceLock;
+
 use radiosity::assembly::{AssemblyOptions, Quadrature};
 use radiosity::discretization::Method;
+use radiosity::distributed::Ranks;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
 use radiosity::mesh::{LineExtent, S5Diagonals};
@@ -507,7 +510,7 @@ impl GeometryArgs {
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
             solver: SolverOptions::default(),
-            progress: progress::on_stderr(),
+            progress: if is_root() { progress::on_stderr() } else { Default::default() },
             setup_repeats: 1,
             surface_lattice: None,
             operator: OperatorChoice::Dense,
@@ -515,6 +518,7 @@ impl GeometryArgs {
             bands: Vec::new(),
             cases: None,
             operator_file: None,
+            ranks: world(),
         })
     }
 }
@@ -681,4 +685,23 @@ impl ColourArgs {
         }
         Ok(up)
     }
+}
+
+/// The ranks of this process's `mpirun`, where it started several.
+static WORLD: OnceLock<Ranks> = OnceLock::new();
+
+/// Makes the runs of this process distributed over `ranks`.
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub(crate) fn set_world(ranks: Ranks) {
+    WORLD.set(ranks).expect("the world is set once, at the start");
+}
+
+/// The ranks the runs are spread over, or `None` for one process.
+pub(crate) fn world() -> Option<Ranks> {
+    WORLD.get().cloned()
+}
+
+/// Whether this process prints and writes: rank 0 of a distributed run, or a lone process.
+pub(crate) fn is_root() -> bool {
+    WORLD.get().is_none_or(|w| w.rank() == 0)
 }

@@ -136,6 +136,10 @@ pub(crate) fn run(args: &SolveArgs) -> Result<()> {
     // Checked before the solve, which may take long.
     let picture = (args.colour.up(&config.scene)?, args.colour.tone());
     let run = pipeline::run_keeping_mesh(&config)?;
+    // Every rank of a distributed run holds the solution; rank 0 writes and prints it.
+    if !is_root() {
+        return Ok(());
+    }
     write_outputs(&run, &args.outputs, picture)?;
     let r = &run.report;
     for note in &r.notes {

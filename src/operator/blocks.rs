@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::CompressionOptions;
 use super::cluster::{Cluster, ClusterTree};
 use crate::discretization::ElementFrame;
+use crate::distributed::Collective;
 use crate::scene::Scene;
 use crate::visibility::{PairPlanner, Shaft};
 
@@ -157,6 +158,56 @@ impl BlockPlan {
         plan
     }
 
+    /// The plan [`BlockPlan::new`] makes, walked in parts by the ranks of `ranks` (every rank
+    /// calls this) and gathered: the top of the block tree is walked by all, the subtrees below
+    /// it dealt out in turn. The same blocks as the single walk's, in another order.
+    pub(super) fn new_shared(
+        nodes: &ClusterTree,
+        elements: &ClusterTree,
+        faces: &FacePairs,
+        options: &CompressionOptions,
+        ranks: &dyn Collective,
+    ) -> Self {
+        let mut plan = Self::default();
+        let mut mine = Self::default();
+        if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
+            let walk = Walk { nodes, elements, faces, options };
+            let frontier = walk.frontier(&mut plan, FRONTIER_PER_RANK * ranks.size());
+            let parts: Vec<BlockPlan> = frontier
+                .par_iter()
+                .skip(ranks.rank())
+                .step_by(ranks.size())
+                .map(|(t, s, within)| {
+                    let mut part = BlockPlan::default();
+                    walk.visit(&mut part, *t, *s, within.as_deref());
+                    part
+                })
+                .collect();
+            parts.into_iter().for_each(|part| mine.append(part));
+        }
+        // Each rank's blocks as (t << 32 | s), then the empty count.
+        let code = |&(t, s): &(usize, usize)| ((t as u64) << 32) | s as u64;
+        let decode = |c: &u64| ((c >> 32) as usize, (c & 0xffff_ffff) as usize);
+        let near: Vec<u64> = mine.near.iter().map(code).collect();
+        let far: Vec<u64> = mine.far.iter().map(code).collect();
+        for part in ranks.gather(&near) {
+            plan.near.extend(part.iter().map(decode));
+        }
+        for part in ranks.gather(&far) {
+            plan.far.extend(part.iter().map(decode));
+        }
+        plan.empty +=
+            ranks.gather(&[mine.empty as u64]).iter().map(|e| e[0] as usize).sum::<usize>();
+        plan
+    }
+
+    /// Adds `other`'s blocks after this plan's.
+    fn append(&mut self, other: BlockPlan) {
+        self.near.extend(other.near);
+        self.far.extend(other.far);
+        self.empty += other.empty;
+    }
+
     /// Entries of the near blocks (an upper bound on what they store).
     pub(super) fn near_entries(
         &self,
@@ -180,35 +231,51 @@ struct Walk<'a> {
 }
 
 impl Walk<'_> {
-    /// Plans block (t, s), whose occluders are among `within` (any when `None`).
-    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize, within: Option<&[usize]>) {
+    /// Settles block (t, s), whose occluders are among `within` (any when `None`), into `plan`,
+    /// or returns its sub-blocks and what they inherit of its occluders.
+    fn step<'b>(
+        &self,
+        plan: &mut BlockPlan,
+        t: usize,
+        s: usize,
+        within: Option<&'b [usize]>,
+    ) -> Option<(Vec<(usize, usize)>, Between<'b>)> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let between = Between::new(within);
         let class = classify(self.faces, tc, sc, &between);
         if class == PairClass::Nothing {
             plan.empty += 1;
-            return;
+            return None;
         }
         let admissible = tc.diameter().min(sc.diameter()) <= self.options.eta * tc.distance(sc);
         if class == PairClass::Smooth && admissible {
             plan.far.push((t, s));
-            return;
+            return None;
         }
         // Smooth neighbours gain nothing from small leaves; where visibility varies they do.
         let leaf = if class == PairClass::Smooth { self.options.leaf_size } else { 0 };
         let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
-        let children: Vec<(usize, usize)> = match (split(tc), split(sc)) {
+        let children = match (split(tc), split(sc)) {
             (None, None) => {
                 plan.near.push((t, s));
-                return;
+                return None;
             }
             (None, Some((s1, s2))) => vec![(t, s1), (t, s2)],
             (Some((t1, t2)), None) => vec![(t1, s), (t2, s)],
             (Some((t1, t2)), Some((s1, s2))) => vec![(t1, s1), (t1, s2), (t2, s1), (t2, s2)],
         };
+        Some((children, between))
+    }
+
+    /// Plans block (t, s) and everything below it, its occluders among `within`.
+    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize, within: Option<&[usize]>) {
+        let Some((children, between)) = self.step(plan, t, s, within) else {
+            return;
+        };
         // Large blocks' subtrees in parallel (each classification is a shaft test); the plans
         // are joined in order, so the plan is the same as a sequential walk's.
         let within = between.for_children();
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         if tc.len() * sc.len() >= PARALLEL_PAIRS {
             let parts: Vec<BlockPlan> = children
                 .par_iter()
@@ -219,9 +286,7 @@ impl Walk<'_> {
                 })
                 .collect();
             for part in parts {
-                plan.near.extend(part.near);
-                plan.far.extend(part.far);
-                plan.empty += part.empty;
+                plan.append(part);
             }
         } else {
             for (a, b) in children {
@@ -229,7 +294,32 @@ impl Walk<'_> {
             }
         }
     }
+
+    /// The blocks below the top of the block tree, breadth first, until there are at least
+    /// `count` (or nothing is left to split), with the occluders each inherits; the blocks
+    /// settled on the way go into `plan`.
+    fn frontier(&self, plan: &mut BlockPlan, count: usize) -> Vec<Pending> {
+        let mut frontier = vec![(0, 0, None)];
+        while frontier.len() < count && !frontier.is_empty() {
+            let mut next = Vec::new();
+            for (t, s, within) in &frontier {
+                if let Some((children, between)) = self.step(plan, *t, *s, within.as_deref()) {
+                    let list = between.for_children().map(<[usize]>::to_vec);
+                    next.extend(children.into_iter().map(|(a, b)| (a, b, list.clone())));
+                }
+            }
+            frontier = next;
+        }
+        frontier
+    }
 }
+
+/// A block still to be walked, with the occluders it inherits.
+type Pending = (usize, usize, Option<Vec<usize>>);
+
+/// Blocks of the frontier per rank when the walk is shared: enough for the ranks' parts to
+/// cost about the same.
+const FRONTIER_PER_RANK: usize = 64;
 
 /// Blocks of at least this many pairs have their subtrees walked in parallel.
 const PARALLEL_PAIRS: usize = 1 << 16;

@@ -22,6 +22,7 @@ mod batched;
 mod blocks;
 pub mod cluster;
 mod saved;
+mod share;
 
 pub use saved::{BinaryReader, BinaryWriter};
 
@@ -35,6 +36,7 @@ use crate::assembly::{
     AssemblyOptions, PairEvaluation, PairIntegrator, Problem, memory_allowance, resident_bytes,
 };
 use crate::discretization::Discretization;
+use crate::distributed::{Collective, Ranks};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::progress::{Progress, in_stage};
@@ -333,6 +335,20 @@ pub struct CompressedOperator {
     pub zero_rows: usize,
     /// The GPU that evaluated the entries (name and backend), if one did.
     pub device: Option<String>,
+    /// In a distributed run, this rank's part: it holds only its blocks, and the products sum
+    /// every rank's. `stats` and `pairs` are then the whole operator's.
+    pub share: Option<RankShare>,
+}
+
+/// A rank's part of a distributed compressed operator.
+#[derive(Clone, Debug)]
+pub struct RankShare {
+    /// The ranks the operator is spread over.
+    pub ranks: Ranks,
+    /// Bytes of this rank's blocks.
+    pub operator_bytes: u64,
+    /// Time of the build this rank spent waiting for the others in collectives.
+    pub waited_seconds: f64,
 }
 
 /// Admissible blocks whose break-even rank is below this are stored exactly.
@@ -350,14 +366,48 @@ impl CompressedOperator {
         batches: Option<&dyn PairEvaluation>,
         progress: &dyn Progress,
     ) -> Result<Self> {
+        Self::build_with(problem, assembly, options, batches, progress, None)
+    }
+
+    /// As [`CompressedOperator::build`], this rank's part of the operator spread over `ranks`
+    /// ([`crate::distributed`]): every rank calls it with the same problem. The block plan is
+    /// walked in parts and gathered, each rank builds its share of the blocks, and the
+    /// products sum the ranks' parts, so that every rank gets the whole `K x`.
+    pub fn build_shared(
+        problem: &Problem,
+        assembly: &AssemblyOptions,
+        options: &CompressionOptions,
+        batches: Option<&dyn PairEvaluation>,
+        progress: &dyn Progress,
+        ranks: &Ranks,
+    ) -> Result<Self> {
+        Self::build_with(problem, assembly, options, batches, progress, Some(ranks))
+    }
+
+    fn build_with(
+        problem: &Problem,
+        assembly: &AssemblyOptions,
+        options: &CompressionOptions,
+        batches: Option<&dyn PairEvaluation>,
+        progress: &dyn Progress,
+        ranks: Option<&Ranks>,
+    ) -> Result<Self> {
         let Problem { scene, mesh, disc, planner, .. } = problem;
+        let waited_before = ranks.map(|r| r.traffic().seconds);
         options.validate()?;
         assembly.quadrature.validate()?;
         let per = disc.method.nodes_per_element();
         let faces = FacePairs::new(scene, planner);
         let (nodes, elements, plan) = in_stage(progress, "blocks", || {
             let (nodes, elements) = cluster_trees(mesh, disc, options);
-            let plan = BlockPlan::new(&nodes, &elements, &faces, options);
+            let plan = match ranks {
+                Some(ranks) => {
+                    let whole = BlockPlan::new_shared(&nodes, &elements, &faces, options, &**ranks);
+                    let rank = (ranks.rank(), ranks.size());
+                    share::share_of(&whole, &nodes, &elements, per, rank)
+                }
+                None => BlockPlan::new(&nodes, &elements, &faces, options),
+            };
             (nodes, elements, plan)
         });
         // The exact blocks alone must fit before any is computed; then every block built counts.
@@ -384,8 +434,14 @@ impl CompressedOperator {
         };
         progress.finish();
 
-        let (blocks, mut stats, pairs) = kept_blocks(built, plan.empty);
+        let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty);
         stats.operator_bytes += 8 * (nodes.order.len() + elements.order.len()) as u64;
+        let share = ranks.map(|ranks| {
+            let operator_bytes = stats.operator_bytes;
+            (stats, pairs) = summed_over(&**ranks, stats, pairs);
+            let waited_seconds = ranks.traffic().seconds - waited_before.unwrap_or(0.0);
+            RankShare { ranks: ranks.clone(), operator_bytes, waited_seconds }
+        });
         let zero_rows = disc.nodes.iter().filter(|n| n.rho == 0.0).count();
         Ok(Self {
             dof: disc.dof(),
@@ -397,6 +453,7 @@ impl CompressedOperator {
             pairs,
             zero_rows,
             device: None,
+            share,
         })
     }
 
@@ -442,7 +499,7 @@ impl CompressedOperator {
                 }
             }
         }
-        let yp = self
+        let mut yp = self
             .blocks
             .par_iter()
             .with_min_len(16)
@@ -461,6 +518,9 @@ impl CompressedOperator {
                     a
                 },
             );
+        if let Some(share) = &self.share {
+            share.ranks.sum(&mut yp);
+        }
         let mut ys = vec![vec![0.0; dof]; m];
         for (k, &i) in self.node_order.iter().enumerate() {
             for (v, y) in ys.iter_mut().enumerate() {
@@ -730,6 +790,53 @@ fn kept_blocks(built: Vec<BuiltBlock>, empty: usize) -> (Vec<Block>, OperatorSta
         blocks.push(block);
     }
     (blocks, stats, pairs)
+}
+
+/// The whole operator's statistics from every rank's (a collective: every rank calls it).
+fn summed_over(
+    ranks: &dyn Collective,
+    stats: OperatorStats,
+    pairs: PairStats,
+) -> (OperatorStats, PairStats) {
+    let mine = [
+        stats.operator_bytes,
+        stats.near_entries,
+        stats.near_blocks,
+        stats.far_blocks,
+        stats.far_entries,
+        stats.empty_blocks,
+        stats.incompressible_blocks,
+        pairs.total,
+        pairs.same_plane,
+        pairs.facing_away,
+        pairs.hidden,
+        pairs.not_reflecting,
+        pairs.full,
+        pairs.partial,
+    ];
+    let all = ranks.gather(&mine);
+    let sum = |k: usize| all.iter().map(|r| r[k]).sum::<u64>();
+    let max_rank = ranks.gather(&[stats.max_rank as u64]).iter().map(|r| r[0]).max();
+    let stats = OperatorStats {
+        operator_bytes: sum(0),
+        near_entries: sum(1),
+        near_blocks: sum(2),
+        far_blocks: sum(3),
+        far_entries: sum(4),
+        max_rank: max_rank.unwrap_or(0) as usize,
+        empty_blocks: sum(5),
+        incompressible_blocks: sum(6),
+    };
+    let pairs = PairStats {
+        total: sum(7),
+        same_plane: sum(8),
+        facing_away: sum(9),
+        hidden: sum(10),
+        not_reflecting: sum(11),
+        full: sum(12),
+        partial: sum(13),
+    };
+    (stats, pairs)
 }
 
 /// The views of faces found so far from each node of one node cluster, kept while its blocks

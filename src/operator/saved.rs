@@ -281,6 +281,15 @@ const LOW_RANK: u64 = 2;
 impl CompressedOperator {
     /// Writes the operator (its statistics, orders and blocks).
     pub fn write<W: Write>(&self, out: &mut BinaryWriter<W>) -> Result<()> {
+        if let Some(share) = &self.share {
+            return Err(Error::InvalidParameter {
+                name: "save",
+                value: format!("{} ranks", share.ranks.size()),
+                reason: "each rank holds only its blocks of a distributed operator: save it \
+                         from a run of one process"
+                    .into(),
+            });
+        }
         let s = &self.stats;
         let p = &self.pairs;
         for v in [self.dof as u64, self.per as u64, self.zero_rows as u64] {
@@ -408,6 +417,7 @@ impl CompressedOperator {
             pairs,
             zero_rows,
             device: None,
+            share: None,
         })
     }
 }

@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use crate::assembly::AssemblyOptions;
 use crate::discretization::Method;
+use crate::distributed::Ranks;
 use crate::error::{Error, Result};
 use crate::gpu::Precision;
 use crate::mesh::{LineExtent, S5Diagonals};
@@ -195,6 +196,9 @@ pub struct RunConfig {
     pub cases: Option<EmissionCases>,
     /// Read the operator from this file (`assemble --save`) instead of building it.
     pub operator_file: Option<PathBuf>,
+    /// The ranks of a distributed run (`mpirun -np N`, N > 1), or `None` for one process:
+    /// the compressed operator is then spread over them ([`crate::distributed`]).
+    pub ranks: Option<Ranks>,
 }
 
 /// Assemblies slower than this are not repeated for timing.
@@ -224,6 +228,7 @@ impl RunConfig {
             bands: Vec::new(),
             cases: None,
             operator_file: None,
+            ranks: None,
         }
     }
 }

@@ -18,6 +18,7 @@ pub use backend::{Assembler, assemble_on};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
 pub use operator::{
     BuiltOperator, OperatorSummary, TimedAssembly, build_compressed, build_operator, compresses,
+    distributed_report,
 };
 pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
 pub use saved::{OperatorHeader, load_operator, save_operator};
@@ -213,6 +214,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
     let solve_seconds = started.elapsed().as_secs_f64();
     let u = outcome.u;
     let summary = built.summary(config);
+    let distributed = built.distributed_report();
 
     let Problem { scene, disc, .. } = &problem;
     let error = u_faces.as_ref().map(|uf| {
@@ -255,6 +257,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         blocks: summary.blocks,
         peak_rss_bytes: peak_rss_bytes(),
         solution_range: range(&u),
+        distributed,
         over_surface,
         u,
     };

@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use super::{Assembler, Problem, REPEAT_BELOW_SECONDS, RunConfig};
 use crate::assembly::{Assembly, PairEvaluation};
+use crate::distributed::{DistributedReport, RankReport};
 use crate::error::{Error, Result};
 use crate::gpu;
 use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats, ProblemShape};
@@ -140,6 +141,15 @@ impl BuiltOperator {
         }
     }
 
+    /// In a distributed run, every rank's figures gathered (a collective: every rank calls it
+    /// at the same point); `None` for one process.
+    pub fn distributed_report(&self) -> Option<DistributedReport> {
+        match self {
+            Self::Compressed { op, setup_seconds, .. } => distributed_report(op, *setup_seconds),
+            Self::Dense(_) => None,
+        }
+    }
+
     /// What a report says of this operator, built for `config`.
     pub fn summary(&self, config: &RunConfig) -> OperatorSummary {
         let dof = self.dof();
@@ -168,6 +178,26 @@ impl BuiltOperator {
     }
 }
 
+/// In a distributed run, every rank's figures gathered, this rank's operator `op` built in
+/// `setup_seconds` (a collective: every rank calls it at the same point); `None` for one
+/// process.
+pub fn distributed_report(
+    op: &CompressedOperator,
+    setup_seconds: f64,
+) -> Option<DistributedReport> {
+    let share = op.share.as_ref()?;
+    let traffic = share.ranks.traffic();
+    let mine = RankReport {
+        rank: share.ranks.rank(),
+        setup_seconds: setup_seconds - share.waited_seconds,
+        operator_bytes: share.operator_bytes,
+        peak_rss_bytes: super::peak_rss_bytes(),
+        communication_seconds: traffic.seconds,
+        communication_bytes: traffic.bytes,
+    };
+    Some(DistributedReport::gather(&*share.ranks, mine))
+}
+
 /// The compressed operator of `config` for `problem`, its entries evaluated by `assembler` (the
 /// CPU, or the GPU's pair kernel in batches); refused where the configuration needs the dense
 /// matrix (LU).
@@ -185,18 +215,28 @@ pub fn build_compressed(
                 .into(),
         });
     }
+    if let Some(ranks) = &config.ranks {
+        check_distributed(config, ranks.size())?;
+    }
     let Problem { scene, disc, .. } = problem;
     let device = match assembler {
         Assembler::Cpu => None,
         Assembler::Gpu(g) => Some(gpu::PairEvaluator::new(g, scene, disc, &config.assembly)?),
     };
-    let mut op = CompressedOperator::build(
-        problem,
-        &config.assembly,
-        &config.compression,
-        device.as_ref().map(|d| d as &dyn PairEvaluation),
-        &*config.progress,
-    )?;
+    let batches = device.as_ref().map(|d| d as &dyn PairEvaluation);
+    let (assembly, compression, progress) =
+        (&config.assembly, &config.compression, &*config.progress);
+    let mut op = match &config.ranks {
+        Some(ranks) => CompressedOperator::build_shared(
+            problem,
+            assembly,
+            compression,
+            batches,
+            progress,
+            ranks,
+        )?,
+        None => CompressedOperator::build(problem, assembly, compression, batches, progress)?,
+    };
     op.device = assembler.device();
     Ok(op)
 }
@@ -205,6 +245,9 @@ pub fn build_compressed(
 /// size, the compressed operator (built once; its setup time includes the pair planner's, as
 /// the dense assembly's does).
 pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
+    if let Some(ranks) = &config.ranks {
+        check_distributed(config, ranks.size())?;
+    }
     if let Some(path) = &config.operator_file {
         return super::load_operator(path, config, problem);
     }
@@ -221,10 +264,47 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
     Ok(BuiltOperator::Compressed { op, setup_seconds, preparation_seconds })
 }
 
+/// Refuses what a run over `size` ranks cannot do: only the compressed operator is spread over
+/// them, so the dense one, LU and a saved operator (which holds the whole of it) are for runs of
+/// one process.
+fn check_distributed(config: &RunConfig, size: usize) -> Result<()> {
+    let why = if config.operator == OperatorChoice::Dense {
+        Some(("operator", "dense", "the dense operator is not distributed"))
+    } else if config.solver.choice == solve::SolverChoice::Lu {
+        Some(("solver", "lu", "LU needs the dense matrix, which is not distributed"))
+    } else if config.operator_file.is_some() {
+        Some((
+            "operator-file",
+            "given",
+            "a saved operator holds the whole of it, not a rank's part",
+        ))
+    } else {
+        None
+    };
+    match why {
+        Some((name, value, why)) => Err(Error::InvalidParameter {
+            name,
+            value: value.into(),
+            reason: format!(
+                "{why}: run it in one process, or use the compressed operator over the {size} \
+                 ranks"
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Whether `config` stores the compressed operator for `problem`: when asked for, or as
 /// [`OperatorChoice::decide`] says under [`OperatorChoice::Auto`] (its reason given as a note)
-/// unless LU (which needs the dense matrix) is asked for.
+/// unless LU (which needs the dense matrix) is asked for. A distributed run always compresses.
 pub fn compresses(config: &RunConfig, problem: &Problem) -> bool {
+    if let Some(ranks) = &config.ranks {
+        config.progress.note(&format!(
+            "operator: compressed, spread over {} ranks (the dense operator is not distributed)",
+            ranks.size()
+        ));
+        return true;
+    }
     if config.operator == OperatorChoice::Auto && config.solver.choice == solve::SolverChoice::Lu {
         return false;
     }

@@ -4,6 +4,7 @@ use serde::Serialize;
 
 use super::{Problem, RunConfig};
 use crate::assembly::Quadrature;
+use crate::distributed::DistributedReport;
 use crate::operator::OperatorStats;
 use crate::surface_error::SurfaceErrors;
 use crate::visibility::PairStats;
@@ -114,6 +115,10 @@ pub struct RunReport {
     pub peak_rss_bytes: Option<u64>,
     /// Smallest, mean and largest nodal value of the solution.
     pub solution_range: [f64; 3],
+    /// The ranks of a distributed run (`ranks`, `per_rank`, `communication_seconds`,
+    /// `communication_bytes`, `load_imbalance`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub distributed: Option<DistributedReport>,
     /// Errors over all of S at sample points (`surface_error`, `iterated_error`, `surface_points`),
     /// when asked for and a true solution is known.
     #[serde(flatten)]
