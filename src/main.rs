@@ -11,11 +11,18 @@ use cli::{Cli, Command};
 use radiosity::error::Result;
 
 fn run(cli: Cli) -> Result<()> {
-    if cli::world().is_some() && !matches!(cli.command, Command::Solve(_) | Command::Inspect(_)) {
+    let distributed = match &cli.command {
+        Command::Solve(_) | Command::Inspect(_) => true,
+        Command::Study { id, .. } => id == "compression",
+        _ => false,
+    };
+    if cli::world().is_some() && !distributed {
         return Err(radiosity::error::Error::InvalidParameter {
             name: "command",
             value: "under mpirun with several ranks".into(),
-            reason: "solve and inspect run distributed; run the others in one process".into(),
+            reason: "solve, inspect and study compression run distributed; run the others in \
+                     one process"
+                .into(),
         });
     }
     match cli.command {

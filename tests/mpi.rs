@@ -158,3 +158,33 @@ fn what_is_not_distributed_is_refused_over_ranks() {
         assert!(stderr.contains(culprit), "{extra:?}: {stderr}");
     }
 }
+
+#[test]
+fn the_compression_study_runs_over_ranks() {
+    // The compressed rows over two ranks, the dense reference at rank 0: each compressed
+    // solution within 10 × its tolerance of the dense one, as in one process.
+    let (ok, stdout, stderr) = mpirun(
+        2,
+        &[
+            "study",
+            "compression",
+            "--max-n",
+            "3000",
+            "--json",
+            "-",
+            "--figures",
+            "target/mpi-figures",
+        ],
+    );
+    assert!(ok, "{stderr}");
+    let study: Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    let rows = study["rows"].as_array().unwrap();
+    let compressed: Vec<&Value> = rows.iter().filter(|r| r["operator"] == "compressed").collect();
+    assert_eq!(compressed.len(), 6, "{stdout}");
+    for r in compressed {
+        assert_eq!(r["ranks"], 2, "{r}");
+        let tolerance = r["compression_tolerance"].as_f64().unwrap();
+        let d = r["difference_from_dense"].as_f64().unwrap();
+        assert!(d <= 10.0 * tolerance, "{r}");
+    }
+}

@@ -31,14 +31,24 @@ pub(crate) fn run(
             emit(&result, json, || report::stability_table(&result, format))
         }
         "compression" => {
-            let progress = super::progress::on_stderr();
+            let progress =
+                if is_root() { super::progress::on_stderr() } else { Default::default() };
             // The study measures the CPU unless the GPU is asked for.
             let backend = match device {
                 StudyDevice::Gpu(p) => radiosity::pipeline::Backend::Gpu(p),
                 _ => radiosity::pipeline::Backend::Cpu,
             };
-            let mut result =
-                radiosity::study::compression::run_compression(max_n, backend, &progress)?;
+            let ranks = world();
+            let mut result = radiosity::study::compression::run_compression(
+                max_n,
+                backend,
+                &progress,
+                ranks.as_ref(),
+            )?;
+            // Every rank ran the compressed operators; rank 0 holds the rows and prints them.
+            if !is_root() {
+                return Ok(());
+            }
             result.figures =
                 report::write_compression_figure(&result, std::path::Path::new(figures))?;
             emit(&result, json, || report::compression_table(&result, format))

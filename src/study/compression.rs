@@ -5,6 +5,7 @@
 use serde::Serialize;
 
 use crate::discretization::Method;
+use crate::distributed::Ranks;
 use crate::error::{Error, Result};
 use crate::operator::{CompressionOptions, OperatorChoice};
 use crate::pipeline::{self, Backend, RunConfig};
@@ -55,6 +56,9 @@ pub struct CompressionRow {
     pub max_rank: Option<usize>,
     /// GMRES iterations (0 for LU).
     pub iterations: usize,
+    /// Ranks the operator was spread over (a distributed run's compressed rows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranks: Option<usize>,
 }
 
 /// Growth of time and memory in n, fitted by least squares on log-log data.
@@ -88,12 +92,16 @@ pub struct CompressionStudy {
 }
 
 /// Runs the study up to `max_n` elements (default [`DEFAULT_MAX_N`]), every operator built on
-/// `backend` (the GPU: the compressed operator's entries by its pair kernel).
+/// `backend` (the GPU: the compressed operator's entries by its pair kernel). With `ranks` (a
+/// distributed run: every rank calls this) the compressed operators are spread over them and
+/// the dense references run at rank 0 alone, whose rows are the study's.
 pub fn run_compression(
     max_n: Option<usize>,
     backend: Backend,
     progress: &ProgressSink,
+    ranks: Option<&Ranks>,
 ) -> Result<CompressionStudy> {
+    let is_root = ranks.is_none_or(|r| r.rank() == 0);
     let max_n = max_n.unwrap_or(DEFAULT_MAX_N);
     let mut rows = Vec::new();
     let mut left_out = Vec::new();
@@ -109,9 +117,11 @@ pub fn run_compression(
                 c.compression = CompressionOptions { tolerance, ..Default::default() };
                 c.solver = SolverOptions::with(SolverChoice::Auto);
                 c.progress = progress.clone();
+                c.ranks =
+                    (operator == OperatorChoice::Compressed).then(|| ranks.cloned()).flatten();
                 c
             };
-            let dense = if dof <= DENSE_LIMIT {
+            let dense = if dof <= DENSE_LIMIT && is_root {
                 progress.note(&format!("compression study: {method}, dof = {dof}, dense"));
                 let r = pipeline::run(&config(OperatorChoice::Dense, TOLERANCES[0]))?;
                 let row = row_of(&r, None, None);
@@ -131,7 +141,9 @@ pub fn run_compression(
                     }
                     // A run that does not fit in memory is reported, and the rest of the
                     // study goes on (smaller tolerances need more memory still).
-                    Err(e @ Error::OperatorTooLarge { .. }) => {
+                    // (Not over ranks: each rank's guard sees its own share, so they would not
+                    // agree on leaving the run out; the error stops them all.)
+                    Err(e @ Error::OperatorTooLarge { .. }) if ranks.is_none() => {
                         let note = format!("{method}, dof = {dof}, tolerance {tolerance:.0e}: {e}");
                         progress.note(&format!("compression study: left out: {note}"));
                         left_out.push(note);
@@ -166,6 +178,7 @@ fn row_of(
         peak_rss_bytes: r.peak_rss_bytes,
         max_rank: r.blocks.map(|b| b.max_rank),
         iterations: r.iterations,
+        ranks: r.distributed.as_ref().map(|d| d.ranks),
     }
 }
 
