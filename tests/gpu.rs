@@ -411,3 +411,96 @@ fn the_compressed_operator_built_on_the_gpu_matches_the_one_built_on_the_cpu() {
         }
     }
 }
+
+/// The scenes of the device-resident checks: the paper's surface (both methods), a room with
+/// furniture, a box with baffles, a room lit by a black lamp (rho = 0: rows of zeros), and a
+/// sliver shelf (thin elements, whose columns come from the host).
+fn resident_cases() -> Vec<(&'static str, Problem)> {
+    let sliver = sliver_scene("resident");
+    let scene = |name: &str| match name.strip_prefix("examples/") {
+        Some(_) => radiosity::scene::load(std::path::Path::new(name)).unwrap(),
+        None => {
+            let builtin = BuiltinScene::ALL.iter().find(|b| b.name() == name).unwrap();
+            builtin.build(SurfaceParameters::default()).unwrap()
+        }
+    };
+    let problem = |name: &'static str, method: Method, refine: u32| {
+        let scene = match name {
+            "sliver" => radiosity::scene::load(&sliver).unwrap(),
+            _ => scene(name),
+        };
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
+        let disc = Discretization::new(&scene, &mesh, method).unwrap();
+        (name, Problem::new(scene, mesh, disc))
+    };
+    vec![
+        problem("five-piece", Method::Centroid, 3),
+        problem("five-piece", Method::linear(Method::PAPER_ALPHA).unwrap(), 2),
+        problem("examples/furnished-room.toml", Method::Centroid, 1),
+        problem("baffled-box", Method::Centroid, 2),
+        problem("examples/louvre-room.toml", Method::Centroid, 1),
+        problem("sliver", Method::linear(Method::PAPER_ALPHA).unwrap(), 1),
+    ]
+}
+
+#[test]
+fn gmres_on_the_device_resident_matrix_equals_gmres_on_the_host() {
+    // The same GPU-built matrix, read back and solved by the host's GMRES, or kept on the
+    // device with GMRES's products there (thin columns from the host): u to 1e-12.
+    use radiosity::solve::{self, SolverChoice, SolverOptions};
+    let Some(ctx) = gpu() else { return };
+    let options = AssemblyOptions::default();
+    let silent = &radiosity::progress::Silent;
+    for (name, problem) in resident_cases() {
+        let method = problem.disc.method;
+        let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
+        let mut host = assembler.assemble(&problem, &options, silent).unwrap();
+        radiosity::assembly::recompute_thin_columns(&mut host, &problem, &options);
+        let device = gpu::DeviceOperator::assemble(&assembler, &problem, &options, silent).unwrap();
+        assert_eq!(host.stats, device.stats, "{name}");
+        let thin = radiosity::assembly::ThinColumns::new(&problem, &options);
+        assert_eq!(thin.is_some(), name == "sliver", "{name}: thin columns");
+        let e: Vec<f64> = (0..problem.disc.dof()).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect();
+        let iterative = SolverOptions::with(SolverChoice::Iterative);
+        let on_host = solve::solve_many(&host.matrix, &[&e], iterative).unwrap().pop().unwrap();
+        let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
+        let on_device =
+            solve::solve_by_products(&device, &e, (&rho, &rho), iterative, 0.0).unwrap();
+        let scale = on_host.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let d = on_host.u.iter().zip(&on_device.u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(d <= 1e-12 * scale, "{name} ({method}): u differs by {:.2e}", d / scale);
+        // The product itself, against the host's matrix.
+        let kx = device.apply_many(&[&e]).unwrap().pop().unwrap();
+        let want = host.matrix.apply(&e);
+        let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let d = kx.iter().zip(&want).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(d <= 1e-14 * scale, "{name} ({method}): K x differs by {:.2e}", d / scale);
+    }
+}
+
+#[test]
+fn a_device_resident_solve_reads_back_vectors_not_the_matrix() {
+    // five-piece refine 5 (10 240 unknowns): the matrix is 839 MB; what comes back is one
+    // vector per product, at most 200 of them.
+    if gpu().is_none() {
+        return;
+    }
+    let args = ["solve", "--scene", "five-piece", "--refine", "5", "--backend", "gpu"];
+    let json = common::json(&[&args[..], &["--solver", "iterative", "--json", "-"]].concat());
+    let dof = json["dof"].as_u64().unwrap();
+    assert_eq!(json["operator_location"], "device", "{json}");
+    let read_back = json["bytes_read_back"].as_u64().unwrap();
+    assert!(read_back > 0 && read_back <= 200 * dof * 8, "read back {read_back} bytes: {json}");
+    assert!(json["bytes_uploaded"].as_u64().unwrap() > 0);
+    assert!(json["gpu_submissions"].as_u64().unwrap() > json["iterations"].as_u64().unwrap());
+    let idle = json["device_idle_fraction"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&idle), "{json}");
+    // E_n of the dense operator at n = 10 240 (docs/results.md, the compression study).
+    let error = json["error"].as_f64().unwrap();
+    assert!((error - 2.595262e-1).abs() <= 1e-6, "E_n {error}");
+    // Read back, the matrix itself comes over (at refine 3).
+    let small = ["solve", "--scene", "five-piece", "--refine", "3", "--backend", "gpu"];
+    let host = common::json(&[&small[..], &["--solver", "lu", "--json", "-"]].concat());
+    assert_eq!(host["operator_location"], "host");
+    assert_eq!(host["bytes_read_back"].as_u64().unwrap(), 640 * 640 * 8);
+}

@@ -479,7 +479,7 @@ impl PyOperator {
                 self.built.dof()
             )));
         }
-        Ok(py.detach(|| self.built.apply(&x)).into_pyarray(py))
+        Ok(py.detach(|| self.built.apply(&x)).map_err(raised)?.into_pyarray(py))
     }
 
     /// Solves `(I - K) u = E` for E per face or per node, 1-D or one case per column (2-D);

@@ -272,41 +272,122 @@ pub fn recompute_thin_columns(
     problem: &Problem,
     options: &AssemblyOptions,
 ) {
-    let Problem { disc, planner, .. } = problem;
-    let thin: Vec<usize> = (0..disc.elements.len()).filter(|&j| disc.elements[j].thin).collect();
-    if thin.is_empty() || !options.far_field {
+    let Some(thin) = ThinElements::new(problem, options) else {
         return;
-    }
-    let integrator = PairIntegrator::new(disc.method, options);
-    let per = disc.method.nodes_per_element();
-    let by_face = by_face(thin.iter().map(|&j| (disc.elements[j].face, j)));
+    };
+    let per = thin.per;
     assembly.matrix.rows_mut().enumerate().for_each_init(
         RecentHiders::default,
         |hiders, (i, row)| {
-            let node = &disc.nodes[i];
-            let scale = node.rho / PI;
-            let mut write = |j: usize, vis: &Visibility| {
-                let el = &disc.elements[j];
-                let values =
-                    integrator.integrate(el, &disc.bases[j], node.position, node.normal, vis);
-                for (c, v) in values.iter().take(per).enumerate() {
-                    row[j * per + c] = scale * v;
-                }
-            };
-            let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
-            planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, list, sight| {
-                match sight {
-                    FaceSight::Hidden(reason) => {
-                        list.for_each(|j| write(j, &Visibility::Skip(reason)))
-                    }
-                    FaceSight::Whole => list.for_each(|j| write(j, &Visibility::Full)),
-                    FaceSight::Part(mut part) => {
-                        list.for_each(|j| write(j, &part.element(&disc.elements[j].in_face())))
-                    }
-                }
-            });
+            thin.row(problem, i, hiders, |k, values| {
+                let j = thin.elements[k];
+                row[j * per..(j + 1) * per].copy_from_slice(&values[..per]);
+            })
         },
     );
+}
+
+/// The thin elements of a problem and how their entries are computed on the CPU.
+struct ThinElements {
+    elements: Vec<usize>,
+    per: usize,
+    integrator: PairIntegrator,
+    /// Positions in `elements` by face, as the row walk takes them.
+    by_face: Vec<(usize, Vec<usize>)>,
+}
+
+impl ThinElements {
+    /// `None` where there is no thin element or the closed forms are asked for everywhere.
+    fn new(problem: &Problem, options: &AssemblyOptions) -> Option<Self> {
+        let disc = &problem.disc;
+        let elements: Vec<usize> =
+            (0..disc.elements.len()).filter(|&j| disc.elements[j].thin).collect();
+        if elements.is_empty() || !options.far_field {
+            return None;
+        }
+        let by_face =
+            by_face(elements.iter().enumerate().map(|(k, &j)| (disc.elements[j].face, k)));
+        Some(Self {
+            per: disc.method.nodes_per_element(),
+            integrator: PairIntegrator::new(disc.method, options),
+            by_face,
+            elements,
+        })
+    }
+
+    /// Row i's entries of the thin elements: `write(k, values)` for the k-th of them (values
+    /// scaled by rho/π, zero where it is hidden).
+    fn row(
+        &self,
+        problem: &Problem,
+        i: usize,
+        hiders: &mut RecentHiders,
+        mut write: impl FnMut(usize, [f64; 3]),
+    ) {
+        let Problem { disc, planner, .. } = problem;
+        let node = &disc.nodes[i];
+        let scale = node.rho / PI;
+        let mut put = |k: usize, vis: &Visibility| {
+            let j = self.elements[k];
+            let el = &disc.elements[j];
+            let values =
+                self.integrator.integrate(el, &disc.bases[j], node.position, node.normal, vis);
+            write(k, values.map(|v| scale * v));
+        };
+        let faces = self.by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
+        planner.walk_row(
+            &node.viewer(),
+            faces,
+            Views::Fresh(hiders),
+            |_, list, sight| match sight {
+                FaceSight::Hidden(reason) => list.for_each(|k| put(k, &Visibility::Skip(reason))),
+                FaceSight::Whole => list.for_each(|k| put(k, &Visibility::Full)),
+                FaceSight::Part(mut part) => list.for_each(|k| {
+                    put(k, &part.element(&disc.elements[self.elements[k]].in_face()))
+                }),
+            },
+        );
+    }
+}
+
+/// The columns of K of the thin elements, computed on the CPU (see
+/// [`recompute_thin_columns`]): what a K built on the GPU and kept there takes from the host.
+#[derive(Clone, Debug)]
+pub struct ThinColumns {
+    /// The columns (element × basis function), ascending.
+    pub columns: Vec<usize>,
+    /// Row-major, dof × `columns.len()`.
+    pub values: Vec<f64>,
+}
+
+impl ThinColumns {
+    /// The thin columns of `problem`'s K, or `None` where there are none or the closed forms
+    /// are asked for everywhere (`far_field` off).
+    pub fn new(problem: &Problem, options: &AssemblyOptions) -> Option<Self> {
+        let thin = ThinElements::new(problem, options)?;
+        let per = thin.per;
+        let columns: Vec<usize> =
+            thin.elements.iter().flat_map(|&j| (0..per).map(move |c| j * per + c)).collect();
+        let width = columns.len();
+        let mut values = vec![0.0; problem.disc.dof() * width];
+        values.par_chunks_mut(width).enumerate().for_each_init(
+            RecentHiders::default,
+            |hiders, (i, row)| {
+                thin.row(problem, i, hiders, |k, v| {
+                    row[k * per..(k + 1) * per].copy_from_slice(&v[..per])
+                })
+            },
+        );
+        Some(Self { columns, values })
+    }
+
+    /// `y += T x`, T these columns of K.
+    pub fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        let width = self.columns.len();
+        for (yi, row) in y.iter_mut().zip(self.values.chunks_exact(width)) {
+            *yi += self.columns.iter().zip(row).map(|(&c, v)| v * x[c]).sum::<f64>();
+        }
+    }
 }
 
 /// `(K u)(P)` at arbitrary points of S (the operator of (1.4) applied to the collocation solution

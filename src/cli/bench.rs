@@ -64,8 +64,13 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
             );
             if let Some(b) = &t.breakdown {
                 println!(
-                    "    {} tiles: host planning {:.3} s, waiting for the device {:.3} s, read-back {:.3} s",
-                    b.tiles, b.planning_seconds, b.device_wait_seconds, b.readback_seconds
+                    "    {} tiles: host planning {:.3} s, waiting for the device {:.3} s, read-back {:.3} s \
+                     ({:.2} GB/s)",
+                    b.tiles,
+                    b.planning_seconds,
+                    b.device_wait_seconds,
+                    b.readback_seconds,
+                    b.read_back_gb_per_second
                 );
             }
         }

@@ -57,6 +57,12 @@ pub struct GpuTimings {
     pub readback_seconds: f64,
     /// Tiles.
     pub tiles: usize,
+    /// Bytes written to the device: the elements, the rule tables, and each tile's plan.
+    pub bytes_uploaded: u64,
+    /// Bytes of the matrix read back (none when it stays on the device).
+    pub bytes_read_back: u64,
+    /// Those bytes over the time of copying them out of the mapped staging buffers.
+    pub read_back_gb_per_second: f64,
 }
 
 /// Compiled pipelines for one precision and collocation method.
@@ -269,9 +275,21 @@ pub(super) struct Uploaded {
 
 struct InFlight {
     rows: Range<usize>,
-    staging: wgpu::Buffer,
+    /// The tile's entries on the device.
+    out: wgpu::Buffer,
+    /// Their copy for the host; none when the tile stays on the device.
+    staging: Option<wgpu::Buffer>,
     size: u64,
     _buffers: Vec<wgpu::Buffer>,
+}
+
+/// Tiles of K kept on the device: rows, and their entries row-major.
+pub type DeviceTiles = Vec<(Range<usize>, wgpu::Buffer)>;
+
+/// Where an assembly's tiles go: into the host's matrix, or kept on the device.
+enum Destination<'m> {
+    Host(&'m mut CollocationMatrix),
+    Device(&'m mut DeviceTiles),
 }
 
 impl<'a> GpuAssembler<'a> {
@@ -366,6 +384,38 @@ impl<'a> GpuAssembler<'a> {
         limits: TileLimits,
         progress: &dyn Progress,
     ) -> Result<Assembly> {
+        let mut matrix = CollocationMatrix::zeros(problem.disc.dof())?;
+        let destination = Destination::Host(&mut matrix);
+        let stats = self.assemble_tiles(problem, options, limits, destination, progress)?;
+        Ok(Assembly { matrix, stats })
+    }
+
+    /// K assembled into device memory and left there, tile by tile of rows (each tile's
+    /// entries row-major in the kernels' precision), with the pair classes; nothing is read
+    /// back. The thin elements' columns are as the kernels give them (see
+    /// [`crate::assembly::recompute_thin_columns`]).
+    pub fn assemble_on_device(
+        &self,
+        problem: &Problem,
+        options: &AssemblyOptions,
+        progress: &dyn Progress,
+    ) -> Result<(DeviceTiles, PairStats)> {
+        let mut tiles = Vec::new();
+        let destination = Destination::Device(&mut tiles);
+        let limits = TileLimits::default();
+        let stats = self.assemble_tiles(problem, options, limits, destination, progress)?;
+        Ok((tiles, stats))
+    }
+
+    /// Plans, submits and collects the tiles of K into `destination`.
+    fn assemble_tiles(
+        &self,
+        problem: &Problem,
+        options: &AssemblyOptions,
+        limits: TileLimits,
+        mut destination: Destination,
+        progress: &dyn Progress,
+    ) -> Result<PairStats> {
         let Problem { scene, mesh, disc, planner, .. } = problem;
         if disc.method.nodes_per_element() != self.method.nodes_per_element() {
             return Err(Error::Gpu(format!(
@@ -376,7 +426,6 @@ impl<'a> GpuAssembler<'a> {
         }
         let ctx = self.ctx;
         let dof = disc.dof();
-        let mut matrix = CollocationMatrix::zeros(dof)?;
         let p = self.precision;
         let uploaded = self.upload(scene, disc, options)?;
         let unit = uploaded.unit;
@@ -396,7 +445,10 @@ impl<'a> GpuAssembler<'a> {
             (0..dof).step_by(rows_per_tile).map(|s| s..(s + rows_per_tile).min(dof)).collect();
 
         let mut stats = PairStats::default();
-        *self.timings.lock().expect("timings lock") = GpuTimings::default();
+        *self.timings.lock().expect("timings lock") = GpuTimings {
+            bytes_uploaded: uploaded.elements.size() + uploaded.tables.size(),
+            ..Default::default()
+        };
         let timed_plan = |t: &Range<usize>| {
             let started = std::time::Instant::now();
             let plan = plan_tile(unit, t.clone(), scene, mesh, disc, planner);
@@ -424,19 +476,33 @@ impl<'a> GpuAssembler<'a> {
         while let Some(plan) = next_plan.take() {
             self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
+            let keep = matches!(destination, Destination::Device(_));
             let submitted =
-                self.submit(&plan, disc, mesh, &uploaded, max_binding, limits.near_pairs)?;
+                self.submit(&plan, disc, mesh, &uploaded, (max_binding, limits.near_pairs), keep)?;
             if let Some(done) = in_flight.take() {
-                self.finish(done, &mut matrix, progress)?;
+                self.finish(done, &mut destination, progress)?;
             }
             in_flight = Some(submitted);
             // Plan the next tile while the device works on this one.
             next_plan = plan_next();
         }
         if let Some(done) = in_flight.take() {
-            self.finish(done, &mut matrix, progress)?;
+            self.finish(done, &mut destination, progress)?;
         }
-        Ok(Assembly { matrix, stats })
+        let mut t = self.timings.lock().expect("timings lock");
+        if t.readback_seconds > 0.0 {
+            t.read_back_gb_per_second = t.bytes_read_back as f64 / t.readback_seconds / 1e9;
+        }
+        drop(t);
+        if let Destination::Device(_) = destination {
+            let started = std::time::Instant::now();
+            ctx.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| Error::Gpu(format!("waiting for the device failed: {e}")))?;
+            self.timings.lock().expect("timings lock").device_wait_seconds +=
+                started.elapsed().as_secs_f64();
+        }
+        Ok(stats)
     }
 
     /// Sends the tile `plan` to the device over the `uploaded` elements and tables.
@@ -446,8 +512,8 @@ impl<'a> GpuAssembler<'a> {
         disc: &Discretization,
         mesh: &Mesh,
         uploaded: &Uploaded,
-        max_binding: u64,
-        max_near_pairs: u64,
+        (max_binding, max_near_pairs): (u64, u64),
+        keep_on_device: bool,
     ) -> Result<InFlight> {
         let Uploaded { elements, tables, counts, .. } = uploaded;
         let ctx = self.ctx;
@@ -503,11 +569,22 @@ impl<'a> GpuAssembler<'a> {
                 usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            self.timings.lock().expect("timings lock").bytes_uploaded += (view_bytes.len()
+                + vertex_bytes.len()
+                + exception_bytes.len()
+                + std::mem::size_of::<Params>())
+                as u64;
             let views = compute::storage(ctx, &view_bytes);
             let exceptions = compute::storage(ctx, exception_bytes);
             let vertices = compute::storage(ctx, &vertex_bytes);
             let size = (rows * dof * p.bytes()) as u64;
-            let (out, staging) = compute::output(ctx, size);
+            let (out, staging) = match keep_on_device {
+                true => (compute::writable(ctx, size), None),
+                false => {
+                    let (out, staging) = compute::output(ctx, size);
+                    (out, Some(staging))
+                }
+            };
             let group = compute::bind_group(
                 ctx,
                 &self.layout,
@@ -524,13 +601,16 @@ impl<'a> GpuAssembler<'a> {
                 pass.set_bind_group(0, &group, &[]);
                 pass.dispatch_workgroups(exc_x, exc_y, 1);
             }
-            encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, size.max(16));
+            if let Some(staging) = &staging {
+                encoder.copy_buffer_to_buffer(&out, 0, staging, 0, size.max(16));
+            }
             ctx.queue.submit([encoder.finish()]);
             Ok::<_, Error>(InFlight {
                 rows: plan.rows.clone(),
+                out,
                 staging,
                 size,
-                _buffers: vec![params, views, exceptions, vertices, out, near, near_args],
+                _buffers: vec![params, views, exceptions, vertices, near, near_args],
             })
         })?
     }
@@ -578,19 +658,29 @@ impl<'a> GpuAssembler<'a> {
         }
     }
 
+    /// Collects a submitted tile: copied into the host's matrix, or its buffer kept.
     fn finish(
         &self,
         done: InFlight,
-        matrix: &mut CollocationMatrix,
+        destination: &mut Destination,
         progress: &dyn Progress,
     ) -> Result<()> {
+        let (matrix, staging) = match (destination, &done.staging) {
+            (Destination::Device(tiles), _) => {
+                progress.advance(done.rows.len());
+                tiles.push((done.rows, done.out));
+                return Ok(());
+            }
+            (Destination::Host(matrix), Some(staging)) => (matrix, staging),
+            (Destination::Host(_), None) => unreachable!("host tiles are staged"),
+        };
         let started = std::time::Instant::now();
-        compute::wait(self.ctx, &done.staging, done.size)?;
+        compute::wait(self.ctx, staging, done.size)?;
         let waited = started.elapsed().as_secs_f64();
         let started = std::time::Instant::now();
         let dof = matrix.dof();
         compute::copy_mapped(
-            &done.staging,
+            staging,
             done.size,
             self.precision,
             matrix.rows_slice_mut(done.rows.clone()),
@@ -598,6 +688,7 @@ impl<'a> GpuAssembler<'a> {
         let mut t = self.timings.lock().expect("timings lock");
         t.device_wait_seconds += waited;
         t.readback_seconds += started.elapsed().as_secs_f64();
+        t.bytes_read_back += done.size;
         drop(t);
         debug_assert_eq!(done.size as usize, done.rows.len() * dof * self.precision.bytes());
         progress.advance(done.rows.len());

@@ -1,5 +1,6 @@
 //! Small helpers over wgpu: pipelines from WGSL, buffers, dispatch grids and read-back.
 
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use super::GpuContext;
@@ -105,15 +106,20 @@ pub fn uniform(ctx: &GpuContext, bytes: &[u8]) -> wgpu::Buffer {
     })
 }
 
+/// A writable storage buffer of `size` bytes that can be copied out.
+pub fn writable(ctx: &GpuContext, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("out"),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
 /// A writable storage buffer of `size` bytes that can be copied out, and its staging twin.
 pub fn output(ctx: &GpuContext, size: u64) -> (wgpu::Buffer, wgpu::Buffer) {
     let size = size.max(16);
-    let out = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("out"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
+    let out = writable(ctx, size);
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("staging"),
         size,
@@ -166,6 +172,9 @@ pub fn wait(ctx: &GpuContext, staging: &wgpu::Buffer, size: u64) -> Result<()> {
     Ok(())
 }
 
+/// Reals per part of a parallel copy out of a staging buffer.
+const COPY_CHUNK: usize = 1 << 16;
+
 /// Converts the reals of a staging buffer mapped by [`wait`] into `out` and unmaps it.
 pub fn copy_mapped(
     staging: &wgpu::Buffer,
@@ -179,11 +188,20 @@ pub fn copy_mapped(
             .get_mapped_range()
             .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
         let bytes = &view[..size as usize];
+        // On all cores: one thread copying out of mapped memory took most of the time of a GPU
+        // assembly on a real card (docs/gpu.md).
         match precision {
-            Precision::F64 => out.copy_from_slice(bytemuck::cast_slice(bytes)),
+            Precision::F64 => {
+                let values: &[f64] = bytemuck::cast_slice(bytes);
+                out.par_chunks_mut(COPY_CHUNK)
+                    .zip(values.par_chunks(COPY_CHUNK))
+                    .for_each(|(o, v)| o.copy_from_slice(v));
+            }
             Precision::F32 => {
                 let values: &[f32] = bytemuck::cast_slice(bytes);
-                out.iter_mut().zip(values).for_each(|(o, v)| *o = f64::from(*v));
+                out.par_chunks_mut(COPY_CHUNK)
+                    .zip(values.par_chunks(COPY_CHUNK))
+                    .for_each(|(o, v)| o.iter_mut().zip(v).for_each(|(o, v)| *o = f64::from(*v)));
             }
         }
     }

@@ -7,11 +7,13 @@ mod context;
 pub mod layout;
 pub mod math;
 mod pairs;
+mod resident;
 pub mod shaders;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
 pub use context::{AdapterRequest, AdapterSummary, GpuContext, INSTALL_HINT};
 pub use pairs::PairEvaluator;
+pub use resident::{DeviceOperator, DeviceTraffic};
 pub use shaders::Precision;
 
 use std::sync::OnceLock;

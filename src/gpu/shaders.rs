@@ -33,6 +33,7 @@ const MATH_F64: &str = include_str!("../../shaders/math_f64.wgsl");
 const MATH_F32: &str = include_str!("../../shaders/math_f32.wgsl");
 const COLLOCATION: &str = include_str!("../../shaders/collocation.wgsl");
 const MATH_TEST: &str = include_str!("../../shaders/math_test.wgsl");
+const MATVEC: &str = include_str!("../../shaders/matvec.wgsl");
 
 fn with_math(precision: Precision, body: &str) -> String {
     let (alias, math) = match precision {
@@ -53,6 +54,16 @@ pub fn collocation(precision: Precision, per_element: u32, far_field: bool) -> S
             "const PER_ELEMENT: u32 = {per_element}u;\nconst FAR_FIELD: bool = {far_field};\n{COLLOCATION}"
         ),
     )
+}
+
+/// The product of a device-resident matrix stored in `precision` with vectors in f64 (entry
+/// point `matvec`).
+pub fn matvec(precision: Precision) -> String {
+    let alias = match precision {
+        Precision::F64 => "alias real = f64;\n",
+        Precision::F32 => "alias real = f32;\n",
+    };
+    format!("{alias}{MATVEC}")
 }
 
 /// The math-library test kernel (entry point `math_eval`).
@@ -84,6 +95,7 @@ mod tests {
                 ("collocation, centroid, far field", collocation(p, 1, true)),
                 ("collocation, linear", collocation(p, 3, true)),
                 ("math_test", math_test(p)),
+                ("matvec", matvec(p)),
             ];
             for (name, src) in sources {
                 if let Err(e) = validate(&src) {

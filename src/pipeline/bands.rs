@@ -10,10 +10,9 @@ use super::report::range;
 use crate::assembly::CollocationMatrix;
 use crate::discretization::Discretization;
 use crate::error::Result;
-use crate::operator::CompressedOperator;
 use crate::scene::{CHANNELS, Scene};
 use crate::solution::BandValues;
-use crate::solve::{self, SolveOutcome, SolverOptions};
+use crate::solve::{self, Products, SolveOutcome, SolverOptions};
 
 /// K for colour channel `channel` from the grey K: node i's row scaled by rho_channel / rho
 /// (K includes rho/π per row, and rho = 0 only where every channel is 0).
@@ -47,10 +46,10 @@ pub(super) fn solve_bands(
     })
 }
 
-/// Solves each band in `channels` on the grey compressed operator, its rows scaled per band
-/// in every product (no copy).
-pub(super) fn solve_bands_compressed(
-    grey: &CompressedOperator,
+/// Solves each band in `channels` on the grey operator known by its products (compressed, or
+/// on the device), its rows scaled per band in every product (no copy).
+pub(super) fn solve_bands_by_products(
+    grey: &dyn Products,
     scene: &Scene,
     disc: &Discretization,
     channels: &[usize],
@@ -62,7 +61,7 @@ pub(super) fn solve_bands_compressed(
         let rho: Vec<f64> =
             disc.nodes.iter().map(|n| scene.faces[n.face].channel(channel).0).collect();
         let rho = (rho.as_slice(), grey_rho.as_slice());
-        solve::solve_compressed(grey, emission, rho, options, compression_tolerance)
+        solve::solve_by_products(grey, emission, rho, options, compression_tolerance)
     })
 }
 

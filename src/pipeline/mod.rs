@@ -17,8 +17,8 @@ pub use crate::assembly::Problem;
 pub use backend::{Assembler, assemble_on};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
 pub use operator::{
-    BuiltOperator, OperatorSummary, TimedAssembly, build_compressed, build_operator, compresses,
-    distributed_report,
+    BuiltOperator, DeviceTransfers, OperatorSummary, TimedAssembly, build_compressed,
+    build_operator, compresses, distributed_report,
 };
 pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
 pub use saved::{OperatorHeader, load_operator, save_operator};
@@ -35,7 +35,7 @@ use crate::solution::{BandValues, CaseValues};
 use crate::solve;
 use crate::surface_error::surface_errors;
 use crate::visibility::PairPlanner;
-use bands::{mean_outcome, solve_bands, solve_bands_compressed};
+use bands::{mean_outcome, solve_bands, solve_bands_by_products};
 use cases::solve_cases;
 use report::range;
 
@@ -255,6 +255,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         compression_tolerance: summary.compression_tolerance,
         operator_bytes: summary.operator_bytes,
         blocks: summary.blocks,
+        transfers: summary.transfers.map(|t| t.over(summary.setup_seconds + solve_seconds)),
         peak_rss_bytes: peak_rss_bytes(),
         solution_range: range(&u),
         distributed,
@@ -300,16 +301,16 @@ fn solve_built(
     rhs: &[f64],
 ) -> Result<(solve::SolveOutcome, Vec<BandValues>, Vec<BandReport>)> {
     let (scene, disc) = (&problem.scene, &problem.disc);
-    let tolerance = config.compression.tolerance;
-    let per_band = match built {
-        _ if config.bands.is_empty() => None,
-        BuiltOperator::Dense(timed) => {
-            Some(solve_bands(&timed.assembled.matrix, scene, disc, &config.bands, config.solver)?)
+    let bands = &config.bands;
+    let per_band = match (built, built.products(config)) {
+        _ if bands.is_empty() => None,
+        (BuiltOperator::Dense(timed), _) => {
+            Some(solve_bands(&timed.assembled.matrix, scene, disc, bands, config.solver)?)
         }
-        BuiltOperator::Compressed { op, .. } => {
-            let bands = &config.bands;
-            Some(solve_bands_compressed(op, scene, disc, bands, config.solver, tolerance)?)
+        (_, Some((op, tolerance))) => {
+            Some(solve_bands_by_products(op, scene, disc, bands, config.solver, tolerance)?)
         }
+        (_, None) => unreachable!("every operator but the host's matrix is known by products"),
     };
     if let Some(per_band) = per_band {
         let (mut values, mut reports, mut outcomes) = (Vec::new(), Vec::new(), Vec::new());

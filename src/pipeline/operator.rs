@@ -9,7 +9,7 @@ use super::{Assembler, Problem, REPEAT_BELOW_SECONDS, RunConfig};
 use crate::assembly::{Assembly, PairEvaluation};
 use crate::distributed::{DistributedReport, RankReport};
 use crate::error::{Error, Result};
-use crate::gpu;
+use crate::gpu::{self, DeviceOperator, GpuTimings};
 use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats, ProblemShape};
 use crate::solve;
 use crate::visibility::PairStats;
@@ -39,13 +39,16 @@ fn assemble_timed(config: &RunConfig, problem: &Problem) -> Result<TimedAssembly
     }
     let assembled = timed.expect("at least one assembly");
     let setup_seconds = problem.plan_seconds + fastest;
-    Ok(TimedAssembly { assembled, device: assembler.device(), setup_seconds, preparation_seconds })
+    let (device, gpu) = (assembler.device(), assembler.last_timings());
+    Ok(TimedAssembly { assembled, device, gpu, setup_seconds, preparation_seconds })
 }
 
 /// An assembly with its timings.
 pub struct TimedAssembly {
     pub(super) assembled: Assembly,
     device: Option<String>,
+    /// Where the GPU's (last) assembly spent its time and what it moved.
+    gpu: Option<GpuTimings>,
     /// The fastest assembly (pair plan included).
     setup_seconds: f64,
     /// One-time preparation (GPU: compiling the kernels), not part of `setup_seconds`.
@@ -55,14 +58,27 @@ pub struct TimedAssembly {
 impl TimedAssembly {
     /// A matrix read from a file in `setup_seconds`.
     pub(super) fn loaded(assembled: Assembly, setup_seconds: f64) -> Self {
-        Self { assembled, device: None, setup_seconds, preparation_seconds: 0.0 }
+        Self { assembled, device: None, gpu: None, setup_seconds, preparation_seconds: 0.0 }
     }
 }
 
-/// The operator a run solves with: the dense matrix K or the compressed operator.
+/// The operator a run solves with: the dense matrix K (on the host, or kept on the GPU) or the
+/// compressed operator.
 pub enum BuiltOperator {
     /// K stored entry by entry, with its timings.
     Dense(TimedAssembly),
+    /// K assembled on the GPU and kept in its memory: GMRES's products run there, and only
+    /// vectors cross.
+    Device {
+        /// The operator.
+        op: DeviceOperator,
+        /// The GPU adapter.
+        device: Option<String>,
+        /// Its setup time (pair plan included).
+        setup_seconds: f64,
+        /// One-time preparation of the backend (compiling the kernels).
+        preparation_seconds: f64,
+    },
     /// K in exact and low-rank blocks.
     Compressed {
         /// The operator.
@@ -94,6 +110,43 @@ pub struct OperatorSummary {
     /// Block statistics of the compressed operator.
     #[serde(flatten)]
     pub blocks: Option<OperatorStats>,
+    /// Where the dense matrix assembled on the GPU lives, and what crossed.
+    #[serde(flatten)]
+    pub transfers: Option<DeviceTransfers>,
+}
+
+/// Where a matrix assembled on the GPU is kept and what crossed between host and device
+/// (`operator_location`, `bytes_uploaded`, `bytes_read_back`, `gpu_submissions`,
+/// `device_idle_fraction` in reports).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct DeviceTransfers {
+    /// `device` (kept there, products there) or `host` (read back).
+    pub operator_location: &'static str,
+    /// Bytes written to the device.
+    pub bytes_uploaded: u64,
+    /// Bytes read back.
+    pub bytes_read_back: u64,
+    /// Command submissions.
+    pub gpu_submissions: u64,
+    /// At most this share of the setup and solve's wall time was the device idle: one less the
+    /// host's waits for it over that time (the device was busy at least while the host
+    /// waited; it may have been busy longer).
+    pub device_idle_fraction: f64,
+    /// Host time spent waiting for the device.
+    #[serde(skip)]
+    pub device_wait_seconds: f64,
+}
+
+impl DeviceTransfers {
+    /// With the idle share of `wall_seconds` (setup and solve) filled in.
+    pub fn over(mut self, wall_seconds: f64) -> Self {
+        self.device_idle_fraction = if wall_seconds > 0.0 {
+            (1.0 - self.device_wait_seconds / wall_seconds).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        self
+    }
 }
 
 impl BuiltOperator {
@@ -101,6 +154,7 @@ impl BuiltOperator {
     pub fn dof(&self) -> usize {
         match self {
             Self::Dense(t) => t.assembled.matrix.dof(),
+            Self::Device { op, .. } => op.dof(),
             Self::Compressed { op, .. } => op.dof(),
         }
     }
@@ -109,15 +163,16 @@ impl BuiltOperator {
     pub fn matrix(&self) -> Option<&crate::assembly::CollocationMatrix> {
         match self {
             Self::Dense(t) => Some(&t.assembled.matrix),
-            Self::Compressed { .. } => None,
+            Self::Device { .. } | Self::Compressed { .. } => None,
         }
     }
 
     /// The product `K x`.
-    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+    pub fn apply(&self, x: &[f64]) -> Result<Vec<f64>> {
         match self {
-            Self::Dense(t) => t.assembled.matrix.apply(x),
-            Self::Compressed { op, .. } => op.apply(x),
+            Self::Dense(t) => Ok(t.assembled.matrix.apply(x)),
+            Self::Device { op, .. } => Ok(op.apply_many(&[x])?.pop().expect("one product")),
+            Self::Compressed { op, .. } => Ok(op.apply(x)),
         }
     }
 
@@ -132,12 +187,22 @@ impl BuiltOperator {
     ) -> Result<Vec<solve::SolveOutcome>> {
         match self {
             Self::Dense(t) => solve::solve_many(&t.assembled.matrix, rhs, config.solver),
-            Self::Compressed { op, .. } => {
+            Self::Device { .. } | Self::Compressed { .. } => {
                 let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
-                let tolerance = config.compression.tolerance;
                 let rho = (rho.as_slice(), rho.as_slice());
-                solve::solve_compressed_many(op, rhs, rho, config.solver, tolerance)
+                let (op, tolerance) = self.products(config).expect("known by products");
+                solve::solve_by_products_many(op, rhs, rho, config.solver, tolerance)
             }
+        }
+    }
+
+    /// The operator as known by its products, with the relative error of those products (the
+    /// compression's tolerance; 0 on the device), or `None` for the matrix on the host.
+    pub fn products(&self, config: &RunConfig) -> Option<(&dyn solve::Products, f64)> {
+        match self {
+            Self::Dense(_) => None,
+            Self::Device { op, .. } => Some((op, 0.0)),
+            Self::Compressed { op, .. } => Some((op, config.compression.tolerance)),
         }
     }
 
@@ -146,7 +211,7 @@ impl BuiltOperator {
     pub fn distributed_report(&self) -> Option<DistributedReport> {
         match self {
             Self::Compressed { op, setup_seconds, .. } => distributed_report(op, *setup_seconds),
-            Self::Dense(_) => None,
+            Self::Dense(_) | Self::Device { .. } => None,
         }
     }
 
@@ -163,7 +228,36 @@ impl BuiltOperator {
                 compression_tolerance: None,
                 operator_bytes: 8 * (dof as u64) * (dof as u64),
                 blocks: None,
+                transfers: t.gpu.map(|g| DeviceTransfers {
+                    operator_location: "host",
+                    bytes_uploaded: g.bytes_uploaded,
+                    bytes_read_back: g.bytes_read_back,
+                    gpu_submissions: g.tiles as u64,
+                    device_idle_fraction: 0.0,
+                    device_wait_seconds: g.device_wait_seconds,
+                }),
             },
+            Self::Device { op, device, setup_seconds, preparation_seconds } => {
+                let traffic = op.traffic();
+                OperatorSummary {
+                    operator: "dense",
+                    device: device.clone(),
+                    setup_seconds: *setup_seconds,
+                    preparation_seconds: *preparation_seconds,
+                    pairs: op.stats,
+                    compression_tolerance: None,
+                    operator_bytes: op.device_bytes(),
+                    blocks: None,
+                    transfers: Some(DeviceTransfers {
+                        operator_location: "device",
+                        bytes_uploaded: traffic.bytes_uploaded,
+                        bytes_read_back: traffic.bytes_read_back,
+                        gpu_submissions: traffic.gpu_submissions,
+                        device_idle_fraction: 0.0,
+                        device_wait_seconds: traffic.device_wait_seconds,
+                    }),
+                }
+            }
             Self::Compressed { op, setup_seconds, preparation_seconds } => OperatorSummary {
                 operator: "compressed",
                 device: op.device.clone(),
@@ -173,6 +267,7 @@ impl BuiltOperator {
                 compression_tolerance: Some(config.compression.tolerance),
                 operator_bytes: op.stats.operator_bytes,
                 blocks: Some(op.stats),
+                transfers: None,
             },
         }
     }
@@ -253,6 +348,14 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
     }
     let disc = &problem.disc;
     if !compresses(config, problem) {
+        if stays_on_device(config) {
+            match assemble_on_device(config, problem) {
+                Ok(built) => return Ok(built),
+                Err(e) => config
+                    .progress
+                    .note(&format!("the matrix is kept on the host ({e}); the products run there")),
+            }
+        }
         return Ok(BuiltOperator::Dense(assemble_timed(config, problem)?));
     }
     let started = Instant::now();
@@ -262,6 +365,30 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
     let op = build_compressed(config, &assembler, problem)?;
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
     Ok(BuiltOperator::Compressed { op, setup_seconds, preparation_seconds })
+}
+
+/// Whether the dense K of `config` is assembled into the GPU's memory and kept there: on the
+/// GPU in f64 with the iterative solver (GMRES needs only products; LU and the other commands
+/// need the matrix on the host).
+fn stays_on_device(config: &RunConfig) -> bool {
+    config.backend == super::Backend::Gpu(gpu::Precision::F64)
+        && config.solver.choice == solve::SolverChoice::Iterative
+        && config.operator_file.is_none()
+}
+
+/// K assembled on the GPU and left in its memory.
+fn assemble_on_device(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
+    let started = Instant::now();
+    let assembler =
+        Assembler::new(config.backend, problem.disc.method, config.assembly.quadrature)?;
+    let preparation_seconds = started.elapsed().as_secs_f64();
+    let Assembler::Gpu(gpu) = &assembler else {
+        unreachable!("a GPU backend gives the GPU's assembler")
+    };
+    let started = Instant::now();
+    let op = DeviceOperator::assemble(gpu, problem, &config.assembly, &*config.progress)?;
+    let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
+    Ok(BuiltOperator::Device { op, device: assembler.device(), setup_seconds, preparation_seconds })
 }
 
 /// Refuses what a run over `size` ranks cannot do: only the compressed operator is spread over

@@ -111,6 +111,10 @@ pub struct RunReport {
     /// ...).
     #[serde(flatten)]
     pub blocks: Option<OperatorStats>,
+    /// Where a dense K assembled on the GPU is kept and what crossed (`operator_location`,
+    /// `bytes_uploaded`, `bytes_read_back`, `gpu_submissions`, `device_idle_fraction`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub transfers: Option<super::DeviceTransfers>,
     /// Peak resident memory of the whole process so far, from the OS (Linux), in bytes.
     pub peak_rss_bytes: Option<u64>,
     /// Smallest, mean and largest nodal value of the solution.

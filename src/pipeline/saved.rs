@@ -145,6 +145,15 @@ pub fn save_operator(
     config: &RunConfig,
     problem: &Problem,
 ) -> Result<()> {
+    if let BuiltOperator::Device { .. } = operator {
+        return Err(Error::InvalidParameter {
+            name: "save",
+            value: path.display().to_string(),
+            reason: "this matrix is in the GPU's memory; build it for the host (the CPU, or \
+                     without the iterative solver) to save it"
+                .into(),
+        });
+    }
     let kind = operator.summary(config).operator;
     let header = OperatorHeader::of(config, problem, kind);
     let mut out = BinaryWriter::new(BufWriter::new(File::create(path)?));
@@ -154,6 +163,7 @@ pub fn save_operator(
     match operator {
         BuiltOperator::Dense(t) => out.f64s(t.assembled.matrix.as_slice())?,
         BuiltOperator::Compressed { op, .. } => op.write(&mut out)?,
+        BuiltOperator::Device { .. } => unreachable!("refused above"),
     }
     out.finish()?;
     Ok(())

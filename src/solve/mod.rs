@@ -9,16 +9,16 @@
 //! grows. Either way a solution is accepted only on its true residual, which is computed again at
 //! the end and reported.
 
-mod compressed;
 mod gmres;
 mod lu;
+mod products;
 mod system;
 
 use serde::Serialize;
 
-pub use compressed::{solve_compressed, solve_compressed_many};
 pub use gmres::{Gmres, KrylovSystem, MAX_ITERATIONS, Need, RESTART};
 pub use lu::{LuFactors, LuSolution, inverse_norm_1_estimate};
+pub use products::{Products, solve_by_products, solve_by_products_many};
 pub use system::ReducedSystem;
 
 use crate::assembly::CollocationMatrix;

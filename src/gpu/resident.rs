@@ -1,0 +1,202 @@
+//! K kept in device memory after its assembly, and its products there: only vectors cross
+//! between host and device (x up, K x down), not the n × n matrix.
+
+use std::sync::Mutex;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::GpuContext;
+use super::assembly::{DeviceTiles, GpuAssembler};
+use super::compute;
+use super::shaders::{self, Precision};
+use crate::assembly::{AssemblyOptions, Problem, ThinColumns};
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::visibility::PairStats;
+
+/// What crossed between host and device, and how often the host submitted work.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct DeviceTraffic {
+    /// Bytes written to the device (the scene's elements and tables, each tile's plan, the
+    /// vectors of the products).
+    pub bytes_uploaded: u64,
+    /// Bytes read back (the products).
+    pub bytes_read_back: u64,
+    /// Command submissions (one per assembled tile, one per product).
+    pub gpu_submissions: u64,
+    /// Host time spent waiting for the device: the device was busy at least that long.
+    pub device_wait_seconds: f64,
+}
+
+/// The buffers of products with `m` vectors at once.
+struct Vectors {
+    m: usize,
+    x: wgpu::Buffer,
+    y: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    /// Per tile, its bind group (and its parameters' buffer, kept alive).
+    groups: Vec<(wgpu::BindGroup, wgpu::Buffer)>,
+}
+
+/// K on the device (dense, row tiles as assembled), with the columns of the thin elements,
+/// which the kernels cannot evaluate, kept on the host.
+pub struct DeviceOperator {
+    ctx: &'static GpuContext,
+    dof: usize,
+    tiles: DeviceTiles,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    /// Columns of thin elements: zero in the vectors sent to the device, applied on the host.
+    thin: Option<ThinColumns>,
+    vectors: Mutex<Option<Vectors>>,
+    traffic: Mutex<DeviceTraffic>,
+    /// Pair classes of the assembly.
+    pub stats: PairStats,
+}
+
+impl std::fmt::Debug for DeviceOperator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "DeviceOperator {{ dof: {}, tiles: {} }}", self.dof, self.tiles.len())
+    }
+}
+
+impl DeviceOperator {
+    /// Assembles K for `problem` by `assembler` into device memory (f64 kernels only: the
+    /// products are summed in f64).
+    pub fn assemble(
+        assembler: &GpuAssembler<'static>,
+        problem: &Problem,
+        options: &AssemblyOptions,
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let ctx = assembler.context();
+        let precision = assembler.precision();
+        if precision != Precision::F64 {
+            return Err(Error::Gpu("the device-resident operator is built in f64".into()));
+        }
+        let source = shaders::matvec(precision);
+        let (layout, mut pipelines) = compute::pipeline(ctx, &source, &["matvec"], 4, &[0], &[3])?;
+        let pipeline = pipelines.pop().expect("one pipeline");
+        progress.start("assembly", problem.disc.dof());
+        let (tiles, stats) = assembler.assemble_on_device(problem, options, progress)?;
+        progress.finish();
+        let timings = assembler.last_timings();
+        let traffic = DeviceTraffic {
+            bytes_uploaded: timings.bytes_uploaded,
+            bytes_read_back: 0,
+            gpu_submissions: timings.tiles as u64,
+            device_wait_seconds: timings.device_wait_seconds,
+        };
+        Ok(Self {
+            ctx,
+            dof: problem.disc.dof(),
+            tiles,
+            layout,
+            pipeline,
+            thin: ThinColumns::new(problem, options),
+            vectors: Mutex::new(None),
+            traffic: Mutex::new(traffic),
+            stats,
+        })
+    }
+
+    /// Number of unknowns.
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+
+    /// Bytes of K in device memory.
+    pub fn device_bytes(&self) -> u64 {
+        self.tiles.iter().map(|(_, b)| b.size()).sum()
+    }
+
+    /// What has crossed so far.
+    pub fn traffic(&self) -> DeviceTraffic {
+        *self.traffic.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// `K x` for every `x` in `xs`, in one submission: the vectors go up, the products come
+    /// down (2 × 8 × dof bytes per vector).
+    pub fn apply_many(&self, xs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
+        let (m, dof) = (xs.len(), self.dof);
+        if m == 0 || dof == 0 {
+            return Ok(vec![vec![0.0; dof]; m]);
+        }
+        let mut flat = Vec::with_capacity(m * dof);
+        for x in xs {
+            flat.extend_from_slice(x);
+        }
+        if let Some(thin) = &self.thin {
+            // Their true columns are applied on the host below.
+            for v in 0..m {
+                thin.columns.iter().for_each(|&c| flat[v * dof + c] = 0.0);
+            }
+        }
+        let bytes = (8 * m * dof) as u64;
+        let mut held = self.vectors.lock().unwrap_or_else(|e| e.into_inner());
+        if held.as_ref().is_none_or(|v| v.m != m) {
+            *held = Some(self.vectors_for(m)?);
+        }
+        let v = held.as_ref().expect("vectors for m");
+        let ctx = self.ctx;
+        compute::checked(ctx, "the product on the device", || {
+            ctx.queue.write_buffer(&v.x, 0, bytemuck::cast_slice(&flat));
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.pipeline);
+                for ((rows, _), (group, _)) in self.tiles.iter().zip(&v.groups) {
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(rows.len() as u32, 1, 1);
+                }
+            }
+            encoder.copy_buffer_to_buffer(&v.y, 0, &v.staging, 0, bytes);
+            ctx.queue.submit([encoder.finish()]);
+        })?;
+        let started = Instant::now();
+        compute::wait(ctx, &v.staging, bytes)?;
+        let waited = started.elapsed().as_secs_f64();
+        let mut y = vec![0.0; m * dof];
+        compute::copy_mapped(&v.staging, bytes, Precision::F64, &mut y)?;
+        let mut out: Vec<Vec<f64>> = y.chunks_exact(dof).map(<[f64]>::to_vec).collect();
+        if let Some(thin) = &self.thin {
+            for (x, y) in xs.iter().zip(&mut out) {
+                thin.apply_add(x, y);
+            }
+        }
+        let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
+        t.bytes_uploaded += bytes;
+        t.bytes_read_back += bytes;
+        t.gpu_submissions += 1;
+        t.device_wait_seconds += waited;
+        Ok(out)
+    }
+
+    /// Buffers and bind groups for products of `m` vectors.
+    fn vectors_for(&self, m: usize) -> Result<Vectors> {
+        let ctx = self.ctx;
+        let bytes = (8 * m * self.dof) as u64;
+        compute::checked(ctx, "the vectors of the product on the device", || {
+            let x = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("x"),
+                size: bytes.max(16),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let (y, staging) = compute::output(ctx, bytes);
+            let groups = self
+                .tiles
+                .iter()
+                .map(|(rows, matrix)| {
+                    let params: [u32; 4] =
+                        [rows.len() as u32, self.dof as u32, rows.start as u32, m as u32];
+                    let params = compute::uniform(ctx, bytemuck::cast_slice(&params));
+                    let group = compute::bind_group(ctx, &self.layout, &[&params, matrix, &x, &y]);
+                    (group, params)
+                })
+                .collect();
+            Vectors { m, x, y, staging, groups }
+        })
+    }
+}
