@@ -2,6 +2,7 @@
 //! in [`shaders`]; host data layouts shared with them are in [`layout`].
 
 mod assembly;
+mod blocks;
 mod compute;
 mod context;
 pub mod layout;
@@ -11,6 +12,7 @@ mod resident;
 pub mod shaders;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
+pub use blocks::{BlockArrays, DeviceBlocks};
 pub use context::{AdapterRequest, AdapterSummary, GpuContext, INSTALL_HINT};
 pub use pairs::PairEvaluator;
 pub use resident::{DeviceOperator, DeviceTraffic};

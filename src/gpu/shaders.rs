@@ -34,6 +34,7 @@ const MATH_F32: &str = include_str!("../../shaders/math_f32.wgsl");
 const COLLOCATION: &str = include_str!("../../shaders/collocation.wgsl");
 const MATH_TEST: &str = include_str!("../../shaders/math_test.wgsl");
 const MATVEC: &str = include_str!("../../shaders/matvec.wgsl");
+const BLOCKS: &str = include_str!("../../shaders/blocks.wgsl");
 
 fn with_math(precision: Precision, body: &str) -> String {
     let (alias, math) = match precision {
@@ -66,6 +67,12 @@ pub fn matvec(precision: Precision) -> String {
     format!("{alias}{MATVEC}")
 }
 
+/// The product of the compressed operator's packed blocks, in f64 (entry points `low_rank_t`,
+/// `block_rows`, `row_sums`).
+pub fn blocks() -> String {
+    BLOCKS.to_string()
+}
+
 /// The math-library test kernel (entry point `math_eval`).
 pub fn math_test(precision: Precision) -> String {
     with_math(precision, MATH_TEST)
@@ -96,6 +103,7 @@ mod tests {
                 ("collocation, linear", collocation(p, 3, true)),
                 ("math_test", math_test(p)),
                 ("matvec", matvec(p)),
+                ("blocks", blocks()),
             ];
             for (name, src) in sources {
                 if let Err(e) = validate(&src) {

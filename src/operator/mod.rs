@@ -21,6 +21,7 @@ pub mod aca;
 mod batched;
 mod blocks;
 pub mod cluster;
+pub mod packed;
 mod saved;
 mod share;
 

@@ -9,7 +9,7 @@ use super::{Assembler, Problem, REPEAT_BELOW_SECONDS, RunConfig};
 use crate::assembly::{Assembly, PairEvaluation};
 use crate::distributed::{DistributedReport, RankReport};
 use crate::error::{Error, Result};
-use crate::gpu::{self, DeviceOperator, GpuTimings};
+use crate::gpu::{self, DeviceBlocks, DeviceOperator, GpuTimings};
 use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats, ProblemShape};
 use crate::solve;
 use crate::visibility::PairStats;
@@ -71,7 +71,7 @@ pub enum BuiltOperator {
     /// vectors cross.
     Device {
         /// The operator.
-        op: DeviceOperator,
+        op: Box<DeviceOperator>,
         /// The GPU adapter.
         device: Option<String>,
         /// Its setup time (pair plan included).
@@ -83,6 +83,9 @@ pub enum BuiltOperator {
     Compressed {
         /// The operator.
         op: CompressedOperator,
+        /// Its blocks in the GPU's memory, where the run is on the GPU: GMRES's products run
+        /// there.
+        on_device: Option<Box<DeviceBlocks>>,
         /// Its setup time (pair plan included).
         setup_seconds: f64,
         /// One-time preparation of the backend.
@@ -201,7 +204,10 @@ impl BuiltOperator {
     pub fn products(&self, config: &RunConfig) -> Option<(&dyn solve::Products, f64)> {
         match self {
             Self::Dense(_) => None,
-            Self::Device { op, .. } => Some((op, 0.0)),
+            Self::Device { op, .. } => Some((&**op, 0.0)),
+            Self::Compressed { on_device: Some(blocks), .. } => {
+                Some((&**blocks, config.compression.tolerance))
+            }
             Self::Compressed { op, .. } => Some((op, config.compression.tolerance)),
         }
     }
@@ -258,17 +264,29 @@ impl BuiltOperator {
                     }),
                 }
             }
-            Self::Compressed { op, setup_seconds, preparation_seconds } => OperatorSummary {
-                operator: "compressed",
-                device: op.device.clone(),
-                setup_seconds: *setup_seconds,
-                preparation_seconds: *preparation_seconds,
-                pairs: op.pairs,
-                compression_tolerance: Some(config.compression.tolerance),
-                operator_bytes: op.stats.operator_bytes,
-                blocks: Some(op.stats),
-                transfers: None,
-            },
+            Self::Compressed { op, on_device, setup_seconds, preparation_seconds } => {
+                OperatorSummary {
+                    operator: "compressed",
+                    device: op.device.clone(),
+                    setup_seconds: *setup_seconds,
+                    preparation_seconds: *preparation_seconds,
+                    pairs: op.pairs,
+                    compression_tolerance: Some(config.compression.tolerance),
+                    operator_bytes: op.stats.operator_bytes,
+                    blocks: Some(op.stats),
+                    transfers: on_device.as_ref().map(|b| {
+                        let traffic = b.traffic();
+                        DeviceTransfers {
+                            operator_location: "device",
+                            bytes_uploaded: traffic.bytes_uploaded,
+                            bytes_read_back: traffic.bytes_read_back,
+                            gpu_submissions: traffic.gpu_submissions,
+                            device_idle_fraction: 0.0,
+                            device_wait_seconds: traffic.device_wait_seconds,
+                        }
+                    }),
+                }
+            }
         }
     }
 }
@@ -364,7 +382,43 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
     let started = Instant::now();
     let op = build_compressed(config, &assembler, problem)?;
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
-    Ok(BuiltOperator::Compressed { op, setup_seconds, preparation_seconds })
+    let on_device = blocks_on_device(config, &op);
+    Ok(BuiltOperator::Compressed { op, on_device, setup_seconds, preparation_seconds })
+}
+
+/// The compressed operator's blocks uploaded to the GPU for GMRES's products, where the run is
+/// on the GPU in f64 in one process; `None`, with a note saying why, where they cannot go there.
+pub(super) fn blocks_on_device(
+    config: &RunConfig,
+    op: &CompressedOperator,
+) -> Option<Box<DeviceBlocks>> {
+    if config.backend != super::Backend::Gpu(gpu::Precision::F64) || config.ranks.is_some() {
+        return None;
+    }
+    let uploaded = op.packed().ok_or_else(|| "offsets beyond u32".to_string()).and_then(|p| {
+        let ctx = gpu::context_for(gpu::Precision::F64).map_err(|e| e.to_string())?;
+        let arrays = gpu::BlockArrays {
+            blocks: p.blocks,
+            low_rank: p.low_rank,
+            values: &p.values,
+            indices: &p.indices,
+            low_rank_at: p.low_rank_at,
+            row_starts_at: p.row_starts_at,
+            contributions_at: p.contributions_at,
+            scratch: p.scratch,
+        };
+        let orders = (op.per_element(), op.node_order(), op.element_order());
+        DeviceBlocks::upload(ctx, op.dof(), orders, arrays).map_err(|e| e.to_string())
+    });
+    match uploaded {
+        Ok(blocks) => Some(Box::new(blocks)),
+        Err(why) => {
+            config.progress.note(&format!(
+                "the compressed operator stays on the host ({why}); its products run there"
+            ));
+            None
+        }
+    }
 }
 
 /// Whether the dense K of `config` is assembled into the GPU's memory and kept there: on the
@@ -386,7 +440,7 @@ fn assemble_on_device(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
         unreachable!("a GPU backend gives the GPU's assembler")
     };
     let started = Instant::now();
-    let op = DeviceOperator::assemble(gpu, problem, &config.assembly, &*config.progress)?;
+    let op = Box::new(DeviceOperator::assemble(gpu, problem, &config.assembly, &*config.progress)?);
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
     Ok(BuiltOperator::Device { op, device: assembler.device(), setup_seconds, preparation_seconds })
 }

@@ -226,7 +226,8 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
                 return Err(input.error(format!("damaged: {} unknowns for dof {dof}", op.dof())));
             }
             let setup_seconds = started.elapsed().as_secs_f64();
-            BuiltOperator::Compressed { op, setup_seconds, preparation_seconds: 0.0 }
+            let on_device = super::operator::blocks_on_device(config, &op);
+            BuiltOperator::Compressed { op, on_device, setup_seconds, preparation_seconds: 0.0 }
         }
         other => return Err(input.error(format!("damaged header: operator '{other}'"))),
     };

@@ -7,7 +7,7 @@ use super::{
     CLOSED_ROW_TOLERANCE, SolveOutcome, SolverOptions, check_tolerance, reject_unit_row_sums,
 };
 use crate::error::Result;
-use crate::gpu::DeviceOperator;
+use crate::gpu::{DeviceBlocks, DeviceOperator};
 use crate::operator::CompressedOperator;
 
 /// An operator known by its products.
@@ -35,6 +35,16 @@ impl Products for DeviceOperator {
 
     fn apply_many(&self, xs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
         DeviceOperator::apply_many(self, xs)
+    }
+}
+
+impl Products for DeviceBlocks {
+    fn dof(&self) -> usize {
+        DeviceBlocks::dof(self)
+    }
+
+    fn apply_many(&self, xs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
+        DeviceBlocks::apply_many(self, xs)
     }
 }
 
