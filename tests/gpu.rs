@@ -511,7 +511,9 @@ fn the_compressed_operator_on_the_device_gives_the_host_product() {
     // product equals the host's to 1e-13 (relative max) on the resident checks' scenes.
     use radiosity::operator::packed::{self, DESCRIPTOR};
     use radiosity::operator::{CompressedOperator, CompressionOptions};
-    let Some(ctx) = gpu() else { return };
+    if gpu().is_none() {
+        return;
+    }
     let (options, silent) = (AssemblyOptions::default(), &radiosity::progress::Silent);
     let compression = CompressionOptions { tolerance: 1e-8, ..Default::default() };
     let mut kinds = [0usize; 3];
@@ -521,18 +523,7 @@ fn the_compressed_operator_on_the_device_gives_the_host_product() {
         for d in p.indices[..p.blocks * DESCRIPTOR].chunks_exact(DESCRIPTOR) {
             kinds[d[packed::field::KIND] as usize] += 1;
         }
-        let arrays = gpu::BlockArrays {
-            blocks: p.blocks,
-            low_rank: p.low_rank,
-            values: &p.values,
-            indices: &p.indices,
-            low_rank_at: p.low_rank_at,
-            row_starts_at: p.row_starts_at,
-            contributions_at: p.contributions_at,
-            scratch: p.scratch,
-        };
-        let orders = (op.per_element(), op.node_order(), op.element_order());
-        let device = gpu::DeviceBlocks::upload(ctx, op.dof(), orders, arrays).unwrap();
+        let device = radiosity::pipeline::compressed_on_device(&op).unwrap();
         let d = op.max_product_difference(&|x| device.apply_many(&[x]).unwrap().pop().unwrap());
         assert!(d <= 1e-13, "{name}: products differ by {d:.2e}");
     }

@@ -204,11 +204,7 @@ impl DeviceBlocks {
         for (k, &i) in self.node_order.iter().enumerate() {
             y[i] = yp[k];
         }
-        let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
-        t.bytes_uploaded += bytes;
-        t.bytes_read_back += bytes;
-        t.gpu_submissions += 1;
-        t.device_wait_seconds += waited;
+        self.traffic.lock().unwrap_or_else(|e| e.into_inner()).product(bytes, waited);
         Ok(y)
     }
 }

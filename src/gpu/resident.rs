@@ -29,6 +29,16 @@ pub struct DeviceTraffic {
     pub device_wait_seconds: f64,
 }
 
+impl DeviceTraffic {
+    /// Counts one product: `bytes` up and down in one submission, `waited` seconds for it.
+    pub(super) fn product(&mut self, bytes: u64, waited: f64) {
+        self.bytes_uploaded += bytes;
+        self.bytes_read_back += bytes;
+        self.gpu_submissions += 1;
+        self.device_wait_seconds += waited;
+    }
+}
+
 /// The buffers of products with `m` vectors at once.
 struct Vectors {
     m: usize,
@@ -165,11 +175,7 @@ impl DeviceOperator {
                 thin.apply_add(x, y);
             }
         }
-        let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
-        t.bytes_uploaded += bytes;
-        t.bytes_read_back += bytes;
-        t.gpu_submissions += 1;
-        t.device_wait_seconds += waited;
+        self.traffic.lock().unwrap_or_else(|e| e.into_inner()).product(bytes, waited);
         Ok(out)
     }
 

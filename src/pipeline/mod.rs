@@ -18,7 +18,7 @@ pub use backend::{Assembler, assemble_on};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
 pub use operator::{
     BuiltOperator, DeviceTransfers, OperatorSummary, TimedAssembly, build_compressed,
-    build_operator, compresses, distributed_report,
+    build_operator, compressed_on_device, compresses, distributed_report,
 };
 pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
 pub use saved::{OperatorHeader, load_operator, save_operator};

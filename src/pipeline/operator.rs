@@ -141,6 +141,18 @@ pub struct DeviceTransfers {
 }
 
 impl DeviceTransfers {
+    /// An operator kept on the device, after `traffic`.
+    fn on_device(traffic: gpu::DeviceTraffic) -> Self {
+        Self {
+            operator_location: "device",
+            bytes_uploaded: traffic.bytes_uploaded,
+            bytes_read_back: traffic.bytes_read_back,
+            gpu_submissions: traffic.gpu_submissions,
+            device_idle_fraction: 0.0,
+            device_wait_seconds: traffic.device_wait_seconds,
+        }
+    }
+
     /// With the idle share of `wall_seconds` (setup and solve) filled in.
     pub fn over(mut self, wall_seconds: f64) -> Self {
         self.device_idle_fraction = if wall_seconds > 0.0 {
@@ -243,27 +255,17 @@ impl BuiltOperator {
                     device_wait_seconds: g.device_wait_seconds,
                 }),
             },
-            Self::Device { op, device, setup_seconds, preparation_seconds } => {
-                let traffic = op.traffic();
-                OperatorSummary {
-                    operator: "dense",
-                    device: device.clone(),
-                    setup_seconds: *setup_seconds,
-                    preparation_seconds: *preparation_seconds,
-                    pairs: op.stats,
-                    compression_tolerance: None,
-                    operator_bytes: op.device_bytes(),
-                    blocks: None,
-                    transfers: Some(DeviceTransfers {
-                        operator_location: "device",
-                        bytes_uploaded: traffic.bytes_uploaded,
-                        bytes_read_back: traffic.bytes_read_back,
-                        gpu_submissions: traffic.gpu_submissions,
-                        device_idle_fraction: 0.0,
-                        device_wait_seconds: traffic.device_wait_seconds,
-                    }),
-                }
-            }
+            Self::Device { op, device, setup_seconds, preparation_seconds } => OperatorSummary {
+                operator: "dense",
+                device: device.clone(),
+                setup_seconds: *setup_seconds,
+                preparation_seconds: *preparation_seconds,
+                pairs: op.stats,
+                compression_tolerance: None,
+                operator_bytes: op.device_bytes(),
+                blocks: None,
+                transfers: Some(DeviceTransfers::on_device(op.traffic())),
+            },
             Self::Compressed { op, on_device, setup_seconds, preparation_seconds } => {
                 OperatorSummary {
                     operator: "compressed",
@@ -274,17 +276,7 @@ impl BuiltOperator {
                     compression_tolerance: Some(config.compression.tolerance),
                     operator_bytes: op.stats.operator_bytes,
                     blocks: Some(op.stats),
-                    transfers: on_device.as_ref().map(|b| {
-                        let traffic = b.traffic();
-                        DeviceTransfers {
-                            operator_location: "device",
-                            bytes_uploaded: traffic.bytes_uploaded,
-                            bytes_read_back: traffic.bytes_read_back,
-                            gpu_submissions: traffic.gpu_submissions,
-                            device_idle_fraction: 0.0,
-                            device_wait_seconds: traffic.device_wait_seconds,
-                        }
-                    }),
+                    transfers: on_device.as_ref().map(|b| DeviceTransfers::on_device(b.traffic())),
                 }
             }
         }
@@ -395,21 +387,7 @@ pub(super) fn blocks_on_device(
     if config.backend != super::Backend::Gpu(gpu::Precision::F64) || config.ranks.is_some() {
         return None;
     }
-    let uploaded = op.packed().ok_or_else(|| "offsets beyond u32".to_string()).and_then(|p| {
-        let ctx = gpu::context_for(gpu::Precision::F64).map_err(|e| e.to_string())?;
-        let arrays = gpu::BlockArrays {
-            blocks: p.blocks,
-            low_rank: p.low_rank,
-            values: &p.values,
-            indices: &p.indices,
-            low_rank_at: p.low_rank_at,
-            row_starts_at: p.row_starts_at,
-            contributions_at: p.contributions_at,
-            scratch: p.scratch,
-        };
-        let orders = (op.per_element(), op.node_order(), op.element_order());
-        DeviceBlocks::upload(ctx, op.dof(), orders, arrays).map_err(|e| e.to_string())
-    });
+    let uploaded = compressed_on_device(op).map_err(|e| e.to_string());
     match uploaded {
         Ok(blocks) => Some(Box::new(blocks)),
         Err(why) => {
@@ -419,6 +397,26 @@ pub(super) fn blocks_on_device(
             None
         }
     }
+}
+
+/// The blocks of `op` uploaded to the GPU (f64) for its products there.
+pub fn compressed_on_device(op: &CompressedOperator) -> Result<DeviceBlocks> {
+    let p = op.packed().ok_or_else(|| {
+        Error::Gpu("the compressed operator is distributed, or its offsets pass u32".into())
+    })?;
+    let ctx = gpu::context_for(gpu::Precision::F64)?;
+    let arrays = gpu::BlockArrays {
+        blocks: p.blocks,
+        low_rank: p.low_rank,
+        values: &p.values,
+        indices: &p.indices,
+        low_rank_at: p.low_rank_at,
+        row_starts_at: p.row_starts_at,
+        contributions_at: p.contributions_at,
+        scratch: p.scratch,
+    };
+    let orders = (op.per_element(), op.node_order(), op.element_order());
+    DeviceBlocks::upload(ctx, op.dof(), orders, arrays)
 }
 
 /// Whether the dense K of `config` is assembled into the GPU's memory and kept there: on the
