@@ -12,7 +12,7 @@ use radiosity::error::Result;
 
 fn run(cli: Cli) -> Result<()> {
     let distributed = match &cli.command {
-        Command::Solve(_) | Command::Inspect(_) => true,
+        Command::Solve(_) | Command::Inspect(_) | Command::Bench(_) => true,
         Command::Study { id, .. } => id == "compression",
         _ => false,
     };
@@ -20,8 +20,8 @@ fn run(cli: Cli) -> Result<()> {
         return Err(radiosity::error::Error::InvalidParameter {
             name: "command",
             value: "under mpirun with several ranks".into(),
-            reason: "solve, inspect and study compression run distributed; run the others in \
-                     one process"
+            reason: "solve, inspect, bench and study compression run distributed; run the others \
+                     in one process"
                 .into(),
         });
     }

@@ -157,6 +157,22 @@ fn what_is_not_distributed_is_refused_over_ranks() {
         assert!(!ok, "{extra:?}");
         assert!(stderr.contains(culprit), "{extra:?}: {stderr}");
     }
+    let (ok, _, stderr) = mpirun(2, &["viewfactors", "--scene", "five-piece"]);
+    assert!(!ok && stderr.contains("run the others in one process"), "{stderr}");
+    let dense_bench = ["bench", "--scene", "five-piece", "--refine", "2", "--operator", "dense"];
+    let (ok, _, stderr) = mpirun(2, &dense_bench);
+    assert!(!ok && stderr.contains("--operator compressed --backends cpu"), "{stderr}");
+}
+
+#[test]
+fn bench_times_the_operator_spread_over_ranks() {
+    let args = ["bench", "--scene", "five-piece", "--refine", "4", "--operator", "compressed"];
+    let (ok, stdout, stderr) = mpirun(2, &[&args[..], &["--json", "-"]].concat());
+    assert!(ok, "{stderr}");
+    let r: Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    assert_eq!(r["ranks"], 2, "{r}");
+    assert!(r["max_product_rel_diff"].as_f64().unwrap() <= 1e-5, "{r}");
+    assert!(r["load_imbalance"].as_f64().unwrap() >= 1.0, "{r}");
 }
 
 #[test]

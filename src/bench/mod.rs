@@ -218,6 +218,10 @@ pub struct CompressedBenchReport {
     pub peak_rss_bytes: Option<u64>,
     /// Repetitions.
     pub repeats: usize,
+    /// The ranks of a distributed run (`ranks`, `per_rank`, ...; the dense reference is built
+    /// by every rank).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub distributed: Option<crate::distributed::DistributedReport>,
 }
 
 /// The compressed operator built on the GPU beside the CPU's.
@@ -242,7 +246,8 @@ pub const DENSE_BENCH_LIMIT: usize = 12_288;
 /// Builds the compressed operator of `config` (built as `scene`, `mesh`, `disc`) on each of
 /// `backends` (one or two: the CPU, then the GPU) `repeats` times (best time), and the dense
 /// matrix on the CPU as reference where it fits; all with one pair planner, built outside the
-/// timings.
+/// timings. Over several ranks (`config.ranks`; every rank calls it) the compressed operator is
+/// spread over them.
 pub fn run_compressed(
     config: &RunConfig,
     problem: &Problem,
@@ -307,5 +312,6 @@ pub fn run_compressed(
         gpu,
         peak_rss_bytes: pipeline::peak_rss_bytes(),
         repeats,
+        distributed: pipeline::distributed_report(&op, best),
     })
 }

@@ -12,6 +12,8 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     config.progress = radiosity::progress::ProgressSink::default();
     let named = match &args.backends {
         Some(named) => named.clone(),
+        // Under mpirun the ranks build on their CPUs.
+        None if config.ranks.is_some() => vec![BackendArg::Cpu],
         None => {
             match radiosity::gpu::context_for(backend(BackendArg::Gpu, args.precision).precision())
             {
@@ -47,6 +49,15 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     };
     if compressed_bench {
         return compressed(&config, &built, &backends, args);
+    }
+    if config.ranks.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "operator",
+            value: "dense".into(),
+            reason: "under mpirun, bench times the compressed operator on the CPU: give \
+                     --operator compressed --backends cpu"
+                .into(),
+        });
     }
     let r = radiosity::bench::run(&config, &built, &backends, args.repeats)?;
     if let Some(target) = &args.json {
@@ -96,7 +107,18 @@ fn compressed(
     backends: &[Backend],
     args: &BenchArgs,
 ) -> Result<()> {
+    if config.ranks.is_some() && backends.iter().any(|&b| b != Backend::Cpu) {
+        return Err(Error::InvalidParameter {
+            name: "backends",
+            value: "gpu".into(),
+            reason: "under mpirun, bench builds on the CPU: give --backends cpu".into(),
+        });
+    }
     let r = radiosity::bench::run_compressed(config, built, backends, args.repeats)?;
+    // Every rank took part; rank 0 prints.
+    if !is_root() {
+        return Ok(());
+    }
     if let Some(target) = &args.json {
         return report::write_json(&r, target);
     }
