@@ -276,13 +276,15 @@ impl Occluder {
     /// with corners `corners` (in space): false when a plane separates the pyramid with apex `p`
     /// over the window from this piece's cone from `p` (its own plane, or the plane through `p`
     /// and one of its edges); cheaper than clipping the piece to the pyramid, which most
-    /// candidates found by boxes miss.
+    /// candidates found by boxes miss. A piece whose plane holds `p` casts nothing: every
+    /// segment from `p` lies in that plane or leaves it at `p` (a node on the line where a
+    /// partition meets a wall sees past the partition's edge on both sides).
     pub(super) fn may_shadow(&self, p: DVec3, corners: &[DVec3]) -> bool {
+        if self.plane_holds(p) {
+            return false;
+        }
         let origin = self.polygon[0];
         let hp = self.normal.dot(p - origin);
-        if hp == 0.0 {
-            return true;
-        }
         if corners.iter().all(|&c| hp * self.normal.dot(c - origin) >= 0.0) {
             return false;
         }
@@ -292,6 +294,12 @@ impl Occluder {
             let n = (self.polygon[k] - p).cross(self.polygon[(k + 1) % m] - p);
             corners.iter().all(|&c| hp * n.dot(c - p) >= 0.0)
         })
+    }
+
+    /// Whether this piece's plane passes through `p`, up to the rounding of its size.
+    pub(super) fn plane_holds(&self, p: DVec3) -> bool {
+        self.normal != DVec3::ZERO
+            && self.normal.dot(p - self.polygon[0]).abs() <= 1e-12 * self.diameter
     }
 
     /// Whether every point of `from` and `to` is on one side of this piece's plane or within

@@ -222,6 +222,10 @@ pub(super) fn shadow(
     sides: &[DVec3],
     occluder: &Occluder,
 ) -> Option<Vec<DVec2>> {
+    if occluder.plane_holds(p) {
+        // Seen edge-on from p: it blocks no segment from p (see Occluder::may_shadow).
+        return None;
+    }
     let normal = f.face.frame.normal;
     // Two buffers in turn, the last clip's result in `current` (none yet: the piece itself);
     // swapping them would copy both inline buffers at every clip.
