@@ -471,12 +471,12 @@ impl<'a> GpuAssembler<'a> {
             }
             None
         };
+        let keep = matches!(destination, Destination::Device(_));
         let mut in_flight: Option<InFlight> = None;
         let mut next_plan = plan_next();
         while let Some(plan) = next_plan.take() {
             self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
-            let keep = matches!(destination, Destination::Device(_));
             let submitted =
                 self.submit(&plan, disc, mesh, &uploaded, (max_binding, limits.near_pairs), keep)?;
             if let Some(done) = in_flight.take() {

@@ -3,12 +3,11 @@
 //! once; per product x goes up and K x comes down.
 
 use std::sync::Mutex;
-use std::time::Instant;
 
 use super::GpuContext;
 use super::compute;
-use super::resident::DeviceTraffic;
-use super::shaders::{self, Precision};
+use super::resident::{DeviceTraffic, round_trip};
+use super::shaders;
 use crate::error::{Error, Result};
 
 /// The packed blocks as the kernels read them (the compressed operator's packed form, whose
@@ -181,10 +180,9 @@ impl DeviceBlocks {
             xp[k * per..(k + 1) * per].copy_from_slice(&x[e * per..(e + 1) * per]);
         }
         let b = &self.buffers;
-        let bytes = 8 * dof as u64;
-        compute::checked(ctx, "the compressed product on the device", || {
-            ctx.queue.write_buffer(&b.x, 0, bytemuck::cast_slice(&xp));
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let buffers = (&b.x, &b.y, &b.staging);
+        let what = "the compressed product on the device";
+        let yp = round_trip(ctx, what, buffers, &xp, &self.traffic, |encoder| {
             let (low_rank, blocks, rows) = self.grid;
             for (pipeline, (gx, gy)) in self.pipelines.iter().zip([low_rank, blocks, rows]) {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -192,19 +190,11 @@ impl DeviceBlocks {
                 pass.set_bind_group(0, &b.group, &[]);
                 pass.dispatch_workgroups(gx, gy, 1);
             }
-            encoder.copy_buffer_to_buffer(&b.y, 0, &b.staging, 0, bytes.max(16));
-            ctx.queue.submit([encoder.finish()]);
         })?;
-        let started = Instant::now();
-        compute::wait(ctx, &b.staging, bytes)?;
-        let waited = started.elapsed().as_secs_f64();
-        let mut yp = vec![0.0; dof];
-        compute::copy_mapped(&b.staging, bytes, Precision::F64, &mut yp)?;
         let mut y = vec![0.0; dof];
         for (k, &i) in self.node_order.iter().enumerate() {
             y[i] = yp[k];
         }
-        self.traffic.lock().unwrap_or_else(|e| e.into_inner()).product(bytes, waited);
         Ok(y)
     }
 }

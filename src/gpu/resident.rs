@@ -29,14 +29,37 @@ pub struct DeviceTraffic {
     pub device_wait_seconds: f64,
 }
 
-impl DeviceTraffic {
-    /// Counts one product: `bytes` up and down in one submission, `waited` seconds for it.
-    pub(super) fn product(&mut self, bytes: u64, waited: f64) {
-        self.bytes_uploaded += bytes;
-        self.bytes_read_back += bytes;
-        self.gpu_submissions += 1;
-        self.device_wait_seconds += waited;
-    }
+/// One product's trip to the device and back, in one submission: `x` written to `x_buffer`,
+/// `encode` records the kernels that write the product to `y_buffer`, whose first `x.len()`
+/// reals come back through `staging`; the bytes, the submission and the wait are counted in
+/// `traffic`.
+pub(super) fn round_trip(
+    ctx: &GpuContext,
+    what: &str,
+    (x_buffer, y_buffer, staging): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+    x: &[f64],
+    traffic: &Mutex<DeviceTraffic>,
+    encode: impl FnOnce(&mut wgpu::CommandEncoder),
+) -> Result<Vec<f64>> {
+    let bytes = 8 * x.len() as u64;
+    compute::checked(ctx, what, || {
+        ctx.queue.write_buffer(x_buffer, 0, bytemuck::cast_slice(x));
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encode(&mut encoder);
+        encoder.copy_buffer_to_buffer(y_buffer, 0, staging, 0, bytes.max(16));
+        ctx.queue.submit([encoder.finish()]);
+    })?;
+    let started = Instant::now();
+    compute::wait(ctx, staging, bytes)?;
+    let waited = started.elapsed().as_secs_f64();
+    let mut y = vec![0.0; x.len()];
+    compute::copy_mapped(staging, bytes, Precision::F64, &mut y)?;
+    let mut t = traffic.lock().unwrap_or_else(|e| e.into_inner());
+    t.bytes_uploaded += bytes;
+    t.bytes_read_back += bytes;
+    t.gpu_submissions += 1;
+    t.device_wait_seconds += waited;
+    Ok(y)
 }
 
 /// The buffers of products with `m` vectors at once.
@@ -143,39 +166,26 @@ impl DeviceOperator {
                 thin.columns.iter().for_each(|&c| flat[v * dof + c] = 0.0);
             }
         }
-        let bytes = (8 * m * dof) as u64;
         let mut held = self.vectors.lock().unwrap_or_else(|e| e.into_inner());
         if held.as_ref().is_none_or(|v| v.m != m) {
             *held = Some(self.vectors_for(m)?);
         }
         let v = held.as_ref().expect("vectors for m");
-        let ctx = self.ctx;
-        compute::checked(ctx, "the product on the device", || {
-            ctx.queue.write_buffer(&v.x, 0, bytemuck::cast_slice(&flat));
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipeline);
-                for ((rows, _), (group, _)) in self.tiles.iter().zip(&v.groups) {
-                    pass.set_bind_group(0, group, &[]);
-                    pass.dispatch_workgroups(rows.len() as u32, 1, 1);
-                }
+        let (buffers, what) = ((&v.x, &v.y, &v.staging), "the product on the device");
+        let y = round_trip(self.ctx, what, buffers, &flat, &self.traffic, |encoder| {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            for ((rows, _), (group, _)) in self.tiles.iter().zip(&v.groups) {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(rows.len() as u32, 1, 1);
             }
-            encoder.copy_buffer_to_buffer(&v.y, 0, &v.staging, 0, bytes);
-            ctx.queue.submit([encoder.finish()]);
         })?;
-        let started = Instant::now();
-        compute::wait(ctx, &v.staging, bytes)?;
-        let waited = started.elapsed().as_secs_f64();
-        let mut y = vec![0.0; m * dof];
-        compute::copy_mapped(&v.staging, bytes, Precision::F64, &mut y)?;
         let mut out: Vec<Vec<f64>> = y.chunks_exact(dof).map(<[f64]>::to_vec).collect();
         if let Some(thin) = &self.thin {
             for (x, y) in xs.iter().zip(&mut out) {
                 thin.apply_add(x, y);
             }
         }
-        self.traffic.lock().unwrap_or_else(|e| e.into_inner()).product(bytes, waited);
         Ok(out)
     }
 

@@ -205,6 +205,67 @@ pub struct OperatorStats {
     pub incompressible_blocks: u64,
 }
 
+impl OperatorStats {
+    /// Length of [`OperatorStats::counts`].
+    pub const COUNTS: usize = 8;
+
+    /// The statistics in a fixed order (bytes, near entries, near blocks, far blocks, far
+    /// entries, largest rank, empty blocks, incompressible blocks), as saved operators and
+    /// messages between processes carry them.
+    pub fn counts(&self) -> [u64; Self::COUNTS] {
+        [
+            self.operator_bytes,
+            self.near_entries,
+            self.near_blocks,
+            self.far_blocks,
+            self.far_entries,
+            self.max_rank as u64,
+            self.empty_blocks,
+            self.incompressible_blocks,
+        ]
+    }
+
+    /// The statistics of [`OperatorStats::counts`].
+    pub fn from_counts(
+        [
+            operator_bytes,
+            near_entries,
+            near_blocks,
+            far_blocks,
+            far_entries,
+            max_rank,
+            empty_blocks,
+            incompressible_blocks,
+        ]: [u64; Self::COUNTS],
+    ) -> Self {
+        Self {
+            operator_bytes,
+            near_entries,
+            near_blocks,
+            far_blocks,
+            far_entries,
+            max_rank: max_rank as usize,
+            empty_blocks,
+            incompressible_blocks,
+        }
+    }
+}
+
+/// The statistics of two parts of one operator together: counts add, the largest rank is the
+/// larger one.
+impl std::ops::AddAssign for OperatorStats {
+    fn add_assign(&mut self, o: Self) {
+        self.operator_bytes += o.operator_bytes;
+        self.near_entries += o.near_entries;
+        self.near_blocks += o.near_blocks;
+        self.far_blocks += o.far_blocks;
+        self.far_entries += o.far_entries;
+        self.max_rank = self.max_rank.max(o.max_rank);
+        self.empty_blocks += o.empty_blocks;
+        self.incompressible_blocks += o.incompressible_blocks;
+    }
+}
+
 /// A block of K: rows `rows` of the node order, columns of the elements `cols` of the element
 /// order (each with its basis functions).
 #[derive(Clone, Debug)]
@@ -468,9 +529,7 @@ impl CompressedOperator {
         let mut y = self.products(&[x], |data, x, y| data.apply_add(x, y));
         y.pop().expect("one product")
     }
-}
 
-impl CompressedOperator {
     /// `K x` for every `x` in `xs` together: each block is read once for all of them (many
     /// right-hand sides cost the operator's memory traffic once per round, not once per
     /// vector). Each product equals [`CompressedOperator::apply`]'s up to the order of sums.
@@ -799,44 +858,13 @@ fn summed_over(
     stats: OperatorStats,
     pairs: PairStats,
 ) -> (OperatorStats, PairStats) {
-    let mine = [
-        stats.operator_bytes,
-        stats.near_entries,
-        stats.near_blocks,
-        stats.far_blocks,
-        stats.far_entries,
-        stats.empty_blocks,
-        stats.incompressible_blocks,
-        pairs.total,
-        pairs.same_plane,
-        pairs.facing_away,
-        pairs.hidden,
-        pairs.not_reflecting,
-        pairs.full,
-        pairs.partial,
-    ];
-    let all = ranks.gather(&mine);
-    let sum = |k: usize| all.iter().map(|r| r[k]).sum::<u64>();
-    let max_rank = ranks.gather(&[stats.max_rank as u64]).iter().map(|r| r[0]).max();
-    let stats = OperatorStats {
-        operator_bytes: sum(0),
-        near_entries: sum(1),
-        near_blocks: sum(2),
-        far_blocks: sum(3),
-        far_entries: sum(4),
-        max_rank: max_rank.unwrap_or(0) as usize,
-        empty_blocks: sum(5),
-        incompressible_blocks: sum(6),
-    };
-    let pairs = PairStats {
-        total: sum(7),
-        same_plane: sum(8),
-        facing_away: sum(9),
-        hidden: sum(10),
-        not_reflecting: sum(11),
-        full: sum(12),
-        partial: sum(13),
-    };
+    let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).collect();
+    let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
+    for counts in ranks.gather(&mine) {
+        let (s, p) = counts.split_at(OperatorStats::COUNTS);
+        stats += OperatorStats::from_counts(s.try_into().expect("a rank's statistics"));
+        pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));
+    }
     (stats, pairs)
 }
 

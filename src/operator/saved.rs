@@ -290,26 +290,10 @@ impl CompressedOperator {
                     .into(),
             });
         }
-        let s = &self.stats;
-        let p = &self.pairs;
         for v in [self.dof as u64, self.per as u64, self.zero_rows as u64] {
             out.u64(v)?;
         }
-        for v in [
-            s.operator_bytes,
-            s.near_entries,
-            s.near_blocks,
-            s.far_blocks,
-            s.far_entries,
-            s.max_rank as u64,
-            s.empty_blocks,
-            s.incompressible_blocks,
-        ] {
-            out.u64(v)?;
-        }
-        for v in
-            [p.total, p.same_plane, p.facing_away, p.hidden, p.not_reflecting, p.full, p.partial]
-        {
+        for v in self.stats.counts().into_iter().chain(self.pairs.counts()) {
             out.u64(v)?;
         }
         out.usizes(&self.node_order)?;
@@ -350,26 +334,15 @@ impl CompressedOperator {
             return Err(input.error(format!("damaged: {dof} unknowns with {per} per element")));
         }
         let zero_rows = input.u64("the zero rows")? as usize;
-        let mut next = |what: &str| input.u64(what);
-        let stats = OperatorStats {
-            operator_bytes: next("statistics")?,
-            near_entries: next("statistics")?,
-            near_blocks: next("statistics")?,
-            far_blocks: next("statistics")?,
-            far_entries: next("statistics")?,
-            max_rank: next("statistics")? as usize,
-            empty_blocks: next("statistics")?,
-            incompressible_blocks: next("statistics")?,
-        };
-        let pairs = PairStats {
-            total: next("pair classes")?,
-            same_plane: next("pair classes")?,
-            facing_away: next("pair classes")?,
-            hidden: next("pair classes")?,
-            not_reflecting: next("pair classes")?,
-            full: next("pair classes")?,
-            partial: next("pair classes")?,
-        };
+        let mut stats = [0; OperatorStats::COUNTS];
+        for v in &mut stats {
+            *v = input.u64("statistics")?;
+        }
+        let mut pairs = [0; 7];
+        for v in &mut pairs {
+            *v = input.u64("pair classes")?;
+        }
+        let (stats, pairs) = (OperatorStats::from_counts(stats), PairStats::from_counts(pairs));
         let node_order = input.usizes("the node order", dof)?;
         let element_order = input.usizes("the element order", dof / per)?;
         if node_order.len() != dof || element_order.len() != dof / per {

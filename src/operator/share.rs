@@ -35,7 +35,7 @@ pub(super) fn share_of(
     let mut units: Vec<Unit> = near
         .chunk_by(|a, b| a.0 == b.0)
         .map(|group| Unit {
-            cost: group.iter().map(|&(t, s)| size_of(t, s).0 * size_of(t, s).1).sum(),
+            cost: group.iter().map(|&(t, s)| size_of(t, s)).map(|(m, c)| m * c).sum(),
             near: group.to_vec(),
             far: None,
         })

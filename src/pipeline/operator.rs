@@ -425,7 +425,6 @@ pub fn compressed_on_device(op: &CompressedOperator) -> Result<DeviceBlocks> {
 fn stays_on_device(config: &RunConfig) -> bool {
     config.backend == super::Backend::Gpu(gpu::Precision::F64)
         && config.solver.choice == solve::SolverChoice::Iterative
-        && config.operator_file.is_none()
 }
 
 /// K assembled on the GPU and left in its memory.

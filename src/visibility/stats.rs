@@ -33,6 +33,27 @@ impl PairStats {
         s
     }
 
+    /// The counts in a fixed order (total, same plane, facing away, hidden, not reflecting,
+    /// full, partial), as files and messages between processes carry them.
+    pub fn counts(&self) -> [u64; 7] {
+        [
+            self.total,
+            self.same_plane,
+            self.facing_away,
+            self.hidden,
+            self.not_reflecting,
+            self.full,
+            self.partial,
+        ]
+    }
+
+    /// The statistics of [`PairStats::counts`].
+    pub fn from_counts(
+        [total, same_plane, facing_away, hidden, not_reflecting, full, partial]: [u64; 7],
+    ) -> Self {
+        Self { total, same_plane, facing_away, hidden, not_reflecting, full, partial }
+    }
+
     /// Pairs that contribute nothing.
     pub fn skipped(&self) -> u64 {
         self.same_plane + self.facing_away + self.hidden + self.not_reflecting
