@@ -1,7 +1,8 @@
 // K x with K the compressed operator's blocks packed in flat arrays (src/operator/packed.rs has
 // the layout): x in the blocks' column order, y in their row order. Three passes: V^T x of every
 // low-rank block; every block's rows of its product into scratch; each row's contributions
-// summed in block order (the same order every time).
+// summed in block order (the same order every time). An operator too large for one binding is
+// applied part by part, each part's sums added to y in part order (`accumulate`).
 
 struct Params {
     blocks: u32,
@@ -11,7 +12,7 @@ struct Params {
     low_rank_at: u32,
     row_starts_at: u32,
     contributions_at: u32,
-    _pad: u32,
+    accumulate: u32,
 }
 
 const LANES: u32 = 64u;
@@ -104,5 +105,9 @@ fn row_sums(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var j = start; j < end; j++) {
         sum += scratch[indices[params.contributions_at + j]];
     }
-    y[i] = sum;
+    if params.accumulate != 0u {
+        y[i] += sum;
+    } else {
+        y[i] = sum;
+    }
 }

@@ -516,16 +516,28 @@ fn the_compressed_operator_on_the_device_gives_the_host_product() {
     }
     let (options, silent) = (AssemblyOptions::default(), &radiosity::progress::Silent);
     let compression = CompressionOptions { tolerance: 1e-8, ..Default::default() };
-    let mut kinds = [0usize; 3];
+    let (mut kinds, mut most_parts) = ([0usize; 3], 0);
     for (name, problem) in resident_cases() {
         let op = CompressedOperator::build(&problem, &options, &compression, None, silent).unwrap();
         let p = op.packed().unwrap();
         for d in p.indices[..p.blocks * DESCRIPTOR].chunks_exact(DESCRIPTOR) {
             kinds[d[packed::field::KIND] as usize] += 1;
         }
-        let device = radiosity::pipeline::compressed_on_device(&op).unwrap();
+        let device = radiosity::pipeline::compressed_on_device(&op, None).unwrap();
+        assert_eq!(device.parts(), 1, "{name}");
         let d = op.max_product_difference(&|x| device.apply_many(&[x]).unwrap().pop().unwrap());
         assert!(d <= 1e-13, "{name}: products differ by {d:.2e}");
+        // Split over bindings of a quarter of the values (or the least that holds each block),
+        // as an operator larger than the device's binding limit is.
+        let mut limit = 2 * p.values.len() as u64;
+        while op.packed_parts(limit).is_none() {
+            limit *= 2;
+        }
+        let split = radiosity::pipeline::compressed_on_device(&op, Some(limit)).unwrap();
+        most_parts = most_parts.max(split.parts());
+        let d = op.max_product_difference(&|x| split.apply_many(&[x]).unwrap().pop().unwrap());
+        assert!(d <= 1e-13, "{name} in {} parts: products differ by {d:.2e}", split.parts());
     }
     assert!(kinds.iter().all(|&k| k > 0), "dense, sparse and low-rank blocks met: {kinds:?}");
+    assert!(most_parts >= 3, "operators split in at most {most_parts} parts");
 }

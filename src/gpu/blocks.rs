@@ -32,14 +32,13 @@ pub struct BlockArrays<'a> {
     pub scratch: usize,
 }
 
-/// What stays on the device between products.
-struct Buffers {
-    x: wgpu::Buffer,
-    y: wgpu::Buffer,
-    staging: wgpu::Buffer,
+/// One part's blocks on the device, with its bind group and grid.
+struct Part {
     group: wgpu::BindGroup,
+    /// Workgroups of the three passes: low-rank blocks, blocks, rows.
+    grid: [(u32, u32); 3],
     /// The blocks, the scratch and the parameters, kept alive for the bind group.
-    _kept: Vec<wgpu::Buffer>,
+    _kept: [wgpu::Buffer; 4],
 }
 
 /// The compressed operator on the device.
@@ -50,44 +49,55 @@ pub struct DeviceBlocks {
     node_order: Vec<usize>,
     element_order: Vec<usize>,
     pipelines: [wgpu::ComputePipeline; 3],
-    buffers: Buffers,
-    grid: ((u32, u32), (u32, u32), (u32, u32)),
+    x: wgpu::Buffer,
+    y: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    parts: Vec<Part>,
     bytes: u64,
     traffic: Mutex<DeviceTraffic>,
 }
 
 impl std::fmt::Debug for DeviceBlocks {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "DeviceBlocks {{ dof: {}, bytes: {} }}", self.dof, self.bytes)
+        let (dof, parts, bytes) = (self.dof, self.parts.len(), self.bytes);
+        write!(f, "DeviceBlocks {{ dof: {dof}, parts: {parts}, bytes: {bytes} }}")
     }
 }
 
 impl DeviceBlocks {
-    /// Uploads `arrays` (for `dof` unknowns, `per` basis functions per element, rows and
-    /// columns in `node_order` and `element_order`); refused where the device lacks f64 or a
-    /// buffer would pass its binding limit.
+    /// The largest binding of the f64 device: what one part's values, indices or scratch may
+    /// take.
+    pub fn max_binding(ctx: &GpuContext) -> u64 {
+        let limits = &ctx.limits;
+        limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+    }
+
+    /// Uploads `parts` (for `dof` unknowns, `per` basis functions per element, rows and
+    /// columns in `node_order` and `element_order`; the product is the sum of the parts'
+    /// products); refused where the device lacks f64 or a buffer would pass its binding limit.
     pub fn upload(
         ctx: &'static GpuContext,
         dof: usize,
         (per, node_order, element_order): (usize, &[usize], &[usize]),
-        arrays: BlockArrays,
+        parts: &[BlockArrays],
     ) -> Result<Self> {
         if !ctx.adapter.f64 {
             return Err(Error::Gpu(format!("adapter '{}' has no SHADER_F64", ctx.adapter.name)));
         }
-        let limits = &ctx.limits;
-        let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
-        let values_bytes = 8 * arrays.values.len() as u64;
-        let index_bytes = 4 * arrays.indices.len() as u64;
-        let scratch_bytes = 8 * arrays.scratch as u64;
-        for (what, bytes) in
-            [("values", values_bytes), ("indices", index_bytes), ("scratch", scratch_bytes)]
-        {
-            if bytes > max_binding {
-                return Err(Error::Gpu(format!(
-                    "the compressed operator's {what} take {bytes} bytes, over the device's \
-                     binding limit of {max_binding}"
-                )));
+        let max_binding = Self::max_binding(ctx);
+        for arrays in parts {
+            let values_bytes = 8 * arrays.values.len() as u64;
+            let index_bytes = 4 * arrays.indices.len() as u64;
+            let scratch_bytes = 8 * arrays.scratch as u64;
+            for (what, bytes) in
+                [("values", values_bytes), ("indices", index_bytes), ("scratch", scratch_bytes)]
+            {
+                if bytes > max_binding {
+                    return Err(Error::Gpu(format!(
+                        "a part of the compressed operator's {what} takes {bytes} bytes, over \
+                         the device's binding limit of {max_binding}"
+                    )));
+                }
             }
         }
         let (layout, pipelines) = compute::pipeline(
@@ -99,43 +109,52 @@ impl DeviceBlocks {
             &[4, 5],
         )?;
         let pipelines: [wgpu::ComputePipeline; 3] = pipelines.try_into().expect("three pipelines");
-        let max_x = limits.max_compute_workgroups_per_dimension.max(1);
+        let max_x = ctx.limits.max_compute_workgroups_per_dimension.max(1);
         let groups = |n: usize| -> (u32, u32) {
             let n = n.max(1) as u64;
             ((n.min(max_x as u64)) as u32, n.div_ceil(max_x as u64) as u32)
         };
-        let grid = (
-            groups(arrays.low_rank),
-            groups(arrays.blocks),
-            groups(dof.div_ceil(super::layout::WORKGROUP as usize)),
-        );
-        let params: [u32; 8] = [
-            arrays.blocks as u32,
-            arrays.low_rank as u32,
-            dof as u32,
-            max_x,
-            arrays.low_rank_at as u32,
-            arrays.row_starts_at as u32,
-            arrays.contributions_at as u32,
-            0,
-        ];
-        let buffers = compute::checked(ctx, "uploading the compressed operator", || {
-            let params = compute::uniform(ctx, bytemuck::cast_slice(&params));
-            let values = compute::storage(ctx, bytemuck::cast_slice(arrays.values));
-            let indices = compute::storage(ctx, bytemuck::cast_slice(arrays.indices));
-            let x = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("x"),
-                size: (8 * dof as u64).max(16),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let scratch = compute::writable(ctx, scratch_bytes);
-            let (y, staging) = compute::output(ctx, 8 * dof as u64);
-            let group =
-                compute::bind_group(ctx, &layout, &[&params, &values, &indices, &x, &scratch, &y]);
-            Buffers { x, y, staging, group, _kept: vec![params, values, indices, scratch] }
-        })?;
-        let bytes = values_bytes + index_bytes;
+        let bytes = parts.iter().map(|a| 8 * a.values.len() as u64 + 4 * a.indices.len() as u64);
+        let bytes = bytes.sum();
+        let rows_grid = groups(dof.div_ceil(super::layout::WORKGROUP as usize));
+        let (x, y, staging, parts) =
+            compute::checked(ctx, "uploading the compressed operator", || {
+                let x = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("x"),
+                    size: (8 * dof as u64).max(16),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let (y, staging) = compute::output(ctx, 8 * dof as u64);
+                let parts = parts
+                    .iter()
+                    .enumerate()
+                    .map(|(n, arrays)| {
+                        let params: [u32; 8] = [
+                            arrays.blocks as u32,
+                            arrays.low_rank as u32,
+                            dof as u32,
+                            max_x,
+                            arrays.low_rank_at as u32,
+                            arrays.row_starts_at as u32,
+                            arrays.contributions_at as u32,
+                            u32::from(n > 0),
+                        ];
+                        let params = compute::uniform(ctx, bytemuck::cast_slice(&params));
+                        let values = compute::storage(ctx, bytemuck::cast_slice(arrays.values));
+                        let indices = compute::storage(ctx, bytemuck::cast_slice(arrays.indices));
+                        let scratch = compute::writable(ctx, 8 * arrays.scratch as u64);
+                        let group = compute::bind_group(
+                            ctx,
+                            &layout,
+                            &[&params, &values, &indices, &x, &scratch, &y],
+                        );
+                        let grid = [groups(arrays.low_rank), groups(arrays.blocks), rows_grid];
+                        Part { group, grid, _kept: [params, values, indices, scratch] }
+                    })
+                    .collect();
+                (x, y, staging, parts)
+            })?;
         let traffic = DeviceTraffic { bytes_uploaded: bytes, ..Default::default() };
         Ok(Self {
             ctx,
@@ -144,11 +163,18 @@ impl DeviceBlocks {
             node_order: node_order.to_vec(),
             element_order: element_order.to_vec(),
             pipelines,
-            buffers,
-            grid,
+            x,
+            y,
+            staging,
+            parts,
             bytes,
             traffic: Mutex::new(traffic),
         })
+    }
+
+    /// Number of parts the blocks were uploaded in (one binding each).
+    pub fn parts(&self) -> usize {
+        self.parts.len()
     }
 
     /// Number of unknowns.
@@ -179,16 +205,17 @@ impl DeviceBlocks {
         for (k, &e) in self.element_order.iter().enumerate() {
             xp[k * per..(k + 1) * per].copy_from_slice(&x[e * per..(e + 1) * per]);
         }
-        let b = &self.buffers;
-        let buffers = (&b.x, &b.y, &b.staging);
+        let buffers = (&self.x, &self.y, &self.staging);
         let what = "the compressed product on the device";
         let yp = round_trip(ctx, what, buffers, &xp, &self.traffic, |encoder| {
-            let (low_rank, blocks, rows) = self.grid;
-            for (pipeline, (gx, gy)) in self.pipelines.iter().zip([low_rank, blocks, rows]) {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &b.group, &[]);
-                pass.dispatch_workgroups(gx, gy, 1);
+            // Part after part: each pass of a part sees the last part's writes to y.
+            for part in &self.parts {
+                for (pipeline, &(gx, gy)) in self.pipelines.iter().zip(&part.grid) {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, &part.group, &[]);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
             }
         })?;
         let mut y = vec![0.0; dof];

@@ -1,7 +1,7 @@
 //! The compressed operator packed into flat arrays for a device to apply
 //! (`shaders/blocks.wgsl` reads this layout; the GPU's side is `gpu::DeviceBlocks`).
 
-use super::{BlockData, CompressedOperator};
+use super::{Block, BlockData, CompressedOperator};
 
 /// Fields of a block's descriptor, in order.
 pub mod field {
@@ -65,19 +65,61 @@ pub struct PackedBlocks {
 }
 
 impl CompressedOperator {
-    /// The blocks packed for a device ([`PackedBlocks`]), or `None` in a distributed run
-    /// (each rank holds a part) or where an offset passes what u32 holds.
+    /// The blocks packed for a device in one part ([`PackedBlocks`]), or `None` in a
+    /// distributed run (each rank holds a part) or where an offset passes what u32 holds.
     pub fn packed(&self) -> Option<PackedBlocks> {
         if self.share.is_some() {
             return None;
         }
-        let mut p = PackedBlocks { blocks: self.blocks.len(), ..Default::default() };
-        let mut descriptors = vec![0u32; DESCRIPTOR * self.blocks.len()];
+        self.pack(&self.blocks)
+    }
+
+    /// The blocks packed in consecutive parts whose values, indices and scratch each take at
+    /// most `max_bytes` (a device's largest binding), so that the product is the sum of the
+    /// parts' products, taken in part order; `None` where [`Self::packed`] gives none or one
+    /// block alone passes `max_bytes`.
+    pub fn packed_parts(&self, max_bytes: u64) -> Option<Vec<PackedBlocks>> {
+        if self.share.is_some() {
+            return None;
+        }
+        // Bytes of each array in a part: the rows' contribution ranges are in every part.
+        let fixed = [0, 4 * (self.dof as u64 + 1), 0];
+        let mut parts = Vec::new();
+        let (mut start, mut bytes) = (0, fixed);
+        for (b, block) in self.blocks.iter().enumerate() {
+            let rows = block.rows.len() as u64;
+            let (values, index, rank) = match &block.data {
+                BlockData::Dense(values) => (values.len(), 0, 0),
+                BlockData::Sparse(s) => (s.values.len(), s.starts.len() + s.columns.len(), 0),
+                BlockData::LowRank(lr) => (lr.u.len() + lr.v.len(), 1, lr.k),
+            };
+            let own = [
+                8 * values as u64,
+                4 * (DESCRIPTOR as u64 + index as u64 + rows),
+                8 * (rank as u64 + rows),
+            ];
+            if (0..3).any(|a| fixed[a] + own[a] > max_bytes) {
+                return None;
+            }
+            if (0..3).any(|a| bytes[a] + own[a] > max_bytes) {
+                parts.push(self.pack(&self.blocks[start..b])?);
+                (start, bytes) = (b, fixed);
+            }
+            (0..3).for_each(|a| bytes[a] += own[a]);
+        }
+        parts.push(self.pack(&self.blocks[start..])?);
+        Some(parts)
+    }
+
+    /// `blocks` packed as one part.
+    fn pack(&self, blocks: &[Block]) -> Option<PackedBlocks> {
+        let mut p = PackedBlocks { blocks: blocks.len(), ..Default::default() };
+        let mut descriptors = vec![0u32; DESCRIPTOR * blocks.len()];
         let mut sparse_index = Vec::new();
         let mut low_rank = Vec::new();
         let mut scratch = 0usize;
         let fits = |v: usize| u32::try_from(v).ok();
-        for (b, block) in self.blocks.iter().enumerate() {
+        for (b, block) in blocks.iter().enumerate() {
             let d = &mut descriptors[b * DESCRIPTOR..(b + 1) * DESCRIPTOR];
             d[field::ROWS_START] = fits(block.rows.start)?;
             d[field::ROWS] = fits(block.rows.len())?;
@@ -118,7 +160,7 @@ impl CompressedOperator {
         }
         // Each row's contributions in block order.
         let mut count = vec![0u32; self.dof + 1];
-        for block in &self.blocks {
+        for block in blocks {
             block.rows.clone().for_each(|r| count[r + 1] += 1);
         }
         for r in 0..self.dof {
@@ -126,7 +168,7 @@ impl CompressedOperator {
         }
         let mut contributions = vec![0u32; count[self.dof] as usize];
         let mut next = count.clone();
-        for (b, block) in self.blocks.iter().enumerate() {
+        for (b, block) in blocks.iter().enumerate() {
             let at = descriptors[b * DESCRIPTOR + field::PARTIAL_AT] as usize;
             for (k, r) in block.rows.clone().enumerate() {
                 contributions[next[r] as usize] = fits(at + k)?;

@@ -387,7 +387,7 @@ pub(super) fn blocks_on_device(
     if config.backend != super::Backend::Gpu(gpu::Precision::F64) || config.ranks.is_some() {
         return None;
     }
-    let uploaded = compressed_on_device(op).map_err(|e| e.to_string());
+    let uploaded = compressed_on_device(op, None).map_err(|e| e.to_string());
     match uploaded {
         Ok(blocks) => Some(Box::new(blocks)),
         Err(why) => {
@@ -399,24 +399,36 @@ pub(super) fn blocks_on_device(
     }
 }
 
-/// The blocks of `op` uploaded to the GPU (f64) for its products there.
-pub fn compressed_on_device(op: &CompressedOperator) -> Result<DeviceBlocks> {
-    let p = op.packed().ok_or_else(|| {
-        Error::Gpu("the compressed operator is distributed, or its offsets pass u32".into())
-    })?;
+/// The blocks of `op` uploaded to the GPU (f64) for its products there, in as many parts as
+/// the device's largest binding asks for, or parts of at most `max_binding` bytes where given
+/// (tests split small operators so).
+pub fn compressed_on_device(
+    op: &CompressedOperator,
+    max_binding: Option<u64>,
+) -> Result<DeviceBlocks> {
     let ctx = gpu::context_for(gpu::Precision::F64)?;
-    let arrays = gpu::BlockArrays {
-        blocks: p.blocks,
-        low_rank: p.low_rank,
-        values: &p.values,
-        indices: &p.indices,
-        low_rank_at: p.low_rank_at,
-        row_starts_at: p.row_starts_at,
-        contributions_at: p.contributions_at,
-        scratch: p.scratch,
-    };
+    let max_binding = max_binding.unwrap_or_else(|| DeviceBlocks::max_binding(ctx));
+    let parts = op.packed_parts(max_binding).ok_or_else(|| {
+        Error::Gpu(format!(
+            "the compressed operator is distributed, a block passes the binding limit of \
+             {max_binding} bytes, or an offset passes u32"
+        ))
+    })?;
+    let arrays: Vec<gpu::BlockArrays> = parts
+        .iter()
+        .map(|p| gpu::BlockArrays {
+            blocks: p.blocks,
+            low_rank: p.low_rank,
+            values: &p.values,
+            indices: &p.indices,
+            low_rank_at: p.low_rank_at,
+            row_starts_at: p.row_starts_at,
+            contributions_at: p.contributions_at,
+            scratch: p.scratch,
+        })
+        .collect();
     let orders = (op.per_element(), op.node_order(), op.element_order());
-    DeviceBlocks::upload(ctx, op.dof(), orders, arrays)
+    DeviceBlocks::upload(ctx, op.dof(), orders, &arrays)
 }
 
 /// Whether the dense K of `config` is assembled into the GPU's memory and kept there: on the
