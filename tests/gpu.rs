@@ -456,7 +456,9 @@ fn gmres_on_the_device_resident_matrix_equals_gmres_on_the_host() {
         let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
         let mut host = assembler.assemble(&problem, &options, silent).unwrap();
         radiosity::assembly::recompute_thin_columns(&mut host, &problem, &options);
-        let device = gpu::DeviceOperator::assemble(&assembler, &problem, &options, silent).unwrap();
+        let device =
+            gpu::DeviceOperator::assemble(&assembler, &problem, &options, Precision::F64, silent)
+                .unwrap();
         assert_eq!(host.stats, device.stats, "{name}");
         let thin = radiosity::assembly::ThinColumns::new(&problem, &options);
         assert_eq!(thin.is_some(), name == "sliver", "{name}: thin columns");
@@ -475,6 +477,70 @@ fn gmres_on_the_device_resident_matrix_equals_gmres_on_the_host() {
         let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let d = kx.iter().zip(&want).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         assert!(d <= 1e-14 * scale, "{name} ({method}): K x differs by {:.2e}", d / scale);
+    }
+}
+
+#[test]
+fn k_stored_in_f32_on_the_device_reports_the_error_it_adds() {
+    // The error the f32 storage reports is the one the f64 matrix's entries take when rounded
+    // (computed here on the host from the same kernels' matrix), and the solution moves from
+    // the f64 one by no more than the reported bound.
+    use radiosity::solve::{self, SolverChoice, SolverOptions};
+    let Some(ctx) = gpu() else { return };
+    let (options, silent) = (AssemblyOptions::default(), &radiosity::progress::Silent);
+    for (name, problem) in resident_cases().into_iter().filter(|(n, _)| *n != "sliver") {
+        let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, problem.disc.method).unwrap();
+        let host = assembler.assemble(&problem, &options, silent).unwrap();
+        let f32 = Precision::F32;
+        let device = gpu::DeviceOperator::assemble(&assembler, &problem, &options, f32, silent);
+        let device = device.unwrap();
+        let dof = problem.disc.dof();
+        let (mut k, mut d) = (0.0f64, 0.0f64);
+        for i in 0..dof {
+            let row = host.matrix.row(i);
+            k = k.max(row.iter().map(|v| v.abs()).sum());
+            d = d.max(row.iter().map(|&v| (v - v as f32 as f64).abs()).sum());
+        }
+        let s = device.storage;
+        assert_eq!(s.storage, f32, "{name}");
+        assert!(d > 0.0 && (s.matrix - d / k).abs() <= 1e-12 * (d / k), "{name}: {s:?}");
+        assert!(s.matrix < 1e-7, "{name}: {s:?}");
+        let bound = s.solution_bound.expect("||K|| < 1 in these scenes");
+        let e: Vec<f64> = (0..dof).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect();
+        let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
+        let solver =
+            SolverOptions { tolerance: 1e-13, ..SolverOptions::with(SolverChoice::Iterative) };
+        let wide = solve::solve_many(&host.matrix, &[&e], solver).unwrap().pop().unwrap();
+        let narrow = solve::solve_by_products(&device, &e, (&rho, &rho), solver, 0.0).unwrap();
+        let scale = narrow.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let moved = wide.u.iter().zip(&narrow.u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(moved > 0.0, "{name}: f32 storage changed nothing");
+        assert!(
+            moved <= bound * scale + 1e-11 * scale,
+            "{name}: {:.2e} > {bound:.2e}",
+            moved / scale
+        );
+    }
+}
+
+#[test]
+fn f32_storage_is_reported_and_refused_where_k_is_not_kept_on_the_device() {
+    if gpu().is_none() {
+        return;
+    }
+    let args = ["solve", "--scene", "five-piece", "--refine", "2", "--storage", "f32"];
+    let json = common::json(
+        &[&args[..], &["--backend", "gpu", "--solver", "iterative", "--json", "-"]].concat(),
+    );
+    assert_eq!(json["operator_location"], "device", "{json}");
+    assert_eq!(json["storage"], "f32", "{json}");
+    let error = json["storage_error"].as_f64().unwrap();
+    assert!(error > 0.0 && error < 1e-7, "{json}");
+    assert!(json["storage_solution_bound"].as_f64().unwrap() >= error, "{json}");
+    for refused in [&["--backend", "cpu"][..], &["--backend", "gpu", "--solver", "lu"]] {
+        let (ok, _, err) = common::radiosity(&[&args[..], refused].concat());
+        assert!(!ok);
+        assert!(err.contains("storage") && err.contains("--solver iterative"), "{err}");
     }
 }
 

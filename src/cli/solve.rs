@@ -120,6 +120,9 @@ pub(crate) fn print_run(r: &RunReport) {
         "setup {:.3} s, emissivity {:.3} s, solve {:.3} s ({}{iterations}, relative residual {:.1e})",
         r.setup_seconds, r.emission_seconds, r.solve_seconds, r.solver, r.residual
     );
+    if let Some(t) = &r.transfers {
+        print_transfers(t);
+    }
     let p = &r.pairs;
     println!(
         "pairs: {} total, {} skipped, {} full, {} partial",
@@ -128,6 +131,33 @@ pub(crate) fn print_run(r: &RunReport) {
         p.full,
         p.partial
     );
+}
+
+/// Where K assembled on the GPU was kept, what crossed, and what its storage did to it.
+fn print_transfers(t: &pipeline::DeviceTransfers) {
+    let kept = match t.operator_location {
+        "device" => "kept in the GPU's memory",
+        _ => "read back to the host",
+    };
+    let mb = |bytes: u64| bytes as f64 / 1e6;
+    println!(
+        "operator {kept}: {:.2} MB uploaded, {:.2} MB read back, {} submissions; the device \
+         idle at most {:.0} % of setup and solve",
+        mb(t.bytes_uploaded),
+        mb(t.bytes_read_back),
+        t.gpu_submissions,
+        100.0 * t.device_idle_fraction
+    );
+    if let Some(s) = t.storage.filter(|s| s.storage == radiosity::gpu::Precision::F32) {
+        let bound = match s.solution_bound {
+            Some(b) => format!("u within {b:.1e} (relative) of u with K stored in f64"),
+            None => "no bound on u (||K|| >= 1)".into(),
+        };
+        println!(
+            "stored in f32: ||K - fl(K)|| / ||K|| = {:.1e} (max norm, measured); {bound}",
+            s.matrix
+        );
+    }
 }
 
 /// Solves, writes the outputs asked for, and prints the summary (or JSON).

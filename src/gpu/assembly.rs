@@ -17,6 +17,7 @@ use super::GpuContext;
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::shaders::{self, Precision};
+use super::storage::{Narrowing, StorageError};
 use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
@@ -283,13 +284,22 @@ struct InFlight {
     _buffers: Vec<wgpu::Buffer>,
 }
 
+/// Whether a submitted tile is copied out for the host, kept, or narrowed and kept.
+#[derive(Clone, Copy)]
+enum Keep<'n> {
+    Host,
+    Device,
+    Narrowed(&'n Narrowing),
+}
+
 /// Tiles of K kept on the device: rows, and their entries row-major.
 pub type DeviceTiles = Vec<(Range<usize>, wgpu::Buffer)>;
 
-/// Where an assembly's tiles go: into the host's matrix, or kept on the device.
+/// Where an assembly's tiles go: into the host's matrix, or kept on the device (as computed,
+/// or narrowed to f32).
 enum Destination<'m> {
     Host(&'m mut CollocationMatrix),
-    Device(&'m mut DeviceTiles),
+    Device(&'m mut DeviceTiles, Option<&'m Narrowing>),
 }
 
 impl<'a> GpuAssembler<'a> {
@@ -391,20 +401,41 @@ impl<'a> GpuAssembler<'a> {
     }
 
     /// K assembled into device memory and left there, tile by tile of rows (each tile's
-    /// entries row-major in the kernels' precision), with the pair classes; nothing is read
-    /// back. The thin elements' columns are as the kernels give them (see
-    /// [`crate::assembly::recompute_thin_columns`]).
+    /// entries row-major in `storage`: the kernels' precision, or f32 narrowed on the device
+    /// from f64 kernels), with the pair classes and what the storage did to K; nothing is read
+    /// back but the rows' norms of a narrowed K. The thin elements' columns are as the kernels
+    /// give them (see [`crate::assembly::recompute_thin_columns`]).
     pub fn assemble_on_device(
         &self,
         problem: &Problem,
         options: &AssemblyOptions,
+        storage: Precision,
         progress: &dyn Progress,
-    ) -> Result<(DeviceTiles, PairStats)> {
+    ) -> Result<(DeviceTiles, PairStats, StorageError)> {
+        let narrowing = match (self.precision, storage) {
+            (Precision::F64, Precision::F32) => Some(Narrowing::new(self.ctx, problem.disc.dof())?),
+            (p, s) if p == s => None,
+            _ => {
+                return Err(Error::Gpu(format!(
+                    "K computed in {} cannot be stored in {}",
+                    self.precision.name(),
+                    storage.name()
+                )));
+            }
+        };
         let mut tiles = Vec::new();
-        let destination = Destination::Device(&mut tiles);
+        let destination = Destination::Device(&mut tiles, narrowing.as_ref());
         let limits = TileLimits::default();
         let stats = self.assemble_tiles(problem, options, limits, destination, progress)?;
-        Ok((tiles, stats))
+        let error = match &narrowing {
+            Some(n) => {
+                let (error, bytes) = n.error(self.ctx)?;
+                self.timings.lock().expect("timings lock").bytes_read_back += bytes;
+                error
+            }
+            None => StorageError::none(),
+        };
+        Ok((tiles, stats, error))
     }
 
     /// Plans, submits and collects the tiles of K into `destination`.
@@ -471,7 +502,11 @@ impl<'a> GpuAssembler<'a> {
             }
             None
         };
-        let keep = matches!(destination, Destination::Device(_));
+        let keep = match &destination {
+            Destination::Host(_) => Keep::Host,
+            Destination::Device(_, None) => Keep::Device,
+            Destination::Device(_, Some(n)) => Keep::Narrowed(n),
+        };
         let mut in_flight: Option<InFlight> = None;
         let mut next_plan = plan_next();
         while let Some(plan) = next_plan.take() {
@@ -494,7 +529,7 @@ impl<'a> GpuAssembler<'a> {
             t.read_back_gb_per_second = t.bytes_read_back as f64 / t.readback_seconds / 1e9;
         }
         drop(t);
-        if let Destination::Device(_) = destination {
+        if let Destination::Device(..) = destination {
             let started = std::time::Instant::now();
             ctx.device
                 .poll(wgpu::PollType::wait_indefinitely())
@@ -513,7 +548,7 @@ impl<'a> GpuAssembler<'a> {
         mesh: &Mesh,
         uploaded: &Uploaded,
         (max_binding, max_near_pairs): (u64, u64),
-        keep_on_device: bool,
+        keep: Keep,
     ) -> Result<InFlight> {
         let Uploaded { elements, tables, counts, .. } = uploaded;
         let ctx = self.ctx;
@@ -578,9 +613,9 @@ impl<'a> GpuAssembler<'a> {
             let exceptions = compute::storage(ctx, exception_bytes);
             let vertices = compute::storage(ctx, &vertex_bytes);
             let size = (rows * dof * p.bytes()) as u64;
-            let (out, staging) = match keep_on_device {
-                true => (compute::writable(ctx, size), None),
-                false => {
+            let (out, staging) = match keep {
+                Keep::Device | Keep::Narrowed(_) => (compute::writable(ctx, size), None),
+                Keep::Host => {
                     let (out, staging) = compute::output(ctx, size);
                     (out, Some(staging))
                 }
@@ -604,13 +639,23 @@ impl<'a> GpuAssembler<'a> {
             if let Some(staging) = &staging {
                 encoder.copy_buffer_to_buffer(&out, 0, staging, 0, size.max(16));
             }
+            let mut buffers = vec![params, views, exceptions, vertices, near, near_args];
+            let out = match keep {
+                Keep::Narrowed(narrowing) => {
+                    let (narrow, params) =
+                        narrowing.encode(ctx, &mut encoder, plan.rows.clone(), &out);
+                    buffers.extend([out, params]);
+                    narrow
+                }
+                Keep::Host | Keep::Device => out,
+            };
             ctx.queue.submit([encoder.finish()]);
             Ok::<_, Error>(InFlight {
                 rows: plan.rows.clone(),
                 out,
                 staging,
                 size,
-                _buffers: vec![params, views, exceptions, vertices, near, near_args],
+                _buffers: buffers,
             })
         })?
     }
@@ -666,7 +711,7 @@ impl<'a> GpuAssembler<'a> {
         progress: &dyn Progress,
     ) -> Result<()> {
         let (matrix, staging) = match (destination, &done.staging) {
-            (Destination::Device(tiles), _) => {
+            (Destination::Device(tiles, _), _) => {
                 progress.advance(done.rows.len());
                 tiles.push((done.rows, done.out));
                 return Ok(());

@@ -10,6 +10,7 @@ pub mod math;
 mod pairs;
 mod resident;
 pub mod shaders;
+mod storage;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
 pub use blocks::{BlockArrays, DeviceBlocks};
@@ -17,6 +18,7 @@ pub use context::{AdapterRequest, AdapterSummary, GpuContext, INSTALL_HINT};
 pub use pairs::PairEvaluator;
 pub use resident::{DeviceOperator, DeviceTraffic};
 pub use shaders::Precision;
+pub use storage::StorageError;
 
 use std::sync::OnceLock;
 

@@ -10,6 +10,7 @@ use super::GpuContext;
 use super::assembly::{DeviceTiles, GpuAssembler};
 use super::compute;
 use super::shaders::{self, Precision};
+use super::storage::StorageError;
 use crate::assembly::{AssemblyOptions, Problem, ThinColumns};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
@@ -86,6 +87,8 @@ pub struct DeviceOperator {
     traffic: Mutex<DeviceTraffic>,
     /// Pair classes of the assembly.
     pub stats: PairStats,
+    /// The precision K is stored in, and what that did to it.
+    pub storage: StorageError,
 }
 
 impl std::fmt::Debug for DeviceOperator {
@@ -95,29 +98,31 @@ impl std::fmt::Debug for DeviceOperator {
 }
 
 impl DeviceOperator {
-    /// Assembles K for `problem` by `assembler` into device memory (f64 kernels only: the
-    /// products are summed in f64).
+    /// Assembles K for `problem` by `assembler` into device memory, its entries stored in
+    /// `storage` (f64 kernels only: the products are summed in f64; f32 storage halves the
+    /// memory and the products' reads, and its error is measured).
     pub fn assemble(
         assembler: &GpuAssembler<'static>,
         problem: &Problem,
         options: &AssemblyOptions,
+        storage: Precision,
         progress: &dyn Progress,
     ) -> Result<Self> {
         let ctx = assembler.context();
-        let precision = assembler.precision();
-        if precision != Precision::F64 {
+        if assembler.precision() != Precision::F64 {
             return Err(Error::Gpu("the device-resident operator is built in f64".into()));
         }
-        let source = shaders::matvec(precision);
+        let source = shaders::matvec(storage);
         let (layout, mut pipelines) = compute::pipeline(ctx, &source, &["matvec"], 4, &[0], &[3])?;
         let pipeline = pipelines.pop().expect("one pipeline");
         progress.start("assembly", problem.disc.dof());
-        let (tiles, stats) = assembler.assemble_on_device(problem, options, progress)?;
+        let (tiles, stats, storage) =
+            assembler.assemble_on_device(problem, options, storage, progress)?;
         progress.finish();
         let timings = assembler.last_timings();
         let traffic = DeviceTraffic {
             bytes_uploaded: timings.bytes_uploaded,
-            bytes_read_back: 0,
+            bytes_read_back: timings.bytes_read_back,
             gpu_submissions: timings.tiles as u64,
             device_wait_seconds: timings.device_wait_seconds,
         };
@@ -131,6 +136,7 @@ impl DeviceOperator {
             vectors: Mutex::new(None),
             traffic: Mutex::new(traffic),
             stats,
+            storage,
         })
     }
 

@@ -35,6 +35,7 @@ const COLLOCATION: &str = include_str!("../../shaders/collocation.wgsl");
 const MATH_TEST: &str = include_str!("../../shaders/math_test.wgsl");
 const MATVEC: &str = include_str!("../../shaders/matvec.wgsl");
 const BLOCKS: &str = include_str!("../../shaders/blocks.wgsl");
+const NARROW: &str = include_str!("../../shaders/narrow.wgsl");
 
 fn with_math(precision: Precision, body: &str) -> String {
     let (alias, math) = match precision {
@@ -71,6 +72,11 @@ pub fn matvec(precision: Precision) -> String {
 /// `block_rows`, `row_sums`).
 pub fn blocks() -> String {
     BLOCKS.to_string()
+}
+
+/// f64 tiles of K narrowed to f32 storage, with each row's norms (entry point `narrow_rows`).
+pub fn narrow() -> String {
+    NARROW.to_string()
 }
 
 /// The math-library test kernel (entry point `math_eval`).

@@ -174,6 +174,9 @@ pub struct RunConfig {
     pub emission: EmissionOptions,
     /// Where the matrix is assembled.
     pub backend: Backend,
+    /// Precision of a dense K kept in the GPU's memory (`--storage`): f64, or f32 on request
+    /// (half the memory and the products' reads; the error it adds is measured and reported).
+    pub storage: Precision,
     /// Linear solver and its tolerance.
     pub solver: SolverOptions,
     /// Where progress goes (nowhere by default).
@@ -219,6 +222,7 @@ impl RunConfig {
             assembly: AssemblyOptions::default(),
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
+            storage: Precision::F64,
             solver: SolverOptions::default(),
             progress: ProgressSink::default(),
             setup_repeats: 1,

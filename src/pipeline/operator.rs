@@ -138,11 +138,15 @@ pub struct DeviceTransfers {
     /// Host time spent waiting for the device.
     #[serde(skip)]
     pub device_wait_seconds: f64,
+    /// For an operator kept on the device, the precision of its entries there and what that
+    /// did to it (`storage`, `storage_error`, `storage_solution_bound`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub storage: Option<gpu::StorageError>,
 }
 
 impl DeviceTransfers {
-    /// An operator kept on the device, after `traffic`.
-    fn on_device(traffic: gpu::DeviceTraffic) -> Self {
+    /// An operator kept on the device in `storage`, after `traffic`.
+    fn on_device(traffic: gpu::DeviceTraffic, storage: gpu::StorageError) -> Self {
         Self {
             operator_location: "device",
             bytes_uploaded: traffic.bytes_uploaded,
@@ -150,6 +154,7 @@ impl DeviceTransfers {
             gpu_submissions: traffic.gpu_submissions,
             device_idle_fraction: 0.0,
             device_wait_seconds: traffic.device_wait_seconds,
+            storage: Some(storage),
         }
     }
 
@@ -253,6 +258,7 @@ impl BuiltOperator {
                     gpu_submissions: g.tiles as u64,
                     device_idle_fraction: 0.0,
                     device_wait_seconds: g.device_wait_seconds,
+                    storage: None,
                 }),
             },
             Self::Device { op, device, setup_seconds, preparation_seconds } => OperatorSummary {
@@ -264,7 +270,7 @@ impl BuiltOperator {
                 compression_tolerance: None,
                 operator_bytes: op.device_bytes(),
                 blocks: None,
-                transfers: Some(DeviceTransfers::on_device(op.traffic())),
+                transfers: Some(DeviceTransfers::on_device(op.traffic(), op.storage)),
             },
             Self::Compressed { op, on_device, setup_seconds, preparation_seconds } => {
                 OperatorSummary {
@@ -276,7 +282,9 @@ impl BuiltOperator {
                     compression_tolerance: Some(config.compression.tolerance),
                     operator_bytes: op.stats.operator_bytes,
                     blocks: Some(op.stats),
-                    transfers: on_device.as_ref().map(|b| DeviceTransfers::on_device(b.traffic())),
+                    transfers: on_device.as_ref().map(|b| {
+                        DeviceTransfers::on_device(b.traffic(), gpu::StorageError::none())
+                    }),
                 }
             }
         }
@@ -354,16 +362,19 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
         check_distributed(config, ranks.size())?;
     }
     if let Some(path) = &config.operator_file {
+        check_storage(config, true)?;
         return super::load_operator(path, config, problem);
     }
     let disc = &problem.disc;
-    if !compresses(config, problem) {
+    let compressed = compresses(config, problem);
+    check_storage(config, compressed)?;
+    if !compressed {
         if stays_on_device(config) {
             match assemble_on_device(config, problem) {
                 Ok(built) => return Ok(built),
-                Err(e) => config
-                    .progress
-                    .note(&format!("the matrix is kept on the host ({e}); the products run there")),
+                Err(e) => config.progress.note(&format!(
+                    "the matrix is kept on the host in f64 ({e}); the products run there"
+                )),
             }
         }
         return Ok(BuiltOperator::Dense(assemble_timed(config, problem)?));
@@ -439,6 +450,23 @@ fn stays_on_device(config: &RunConfig) -> bool {
         && config.solver.choice == solve::SolverChoice::Iterative
 }
 
+/// Refuses `--storage f32` where no dense K is kept in the GPU's memory: the storage is of
+/// that matrix (the CPU's matrix, LU's and the compressed operator's blocks are in f64).
+fn check_storage(config: &RunConfig, compressed: bool) -> Result<()> {
+    if config.storage == gpu::Precision::F64 || (!compressed && stays_on_device(config)) {
+        return Ok(());
+    }
+    let why = if config.operator_file.is_some() {
+        "a saved operator is applied in f64"
+    } else if compressed {
+        "the compressed operator is stored in f64; choose --operator dense"
+    } else {
+        "only a matrix kept on the GPU is stored in f32: it needs --backend gpu (f64 kernels) \
+         and --solver iterative"
+    };
+    Err(Error::InvalidParameter { name: "storage", value: "f32".into(), reason: why.into() })
+}
+
 /// K assembled on the GPU and left in its memory.
 fn assemble_on_device(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
     let started = Instant::now();
@@ -449,7 +477,8 @@ fn assemble_on_device(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
         unreachable!("a GPU backend gives the GPU's assembler")
     };
     let started = Instant::now();
-    let op = Box::new(DeviceOperator::assemble(gpu, problem, &config.assembly, &*config.progress)?);
+    let (options, progress) = (&config.assembly, &*config.progress);
+    let op = Box::new(DeviceOperator::assemble(gpu, problem, options, config.storage, progress)?);
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
     Ok(BuiltOperator::Device { op, device: assembler.device(), setup_seconds, preparation_seconds })
 }
