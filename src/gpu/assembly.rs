@@ -8,6 +8,7 @@
 //! the exceptions. Tiles are sized so no binding exceeds the device's limits, and the next tile is
 //! planned while the device works on the current one.
 
+use std::collections::VecDeque;
 use std::ops::Range;
 
 use glam::DVec2;
@@ -284,6 +285,10 @@ struct InFlight {
     _buffers: Vec<wgpu::Buffer>,
 }
 
+/// Tiles submitted and not yet collected, at most: while the host copies the oldest out of its
+/// staging buffer, the device computes the next ones and the host plans the one after.
+const TILES_IN_FLIGHT: usize = 3;
+
 /// Whether a submitted tile is copied out for the host, kept, or narrowed and kept.
 #[derive(Clone, Copy)]
 enum Keep<'n> {
@@ -507,21 +512,22 @@ impl<'a> GpuAssembler<'a> {
             Destination::Device(_, None) => Keep::Device,
             Destination::Device(_, Some(n)) => Keep::Narrowed(n),
         };
-        let mut in_flight: Option<InFlight> = None;
+        let mut in_flight: VecDeque<InFlight> = VecDeque::with_capacity(TILES_IN_FLIGHT);
         let mut next_plan = plan_next();
         while let Some(plan) = next_plan.take() {
             self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
             let submitted =
                 self.submit(&plan, disc, mesh, &uploaded, (max_binding, limits.near_pairs), keep)?;
-            if let Some(done) = in_flight.take() {
+            in_flight.push_back(submitted);
+            if in_flight.len() == TILES_IN_FLIGHT {
+                let done = in_flight.pop_front().expect("a tile in flight");
                 self.finish(done, &mut destination, progress)?;
             }
-            in_flight = Some(submitted);
-            // Plan the next tile while the device works on this one.
+            // Plan the next tile while the device works on those in flight.
             next_plan = plan_next();
         }
-        if let Some(done) = in_flight.take() {
+        while let Some(done) = in_flight.pop_front() {
             self.finish(done, &mut destination, progress)?;
         }
         let mut t = self.timings.lock().expect("timings lock");
