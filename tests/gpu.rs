@@ -409,6 +409,15 @@ fn the_compressed_operator_built_on_the_gpu_matches_the_one_built_on_the_cpu() {
         if far {
             assert!(v["far_blocks"].as_u64().unwrap() > 0, "{what}: no low-rank block: {v}");
         }
+        // The cross approximations advance together, a round of every block's next rows or
+        // columns per submission: fewer submissions than two per approximated block.
+        let approximated = ["far_blocks", "incompressible_blocks"].map(|k| v[k].as_u64().unwrap());
+        let submissions = gpu["gpu_submissions"].as_u64().unwrap();
+        assert!(submissions > 0, "{what}: {v}");
+        if approximated.iter().sum::<u64>() > 20 {
+            let most = 2 * approximated.iter().sum::<u64>();
+            assert!(submissions < most, "{what}: {submissions} submissions: {v}");
+        }
     }
 }
 

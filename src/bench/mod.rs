@@ -238,6 +238,9 @@ pub struct CompressedGpuBench {
     /// Largest relative difference of its products from the CPU-built operator's (three
     /// vectors, as `max_product_rel_diff`).
     pub max_product_rel_diff: f64,
+    /// Batches of pairs submitted to the GPU in its last build (the cross approximations
+    /// advance together: about 2k rounds for rank k, not per block).
+    pub gpu_submissions: u64,
 }
 
 /// The dense reference of [`run_compressed`] runs up to this many unknowns (1.2 GB).
@@ -269,13 +272,14 @@ pub fn run_compressed(
         builds.push((backend, op.expect("at least one repetition"), best));
     }
     let mut builds = builds.into_iter();
-    let (backend, op, best) = builds.next().expect("at least one backend");
-    let gpu = builds.next().map(|(other, other_op, seconds)| CompressedGpuBench {
+    let (backend, (op, _), best) = builds.next().expect("at least one backend");
+    let gpu = builds.next().map(|(other, (other_op, traffic), seconds)| CompressedGpuBench {
         device: other_op.device.clone(),
         precision: other.precision().name(),
         setup_seconds: seconds,
         speedup: best / seconds,
         max_product_rel_diff: other_op.max_product_difference(&|x| op.apply(x)),
+        gpu_submissions: traffic.map_or(0, |t| t.gpu_submissions),
     });
     let dof = disc.dof();
     let (dense_setup_seconds, max_product_rel_diff) = if dof <= DENSE_BENCH_LIMIT {

@@ -146,11 +146,12 @@ fn compressed(
     }
     if let Some(g) = &r.gpu {
         println!(
-            "compressed on the gpu ({}, {}): setup {:.3} s; speedup (cpu / gpu) {:.2}; products \
-             differ from the cpu's by {:.2e} (relative)",
+            "compressed on the gpu ({}, {}): setup {:.3} s in {} submissions; speedup (cpu / \
+             gpu) {:.2}; products differ from the cpu's by {:.2e} (relative)",
             g.device.as_deref().unwrap_or("?"),
             g.precision,
             g.setup_seconds,
+            g.gpu_submissions,
             g.speedup,
             g.max_product_rel_diff
         );

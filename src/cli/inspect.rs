@@ -78,7 +78,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
     let (row_sums, p, blocks, op) = if pipeline::compresses(&config, &problem) {
         let assembler =
             pipeline::Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
-        let op = pipeline::build_compressed(&config, &assembler, &problem)?;
+        let (op, _) = pipeline::build_compressed(&config, &assembler, &problem)?;
         (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats), Some(op))
     } else {
         let assembled = assemble_without_progress(&config, &problem)?;

@@ -3,11 +3,15 @@
 //! `assemble_pairs` kernel. Unlike the row tiles of [`super::assembly`], nothing here is n × n:
 //! a batch holds exactly the pairs asked for, each with its own view of the element's face.
 
+use std::sync::Mutex;
+use std::time::Instant;
+
 use rayon::prelude::*;
 
 use super::assembly::{GpuAssembler, RuleCounts, Uploaded};
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
+use super::resident::DeviceTraffic;
 use crate::assembly::{AssemblyOptions, CpuPairs, PairEvaluation, PairIntegrator, PairTask};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
@@ -34,6 +38,8 @@ pub struct PairEvaluator<'a> {
     tables: wgpu::Buffer,
     counts: RuleCounts,
     budget: u64,
+    /// What crossed: the elements once, then each batch's records up and values down.
+    traffic: Mutex<DeviceTraffic>,
 }
 
 impl<'a> PairEvaluator<'a> {
@@ -54,6 +60,8 @@ impl<'a> PairEvaluator<'a> {
         let Uploaded { unit, elements, tables, counts } = assembler.upload(scene, disc, options)?;
         let budget = assembler.max_binding().min(BATCH_BYTES);
         let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
+        let uploaded = elements.size() + tables.size();
+        let traffic = DeviceTraffic { bytes_uploaded: uploaded, ..Default::default() };
         Ok(Self {
             assembler,
             scene,
@@ -65,7 +73,13 @@ impl<'a> PairEvaluator<'a> {
             tables,
             counts,
             budget,
+            traffic: Mutex::new(traffic),
         })
+    }
+
+    /// What has crossed so far, and how many batches were submitted.
+    pub fn traffic(&self) -> DeviceTraffic {
+        *self.traffic.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// One batch: views, records and pieces up, `assemble_pairs`, values back.
@@ -155,7 +169,16 @@ impl<'a> PairEvaluator<'a> {
             }
             encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, size.max(16));
             ctx.queue.submit([encoder.finish()]);
-            compute::read_back(ctx, &staging, size, p)
+            let started = Instant::now();
+            let values = compute::read_back(ctx, &staging, size, p);
+            let waited = started.elapsed().as_secs_f64();
+            let up = [&params, &views, &records, &vertices].iter().map(|b| b.size()).sum::<u64>();
+            let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
+            t.bytes_uploaded += up;
+            t.bytes_read_back += size;
+            t.gpu_submissions += 1;
+            t.device_wait_seconds += waited;
+            values
         })??;
         for (o, v) in out.iter_mut().zip(values.chunks_exact(per)) {
             o[..per].copy_from_slice(v);

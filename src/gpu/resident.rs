@@ -24,10 +24,23 @@ pub struct DeviceTraffic {
     pub bytes_uploaded: u64,
     /// Bytes read back (the products).
     pub bytes_read_back: u64,
-    /// Command submissions (one per assembled tile, one per product).
+    /// Command submissions (one per assembled tile, per batch of pairs, per product).
     pub gpu_submissions: u64,
     /// Host time spent waiting for the device: the device was busy at least that long.
     pub device_wait_seconds: f64,
+}
+
+impl std::ops::Add for DeviceTraffic {
+    type Output = Self;
+
+    fn add(self, other: Self) -> Self {
+        Self {
+            bytes_uploaded: self.bytes_uploaded + other.bytes_uploaded,
+            bytes_read_back: self.bytes_read_back + other.bytes_read_back,
+            gpu_submissions: self.gpu_submissions + other.gpu_submissions,
+            device_wait_seconds: self.device_wait_seconds + other.device_wait_seconds,
+        }
+    }
 }
 
 /// One product's trip to the device and back, in one submission: `x` written to `x_buffer`,

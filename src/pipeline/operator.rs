@@ -86,6 +86,8 @@ pub enum BuiltOperator {
         /// Its blocks in the GPU's memory, where the run is on the GPU: GMRES's products run
         /// there.
         on_device: Option<Box<DeviceBlocks>>,
+        /// What crossed to the GPU and back while the GPU evaluated its entries.
+        build_traffic: Option<gpu::DeviceTraffic>,
         /// Its setup time (pair plan included).
         setup_seconds: f64,
         /// One-time preparation of the backend.
@@ -272,7 +274,26 @@ impl BuiltOperator {
                 blocks: None,
                 transfers: Some(DeviceTransfers::on_device(op.traffic(), op.storage)),
             },
-            Self::Compressed { op, on_device, setup_seconds, preparation_seconds } => {
+            Self::Compressed {
+                op,
+                on_device,
+                build_traffic,
+                setup_seconds,
+                preparation_seconds,
+            } => {
+                // The build's batches and the products' trips, where the GPU took part.
+                let transfers = match (on_device, build_traffic) {
+                    (Some(blocks), build) => Some(DeviceTransfers::on_device(
+                        build.unwrap_or_default() + blocks.traffic(),
+                        gpu::StorageError::none(),
+                    )),
+                    (None, Some(build)) => Some(DeviceTransfers {
+                        operator_location: "host",
+                        storage: None,
+                        ..DeviceTransfers::on_device(*build, gpu::StorageError::none())
+                    }),
+                    (None, None) => None,
+                };
                 OperatorSummary {
                     operator: "compressed",
                     device: op.device.clone(),
@@ -282,9 +303,7 @@ impl BuiltOperator {
                     compression_tolerance: Some(config.compression.tolerance),
                     operator_bytes: op.stats.operator_bytes,
                     blocks: Some(op.stats),
-                    transfers: on_device.as_ref().map(|b| {
-                        DeviceTransfers::on_device(b.traffic(), gpu::StorageError::none())
-                    }),
+                    transfers,
                 }
             }
         }
@@ -312,13 +331,13 @@ pub fn distributed_report(
 }
 
 /// The compressed operator of `config` for `problem`, its entries evaluated by `assembler` (the
-/// CPU, or the GPU's pair kernel in batches); refused where the configuration needs the dense
-/// matrix (LU).
+/// CPU, or the GPU's pair kernel in batches, with what crossed to the GPU and back and how many
+/// batches were submitted); refused where the configuration needs the dense matrix (LU).
 pub fn build_compressed(
     config: &RunConfig,
     assembler: &Assembler,
     problem: &Problem,
-) -> Result<CompressedOperator> {
+) -> Result<(CompressedOperator, Option<gpu::DeviceTraffic>)> {
     if config.solver.choice == solve::SolverChoice::Lu {
         return Err(Error::InvalidParameter {
             name: "solver",
@@ -351,7 +370,7 @@ pub fn build_compressed(
         None => CompressedOperator::build(problem, assembly, compression, batches, progress)?,
     };
     op.device = assembler.device();
-    Ok(op)
+    Ok((op, device.map(|d| d.traffic())))
 }
 
 /// The dense matrix (timed as [`assemble_timed`]) or, when `config.operator` asks for it at this
@@ -383,10 +402,16 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
     let assembler = Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
     let preparation_seconds = started.elapsed().as_secs_f64();
     let started = Instant::now();
-    let op = build_compressed(config, &assembler, problem)?;
+    let (op, build_traffic) = build_compressed(config, &assembler, problem)?;
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
     let on_device = blocks_on_device(config, &op);
-    Ok(BuiltOperator::Compressed { op, on_device, setup_seconds, preparation_seconds })
+    Ok(BuiltOperator::Compressed {
+        op,
+        on_device,
+        build_traffic,
+        setup_seconds,
+        preparation_seconds,
+    })
 }
 
 /// The compressed operator's blocks uploaded to the GPU for GMRES's products, where the run is

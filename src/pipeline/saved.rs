@@ -227,7 +227,13 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
             }
             let setup_seconds = started.elapsed().as_secs_f64();
             let on_device = super::operator::blocks_on_device(config, &op);
-            BuiltOperator::Compressed { op, on_device, setup_seconds, preparation_seconds: 0.0 }
+            BuiltOperator::Compressed {
+                op,
+                on_device,
+                build_traffic: None,
+                setup_seconds,
+                preparation_seconds: 0.0,
+            }
         }
         other => return Err(input.error(format!("damaged header: operator '{other}'"))),
     };
