@@ -14,8 +14,9 @@
 //!   plane, so that the integrand is smooth on every piece. An event at an edge that two
 //!   occluders share, seen on its plane from the same side of both (inside a solid's shadow),
 //!   changes nothing and is not cut along, nor one at a vertex all of whose edges are such.
-//!   Where a corner of T_j lies on T_i (a contact along part of an edge, a point contact), T_i
-//!   is also cut across there, so that the contact's ends are corners of pieces;
+//!   Where a corner of T_j lies on T_i (a contact along part of an edge, a point contact), or
+//!   an edge of T_j crosses an edge of T_i that lies in T_j's plane (where that contact ends),
+//!   T_i is also cut across there, so that the contact's ends are corners of pieces;
 //! - each piece keeps only the pair's occluders in its own shaft to T_j
 //!   ([`PairPlanner::polygon_shaft`]): none, and it sees T_j whole; one across that shaft, and it
 //!   sees nothing; otherwise each point's view is shadowed by those alone
@@ -26,7 +27,10 @@
 //!   Bernstein-ellipse bound), and again with one order more, whose difference is the error
 //!   estimate; the nested tensor tanh-sinh rule takes the triangles that touch T_j (d log d
 //!   behaviour beside a common edge), collapsed at the corner nearest a corner of T_j, with
-//!   Bailey's estimate from its last three levels (`kept_error`). The pair is globally
+//!   Bailey's estimate from its last three levels (`kept_error`); where points see T_j
+//!   clipped or shadowed, the triangle's four quarters are integrated too, their sum kept and
+//!   its difference from the whole's counted in the estimate (the levels of one rule can agree
+//!   while missing the integral). The pair is globally
 //!   adaptive: the patch with the largest estimate is split in four until the estimates
 //!   together are within `--tolerance` on F_ij. The estimates also find what the a priori order
 //!   does not see: the curved events of three mutually skew edges, which are not cut along.

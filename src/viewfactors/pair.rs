@@ -163,10 +163,9 @@ impl Context<'_> {
             let (n, o) = (fb.frame.normal, fb.frame.origin);
             pieces = pieces.iter().filter_map(|p| clip_polygon_3d(p, n, -n.dot(o))).collect();
         }
-        for (normal, point) in contact_cuts(&ei.vertices, &fa.frame, &ej.vertices, tol)
-            .into_iter()
-            .chain(event_planes(&ei.vertices, &ej.vertices, occluders, self.planner))
-        {
+        let (ti, tj) = ((&ei.vertices, &fa.frame), (&ej.vertices, &fb.frame));
+        let events = event_planes(&ei.vertices, &ej.vertices, occluders, self.planner);
+        for (normal, point) in contact_cuts(ti, tj, tol).into_iter().chain(events) {
             pieces = pieces.iter().flat_map(|p| split(p, normal, point)).collect();
         }
         pieces
@@ -387,7 +386,8 @@ impl Context<'_> {
             },
             evaluations: 0,
         };
-        let (value, error) = outer.integrate(t, 0);
+        let checked = matches!(part.sight, Sight::PerPoint(_));
+        let (value, error) = outer.integrate(t, checked);
         tally.evaluations += outer.evaluations;
         (area * value, area * error)
     }
