@@ -67,6 +67,18 @@ pub struct GpuTimings {
     pub read_back_gb_per_second: f64,
 }
 
+impl GpuTimings {
+    /// What crossed between host and device in the assembly: one submission per tile.
+    pub fn traffic(&self) -> super::DeviceTraffic {
+        super::DeviceTraffic {
+            bytes_uploaded: self.bytes_uploaded,
+            bytes_read_back: self.bytes_read_back,
+            gpu_submissions: self.tiles as u64,
+            device_wait_seconds: self.device_wait_seconds,
+        }
+    }
+}
+
 /// Compiled pipelines for one precision and collocation method.
 pub struct GpuAssembler<'a> {
     pub(super) ctx: &'a GpuContext,
@@ -375,12 +387,6 @@ impl<'a> GpuAssembler<'a> {
         Ok(Uploaded { unit, elements, tables, counts })
     }
 
-    /// Bytes one storage binding may hold on the device.
-    pub(super) fn max_binding(&self) -> u64 {
-        let limits = &self.ctx.limits;
-        limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
-    }
-
     /// Assembles K like [`crate::assembly::assemble`]. `progress` advances by the rows finished.
     pub fn assemble(
         &self,
@@ -465,7 +471,7 @@ impl<'a> GpuAssembler<'a> {
         let p = self.precision;
         let uploaded = self.upload(scene, disc, options)?;
         let unit = uploaded.unit;
-        let max_binding = self.max_binding().min(limits.binding_bytes);
+        let max_binding = ctx.max_binding().min(limits.binding_bytes);
         // Per row of a tile: its output and its views of every face (a scene of 10 000 faces has
         // 5 MB of views per row in f64, more than its output row).
         let row_bytes = (dof * p.bytes()) as u64;

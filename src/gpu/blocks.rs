@@ -65,13 +65,6 @@ impl std::fmt::Debug for DeviceBlocks {
 }
 
 impl DeviceBlocks {
-    /// The largest binding of the f64 device: what one part's values, indices or scratch may
-    /// take.
-    pub fn max_binding(ctx: &GpuContext) -> u64 {
-        let limits = &ctx.limits;
-        limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
-    }
-
     /// Uploads `parts` (for `dof` unknowns, `per` basis functions per element, rows and
     /// columns in `node_order` and `element_order`; the product is the sum of the parts'
     /// products); refused where the device lacks f64 or a buffer would pass its binding limit.
@@ -84,7 +77,7 @@ impl DeviceBlocks {
         if !ctx.adapter.f64 {
             return Err(Error::Gpu(format!("adapter '{}' has no SHADER_F64", ctx.adapter.name)));
         }
-        let max_binding = Self::max_binding(ctx);
+        let max_binding = ctx.max_binding();
         for arrays in parts {
             let values_bytes = 8 * arrays.values.len() as u64;
             let index_bytes = 4 * arrays.indices.len() as u64;
@@ -119,12 +112,7 @@ impl DeviceBlocks {
         let rows_grid = groups(dof.div_ceil(super::layout::WORKGROUP as usize));
         let (x, y, staging, parts) =
             compute::checked(ctx, "uploading the compressed operator", || {
-                let x = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("x"),
-                    size: (8 * dof as u64).max(16),
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+                let x = compute::input(ctx, 8 * dof as u64);
                 let (y, staging) = compute::output(ctx, 8 * dof as u64);
                 let parts = parts
                     .iter()

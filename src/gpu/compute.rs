@@ -116,6 +116,16 @@ pub fn writable(ctx: &GpuContext, size: u64) -> wgpu::Buffer {
     })
 }
 
+/// A read-only storage buffer of `size` bytes (at least 16) that the host writes to later.
+pub fn input(ctx: &GpuContext, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("in"),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 /// A writable storage buffer of `size` bytes that can be copied out, and its staging twin.
 pub fn output(ctx: &GpuContext, size: u64) -> (wgpu::Buffer, wgpu::Buffer) {
     let size = size.max(16);

@@ -57,6 +57,11 @@ fn rank(info: &wgpu::AdapterInfo) -> u32 {
 }
 
 impl GpuContext {
+    /// The largest buffer one binding may hold: what any kernel's buffer must stay within.
+    pub fn max_binding(&self) -> u64 {
+        self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
+    }
+
     /// Picks an adapter and creates the device; fails with [`Error::Gpu`] when none fits.
     pub fn new(request: &AdapterRequest) -> Result<Self> {
         pollster::block_on(Self::new_async(request))

@@ -58,7 +58,7 @@ impl<'a> PairEvaluator<'a> {
             )));
         }
         let Uploaded { unit, elements, tables, counts } = assembler.upload(scene, disc, options)?;
-        let budget = assembler.max_binding().min(BATCH_BYTES);
+        let budget = assembler.ctx.max_binding().min(BATCH_BYTES);
         let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
         let uploaded = elements.size() + tables.size();
         let traffic = DeviceTraffic { bytes_uploaded: uploaded, ..Default::default() };

@@ -132,13 +132,7 @@ impl DeviceOperator {
         let (tiles, stats, storage) =
             assembler.assemble_on_device(problem, options, storage, progress)?;
         progress.finish();
-        let timings = assembler.last_timings();
-        let traffic = DeviceTraffic {
-            bytes_uploaded: timings.bytes_uploaded,
-            bytes_read_back: timings.bytes_read_back,
-            gpu_submissions: timings.tiles as u64,
-            device_wait_seconds: timings.device_wait_seconds,
-        };
+        let traffic = assembler.last_timings().traffic();
         Ok(Self {
             ctx,
             dof: problem.disc.dof(),
@@ -213,12 +207,7 @@ impl DeviceOperator {
         let ctx = self.ctx;
         let bytes = (8 * m * self.dof) as u64;
         compute::checked(ctx, "the vectors of the product on the device", || {
-            let x = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("x"),
-                size: bytes.max(16),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            let x = compute::input(ctx, bytes);
             let (y, staging) = compute::output(ctx, bytes);
             let groups = self
                 .tiles

@@ -97,9 +97,7 @@ impl Narrowing {
             encoder.copy_buffer_to_buffer(&self.norms, 0, &self.staging, 0, bytes.max(16));
             ctx.queue.submit([encoder.finish()]);
         })?;
-        compute::wait(ctx, &self.staging, bytes)?;
-        let mut norms = vec![0.0; 2 * self.dof];
-        compute::copy_mapped(&self.staging, bytes, Precision::F64, &mut norms)?;
+        let norms = compute::read_back(ctx, &self.staging, bytes, Precision::F64)?;
         Ok((StorageError::from_row_norms(&norms), bytes))
     }
 }

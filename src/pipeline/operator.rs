@@ -147,16 +147,16 @@ pub struct DeviceTransfers {
 }
 
 impl DeviceTransfers {
-    /// An operator kept on the device in `storage`, after `traffic`.
-    fn on_device(traffic: gpu::DeviceTraffic, storage: gpu::StorageError) -> Self {
+    /// After `traffic`, of an operator kept on the device in `storage`, or read back (`None`).
+    fn new(traffic: gpu::DeviceTraffic, storage: Option<gpu::StorageError>) -> Self {
         Self {
-            operator_location: "device",
+            operator_location: if storage.is_some() { "device" } else { "host" },
             bytes_uploaded: traffic.bytes_uploaded,
             bytes_read_back: traffic.bytes_read_back,
             gpu_submissions: traffic.gpu_submissions,
             device_idle_fraction: 0.0,
             device_wait_seconds: traffic.device_wait_seconds,
-            storage: Some(storage),
+            storage,
         }
     }
 
@@ -253,15 +253,7 @@ impl BuiltOperator {
                 compression_tolerance: None,
                 operator_bytes: 8 * (dof as u64) * (dof as u64),
                 blocks: None,
-                transfers: t.gpu.map(|g| DeviceTransfers {
-                    operator_location: "host",
-                    bytes_uploaded: g.bytes_uploaded,
-                    bytes_read_back: g.bytes_read_back,
-                    gpu_submissions: g.tiles as u64,
-                    device_idle_fraction: 0.0,
-                    device_wait_seconds: g.device_wait_seconds,
-                    storage: None,
-                }),
+                transfers: t.gpu.map(|g| DeviceTransfers::new(g.traffic(), None)),
             },
             Self::Device { op, device, setup_seconds, preparation_seconds } => OperatorSummary {
                 operator: "dense",
@@ -272,7 +264,7 @@ impl BuiltOperator {
                 compression_tolerance: None,
                 operator_bytes: op.device_bytes(),
                 blocks: None,
-                transfers: Some(DeviceTransfers::on_device(op.traffic(), op.storage)),
+                transfers: Some(DeviceTransfers::new(op.traffic(), Some(op.storage))),
             },
             Self::Compressed {
                 op,
@@ -282,18 +274,11 @@ impl BuiltOperator {
                 preparation_seconds,
             } => {
                 // The build's batches and the products' trips, where the GPU took part.
-                let transfers = match (on_device, build_traffic) {
-                    (Some(blocks), build) => Some(DeviceTransfers::on_device(
-                        build.unwrap_or_default() + blocks.traffic(),
-                        gpu::StorageError::none(),
-                    )),
-                    (None, Some(build)) => Some(DeviceTransfers {
-                        operator_location: "host",
-                        storage: None,
-                        ..DeviceTransfers::on_device(*build, gpu::StorageError::none())
-                    }),
-                    (None, None) => None,
-                };
+                let transfers = (on_device.is_some() || build_traffic.is_some()).then(|| {
+                    let products = on_device.as_ref().map(|b| b.traffic()).unwrap_or_default();
+                    let storage = on_device.as_ref().map(|_| gpu::StorageError::none());
+                    DeviceTransfers::new(build_traffic.unwrap_or_default() + products, storage)
+                });
                 OperatorSummary {
                     operator: "compressed",
                     device: op.device.clone(),
@@ -443,7 +428,7 @@ pub fn compressed_on_device(
     max_binding: Option<u64>,
 ) -> Result<DeviceBlocks> {
     let ctx = gpu::context_for(gpu::Precision::F64)?;
-    let max_binding = max_binding.unwrap_or_else(|| DeviceBlocks::max_binding(ctx));
+    let max_binding = max_binding.unwrap_or_else(|| ctx.max_binding());
     let parts = op.packed_parts(max_binding).ok_or_else(|| {
         Error::Gpu(format!(
             "the compressed operator is distributed, a block passes the binding limit of \
