@@ -576,7 +576,7 @@ fn view_factors<'py>(
             Ok::<_, radiosity::Error>((f, summary))
         })
         .map_err(raised)?;
-    let csr = radiosity::report::Csr::from_dense(f.len(), f.len(), &f.matrix);
+    let csr = radiosity::report::Csr::from_view_factors(&f);
     let summary = serde_json::to_string(&summary).expect("the summary is JSON");
     Ok((
         csr.indptr.into_pyarray(py),

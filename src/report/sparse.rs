@@ -5,6 +5,7 @@
 use std::io::Write;
 
 use crate::error::Result;
+use crate::viewfactors::ViewFactors;
 
 /// A matrix in compressed sparse rows: row i's entries are `data[indptr[i]..indptr[i + 1]]`, in
 /// the columns `indices[...]`, increasing.
@@ -24,7 +25,8 @@ pub struct Csr {
 
 impl Csr {
     /// The non-zero entries of the row-major `rows` × `cols` matrix `values`.
-    pub fn from_dense(rows: usize, cols: usize, values: &[f64]) -> Self {
+    #[cfg(test)]
+    fn from_dense(rows: usize, cols: usize, values: &[f64]) -> Self {
         assert_eq!(values.len(), rows * cols, "a {rows} x {cols} matrix");
         let mut csr = Self { rows, cols, indptr: vec![0], indices: Vec::new(), data: Vec::new() };
         for row in values.chunks(cols.max(1)).take(rows) {
@@ -35,6 +37,18 @@ impl Csr {
             csr.indptr.push(csr.data.len() as i64);
         }
         csr
+    }
+
+    /// The non-zero view factors F_ij, as they are stored.
+    pub fn from_view_factors(f: &ViewFactors) -> Self {
+        let to_i64 = |k: usize| i64::try_from(k).expect("an index fits in i64");
+        Self {
+            rows: f.len(),
+            cols: f.len(),
+            indptr: f.row_starts.iter().map(|&k| to_i64(k)).collect(),
+            indices: f.columns.iter().map(|&j| i64::from(j)).collect(),
+            data: f.values.clone(),
+        }
     }
 
     /// Stored (non-zero) entries.

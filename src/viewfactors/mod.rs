@@ -100,11 +100,17 @@ impl ViewFactorOptions {
 /// the reported `error_estimate` then shows).
 pub const MAX_SPLITS: u32 = 6;
 
-/// The view factor matrix and its checks.
+/// The view factor matrix (its non-zero entries, row by row: memory follows what is seen, not
+/// n²) and its checks.
 #[derive(Clone, Debug)]
 pub struct ViewFactors {
-    /// F_ij, row-major n x n.
-    pub matrix: Vec<f64>,
+    /// Where row i's entries start in `columns` and `values`, and where the last row's end
+    /// (n + 1 offsets).
+    pub row_starts: Vec<usize>,
+    /// Column j of each non-zero F_ij, increasing within a row.
+    pub columns: Vec<u32>,
+    /// F_ij of each entry.
+    pub values: Vec<f64>,
     /// Element areas A_i.
     pub areas: Vec<f64>,
     /// Largest estimated error of an entry F_ij: the sum of its patches' estimates (the
@@ -163,7 +169,7 @@ impl ViewFactors {
 
     /// Entries that are not zero.
     pub fn nonzeros(&self) -> usize {
-        self.matrix.iter().filter(|&&v| v != 0.0).count()
+        self.values.len()
     }
 
     /// Whether there are no elements.
@@ -171,26 +177,47 @@ impl ViewFactors {
         self.areas.is_empty()
     }
 
+    /// Row i's non-zero entries: their columns and values.
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let range = self.row_starts[i]..self.row_starts[i + 1];
+        (&self.columns[range.clone()], &self.values[range])
+    }
+
     /// F_ij.
     pub fn get(&self, i: usize, j: usize) -> f64 {
-        self.matrix[i * self.len() + j]
+        let (columns, values) = self.row(i);
+        columns.binary_search(&(j as u32)).map_or(0.0, |k| values[k])
+    }
+
+    /// F as a dense row-major n x n matrix (n² values: for small scenes and dense outputs).
+    pub fn to_dense(&self) -> Vec<f64> {
+        let n = self.len();
+        let mut dense = vec![0.0; n * n];
+        for i in 0..n {
+            let (columns, values) = self.row(i);
+            for (&j, &v) in columns.iter().zip(values) {
+                dense[i * n + j as usize] = v;
+            }
+        }
+        dense
     }
 
     /// Smallest and largest row sum.
     pub fn row_sum_range(&self) -> (f64, f64) {
-        let n = self.len();
-        (0..n)
-            .map(|i| self.matrix[i * n..(i + 1) * n].iter().sum::<f64>())
+        (0..self.len())
+            .map(|i| self.row(i).1.iter().sum::<f64>())
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s), hi.max(s)))
     }
 
-    /// max |A_i F_ij - A_j F_ji| relative to the largest A_i F_ij.
+    /// max |A_i F_ij - A_j F_ji| relative to the largest A_i F_ij: over the stored entries, as
+    /// a pair with both entries zero adds nothing.
     pub fn reciprocity_error(&self) -> f64 {
-        let n = self.len();
         let (mut worst, mut scale) = (0.0f64, 0.0f64);
-        for i in 0..n {
-            for j in 0..n {
-                let (a, b) = (self.areas[i] * self.get(i, j), self.areas[j] * self.get(j, i));
+        for i in 0..self.len() {
+            let (columns, values) = self.row(i);
+            for (&j, &v) in columns.iter().zip(values) {
+                let j = j as usize;
+                let (a, b) = (self.areas[i] * v, self.areas[j] * self.get(j, i));
                 worst = worst.max((a - b).abs());
                 scale = scale.max(a.abs());
             }
@@ -201,23 +228,19 @@ impl ViewFactors {
     /// Face-to-face view factors: F_ab = (1/A_a) Σ_{i in a} A_i Σ_{j in b} F_ij.
     pub fn by_face(&self, mesh: &Mesh) -> Vec<Vec<f64>> {
         let faces = mesh.face_count();
-        (0..faces)
-            .map(|a| {
-                let ra = mesh.face_range(a);
-                let area: f64 = ra.clone().map(|i| self.areas[i]).sum();
-                (0..faces)
-                    .map(|b| {
-                        ra.clone()
-                            .map(|i| {
-                                self.areas[i]
-                                    * mesh.face_range(b).map(|j| self.get(i, j)).sum::<f64>()
-                            })
-                            .sum::<f64>()
-                            / area
-                    })
-                    .collect()
-            })
-            .collect()
+        let mut sums = vec![vec![0.0; faces]; faces];
+        let mut face_areas = vec![0.0; faces];
+        for (i, e) in mesh.elements().iter().enumerate() {
+            face_areas[e.face] += self.areas[i];
+            let (columns, values) = self.row(i);
+            for (&j, &v) in columns.iter().zip(values) {
+                sums[e.face][mesh.elements()[j as usize].face] += self.areas[i] * v;
+            }
+        }
+        for (row, area) in sums.iter_mut().zip(face_areas) {
+            row.iter_mut().for_each(|s| *s /= area);
+        }
+        sums
     }
 }
 
@@ -235,33 +258,43 @@ pub fn view_factors(
     let context = Context { scene, mesh, disc: &disc, planner, integrator: &integrator, options };
     let n = mesh.len();
     let faces = mesh.face_count();
-    let rows: Vec<(Vec<f64>, f64, u64)> = (0..n)
+    let rows: Vec<(Vec<(u32, f64)>, Tally)> = (0..n)
         .into_par_iter()
         .map(|i| {
-            let mut row = vec![0.0; n];
+            let mut row = Vec::new();
             let mut tally = Tally::default();
             // Whether any occluder can lie between the two faces: asked once per face.
             let mut occluded: Vec<Option<bool>> = vec![None; faces];
             let face = mesh.elements()[i].face;
-            for (j, entry) in row.iter_mut().enumerate() {
+            for j in 0..n {
                 let other = mesh.elements()[j].face;
                 let occluded = *occluded[other]
                     .get_or_insert_with(|| !planner.candidates(face, other).is_empty());
-                *entry = context.pair(i, j, occluded, &rules, &mut tally);
+                let value = context.pair(i, j, occluded, &rules, &mut tally);
+                if value != 0.0 {
+                    row.push((j as u32, value));
+                }
             }
             progress.advance(1);
-            (row, tally.error, tally.evaluations)
+            (row, tally)
         })
         .collect();
-    let mut matrix = Vec::with_capacity(n * n);
+    let nonzeros = rows.iter().map(|(row, _)| row.len()).sum();
+    let mut row_starts = Vec::with_capacity(n + 1);
+    row_starts.push(0);
+    let (mut columns, mut values) = (Vec::with_capacity(nonzeros), Vec::with_capacity(nonzeros));
     let (mut error_estimate, mut evaluations) = (0.0f64, 0);
-    for (row, e, k) in rows {
-        matrix.extend(row);
-        error_estimate = error_estimate.max(e);
-        evaluations += k;
+    for (row, tally) in rows {
+        for (j, v) in row {
+            columns.push(j);
+            values.push(v);
+        }
+        row_starts.push(columns.len());
+        error_estimate = error_estimate.max(tally.error);
+        evaluations += tally.evaluations;
     }
     let areas = mesh.elements().iter().map(Element::area).collect();
-    Ok(ViewFactors { matrix, areas, error_estimate, evaluations })
+    Ok(ViewFactors { row_starts, columns, values, areas, error_estimate, evaluations })
 }
 
 /// What the pairs of one computation share.

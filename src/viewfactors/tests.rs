@@ -137,7 +137,7 @@ fn a_partition_standing_on_a_floor_element_meets_a_loose_tolerance() {
     let (loose, tight) = (at(1e-6), at(1e-11));
     assert!(loose.error_estimate <= 1e-6, "{}", loose.error_estimate);
     assert!(tight.reciprocity_error() <= 1e-9, "{}", tight.reciprocity_error());
-    for (k, (a, b)) in loose.matrix.iter().zip(&tight.matrix).enumerate() {
+    for (k, (a, b)) in loose.to_dense().iter().zip(&tight.to_dense()).enumerate() {
         let (i, j) = (k / loose.len(), k % loose.len());
         assert!((a - b).abs() <= 1e-6, "F({i}, {j}) at 1e-6: {a}, converged {b}");
     }
