@@ -2,6 +2,7 @@
 //! part of T_j changes shape (occluders' planes, vertex–edge events) and where T_j touches T_i.
 
 use glam::DVec3;
+use smallvec::SmallVec;
 
 use crate::geometry::{self, PlaneFrame, SmallPolygon, bounding_box_3d};
 use crate::visibility::PairPlanner;
@@ -36,11 +37,13 @@ pub(super) fn event_planes(
             for k in 0..m {
                 let (e0, e1) = (edges[k], edges[(k + 1) % m]);
                 let wedge = Wedge { apex: v, d1: e0 - v, d2: e1 - v };
+                // The cheap tests first: most planes miss the viewer or the target.
                 if let Some(normal) = wedge.normal()
-                    && edge_owner.is_none_or(|o| twins.edge_may_outline(o, k, v))
-                    && vertex_owner.is_none_or(|o| twins.vertex_may_outline(o, l, e0, e1))
-                    && wedge.meets(viewer, side)
+                    && cuts(normal, v, viewer)
                     && (!matches!(side, EventSide::Either) || cuts(normal, v, target))
+                    && edge_owner.is_none_or(|o| twins.edge_may_outline(o, k, v))
+                    && wedge.meets(viewer, side)
+                    && vertex_owner.is_none_or(|o| twins.vertex_may_outline(o, l, e0, e1))
                 {
                     planes.push((normal, v));
                 }
@@ -170,10 +173,10 @@ impl Wedge {
     /// straddle the plane for the plane to split it at all).
     fn meets(&self, viewer: &[DVec3], side: EventSide) -> bool {
         let n = self.d1.cross(self.d2);
-        let h: Vec<f64> = viewer.iter().map(|&x| n.dot(x - self.apex)).collect();
+        let h: SmallVec<[f64; 4]> = viewer.iter().map(|&x| n.dot(x - self.apex)).collect();
         let m = viewer.len();
         // The segment where the plane cuts the viewer: the crossings of its edges.
-        let crossings: Vec<DVec3> = (0..m)
+        let crossings: SmallVec<[DVec3; 4]> = (0..m)
             .filter(|&k| (h[k] < 0.0) != (h[(k + 1) % m] < 0.0))
             .map(|k| {
                 let (a, b) = (viewer[k], viewer[(k + 1) % m]);
@@ -292,22 +295,24 @@ pub(super) fn centroid(poly: &[DVec3]) -> DVec3 {
     poly.iter().copied().sum::<DVec3>() / poly.len() as f64
 }
 
-/// The parts of the convex planar polygon `poly` on either side of a plane (those with area).
-pub(super) fn split(poly: &[DVec3], normal: DVec3, point: DVec3) -> Vec<Vec<DVec3>> {
+/// The parts of the convex planar polygon `poly` on either side of a plane (those with area),
+/// or `None` where the plane leaves it whole on one side (most planes do, beyond the tolerance
+/// of the clip, which would keep it whole on that side and drop it on the other).
+pub(super) fn split(poly: &[DVec3], normal: DVec3, point: DVec3) -> Option<Vec<Vec<DVec3>>> {
     let offset = -normal.dot(point);
-    // Most planes leave a piece on one side (beyond the tolerance of the clip, which would keep
-    // it whole on that side and drop it on the other).
     let (lo, hi) = bounding_box_3d(poly);
     let scale = (hi - lo).length();
     if geometry::wholly_inside_3d(poly, normal, offset, scale)
         || geometry::wholly_inside_3d(poly, -normal, -offset, scale)
     {
-        return vec![poly.to_vec()];
+        return None;
     }
-    [clip_polygon_3d(poly, normal, offset), clip_polygon_3d(poly, -normal, -offset)]
-        .into_iter()
-        .flatten()
-        .collect()
+    Some(
+        [clip_polygon_3d(poly, normal, offset), clip_polygon_3d(poly, -normal, -offset)]
+            .into_iter()
+            .flatten()
+            .collect(),
+    )
 }
 
 /// The convex planar polygon clipped to `normal·x + offset >= 0`, if anything with area is left.

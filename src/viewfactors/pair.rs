@@ -167,7 +167,14 @@ impl Context<'_> {
         let (ti, tj) = ((&ei.vertices, &fa.frame), (&ej.vertices, &fb.frame));
         let events = event_planes(&ei.vertices, &ej.vertices, occluders, self.planner);
         for (normal, point) in contact_cuts(ti, tj, tol).into_iter().chain(events) {
-            pieces = pieces.iter().flat_map(|p| split(p, normal, point)).collect();
+            let mut next = Vec::with_capacity(pieces.len() + 1);
+            for piece in pieces {
+                match split(&piece, normal, point) {
+                    Some(parts) => next.extend(parts),
+                    None => next.push(piece),
+                }
+            }
+            pieces = next;
         }
         pieces
     }
