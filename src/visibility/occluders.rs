@@ -6,6 +6,7 @@ use glam::DVec3;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree, SelectionFunction};
 use serde::Serialize;
+use smallvec::SmallVec;
 
 use super::solids::{Solid, convex_solids};
 use crate::geometry::PlaneFrame;
@@ -86,6 +87,27 @@ impl OccluderIndex {
         self.solid_of[o].filter(|&s| {
             let faces = &self.solids[s].faces;
             faces.binary_search(&a).is_err() && faces.binary_search(&b).is_err()
+        })
+    }
+
+    /// Whether a convex solid bounded by some of `pieces` (not one with a face of `a` or `b`)
+    /// hides every point of the convex hull of `from` from every point of that of `to`
+    /// ([`Solid::hides`]).
+    pub(super) fn solid_hides(
+        &self,
+        pieces: &[usize],
+        (a, b): (usize, usize),
+        from: &[DVec3],
+        to: &[DVec3],
+        tol: f64,
+    ) -> bool {
+        let mut tried: SmallVec<[usize; 8]> = SmallVec::new();
+        pieces.iter().filter_map(|&o| self.solid_for_view(o, a, b)).any(|s| {
+            if tried.contains(&s) {
+                return false;
+            }
+            tried.push(s);
+            self.solids[s].hides(from, to, tol)
         })
     }
 

@@ -11,8 +11,8 @@ impl PairPlanner {
     /// `elements` on face `b` (a block of the compressed operator, each box in front of the other
     /// face's plane) meet: nothing, when no occluder piece other than `a`'s and `b`'s reaches into
     /// the shaft (Haines and Wallace 1994), the convex hull of the two boxes in front of both
-    /// planes; one piece that every such segment crosses (the block is hidden); or something in
-    /// between. The shaft is bounded by supporting planes of the two boxes (their faces, and
+    /// planes; one piece that every such segment crosses, or a convex solid that hides one box
+    /// from the other (the block is hidden); or something in between. The shaft is bounded by supporting planes of the two boxes (their faces, and
     /// planes along each axis through corresponding corners), so the test only errs towards
     /// [`Shaft::Partial`].
     ///
@@ -27,12 +27,11 @@ impl PairPlanner {
         candidates: Option<&[usize]>,
     ) -> Shaft {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let mut found = self.occluders.inside(a, b, &volume, candidates).peekable();
-        if found.peek().is_none() {
+        let found: Vec<usize> = self.occluders.inside(a, b, &volume, candidates).collect();
+        if found.is_empty() {
             return Shaft::Clear;
         }
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        if found.any(|o| self.hides_shaft(o, &from, &to, tol)) {
+        if self.hides_shaft(&found, (a, b), &box_corners(nodes), &box_corners(elements), tol) {
             Shaft::Hidden
         } else {
             Shaft::Partial
@@ -56,8 +55,8 @@ impl PairPlanner {
         self.occluders.reaching(&volume, within).collect()
     }
 
-    /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether one
-    /// of them crosses every segment (hides the boxes from each other).
+    /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether they
+    /// hide the boxes from each other (one crossing every segment, or a convex solid).
     pub fn shaft_occluders(
         &self,
         a: usize,
@@ -67,15 +66,16 @@ impl PairPlanner {
     ) -> (Vec<usize>, bool) {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
         let found: Vec<usize> = self.occluders.inside(a, b, &volume, None).collect();
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        let hidden = found.iter().any(|&o| self.hides_shaft(o, &from, &to, tol));
+        let hidden =
+            self.hides_shaft(&found, (a, b), &box_corners(nodes), &box_corners(elements), tol);
         (found, hidden)
     }
 
     /// Those of `candidates` (occluder pieces, none of faces `a` and `b`) that may meet a
     /// segment from the convex polygon `from` on face `a` to the convex polygon `to` on face
     /// `b`, and whether one of them crosses every such segment (exactly: the crossings of the
-    /// corner segments span those of all). A piece is left out when a plane separates it from
+    /// corner segments span those of all) or a convex solid they bound hides one polygon from
+    /// the other. A piece is left out when a plane separates it from
     /// the segments: one of [`PairPlanner::shaft`]'s, or its own plane with both polygons on
     /// one side of it.
     pub fn polygon_shaft(
@@ -98,6 +98,9 @@ impl PairPlanner {
             }
             found.push(o);
         }
+        if self.occluders.solid_hides(&found, (a, b), from, to, tol) {
+            return (found, true);
+        }
         (found, false)
     }
 
@@ -116,10 +119,19 @@ impl PairPlanner {
         (volume, tol)
     }
 
-    /// Whether piece `occluder` crosses every segment between the boxes with corners `from` and
-    /// `to`.
-    fn hides_shaft(&self, occluder: usize, from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
-        self.occluders.pieces[occluder].crosses_every_segment(from, to, tol, tol)
+    /// Whether one of the pieces `found` crosses every segment between the boxes with corners
+    /// `from` and `to` (on faces `a` and `b`), or a convex solid that some of them bound hides
+    /// one box from the other.
+    fn hides_shaft(
+        &self,
+        found: &[usize],
+        faces: (usize, usize),
+        from: &[DVec3],
+        to: &[DVec3],
+        tol: f64,
+    ) -> bool {
+        found.iter().any(|&o| self.occluders.pieces[o].crosses_every_segment(from, to, tol, tol))
+            || self.occluders.solid_hides(found, faces, from, to, tol)
     }
 }
 
@@ -128,7 +140,7 @@ impl PairPlanner {
 pub enum Shaft {
     /// No occluder meets any segment.
     Clear,
-    /// One occluder crosses every segment.
+    /// One occluder crosses every segment, or a convex solid hides the boxes from each other.
     Hidden,
     /// Anything else.
     Partial,

@@ -24,6 +24,53 @@ pub(super) struct Solid {
     pub(super) faces: Vec<usize>,
     /// Its vertices, each once.
     pub(super) vertices: Vec<DVec3>,
+    /// Its pieces' planes, as an outward unit normal n and c with n·x <= c inside (no cap:
+    /// no segment of the scene crosses it).
+    planes: Vec<(DVec3, f64)>,
+}
+
+impl Solid {
+    /// Whether the solid hides every point of the convex hull of `from` from every point of the
+    /// convex hull of `to`: each set lies outside it (beyond one of its planes, or on it, within
+    /// `tol`), and every segment between their corners passes through its interior (deeper than
+    /// `tol`). For a fixed end q, the points p whose segment to q meets the interior of a convex
+    /// solid form a convex set (p1, p2 in it: the segment between the interior points on p1q
+    /// and p2q separates q from p1p2 within the triangle p1 p2 q, so every pq crosses it), so
+    /// the corners' segments decide for the hulls. A segment from outside that meets the
+    /// interior crosses one of the pieces on its way in (not the cap, which no segment of the
+    /// scene crosses): hidden by several occluders together, as a building hides the ground
+    /// behind it from a wall although no single wall crosses every segment.
+    pub(super) fn hides(&self, from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
+        let outside = |points: &[DVec3]| {
+            self.planes.iter().any(|&(n, c)| points.iter().all(|&x| n.dot(x) >= c - tol))
+        };
+        outside(from)
+            && outside(to)
+            && from.iter().all(|&p| to.iter().all(|&q| self.passes_inside(p, q, tol)))
+    }
+
+    /// Whether the segment from `p` to `q` meets the solid shrunk by `tol`: the parameters t of
+    /// p + t (q - p) inside each plane's half-space, intersected, leave an interval.
+    fn passes_inside(&self, p: DVec3, q: DVec3, tol: f64) -> bool {
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for &(n, c) in &self.planes {
+            // n·x(t) - c + tol < 0 on the part inside.
+            let (start, slope) = (n.dot(p) - c + tol, n.dot(q - p));
+            if slope == 0.0 {
+                if start >= 0.0 {
+                    return false;
+                }
+            } else if slope > 0.0 {
+                hi = hi.min(-start / slope);
+            } else {
+                lo = lo.max(-start / slope);
+            }
+            if lo >= hi {
+                return false;
+            }
+        }
+        true
+    }
 }
 
 /// The convex solids among `pieces`, and per piece the solid it bounds, if any.
@@ -122,10 +169,19 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
             group.iter().flat_map(|&k| pieces[k].faces.iter().copied()).collect();
         faces.sort_unstable();
         faces.dedup();
+        // The group's vertices lie on side `s` of piece g's plane: its outward normal is -s n.
+        let planes = group
+            .iter()
+            .zip(&sides)
+            .map(|(&g, &s)| {
+                let n = -s * pieces[g].normal();
+                (n, n.dot(pieces[g].polygon[0]))
+            })
+            .collect();
         for &k in &group {
             solid_of[k] = Some(solids.len());
         }
-        solids.push(Solid { faces, vertices });
+        solids.push(Solid { faces, vertices, planes });
     }
     (solids, solid_of)
 }

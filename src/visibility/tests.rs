@@ -485,3 +485,59 @@ fn a_shaft_tried_on_its_parent_s_candidates_finds_what_the_whole_scene_gives() {
     }
     assert!(tested > 100 && partial > 10 && hidden > 10, "{tested} {partial} {hidden}");
 }
+
+#[test]
+fn a_building_hides_what_no_single_wall_hides_and_ray_casting_confirms_it() {
+    // Boxes on pairs of a city's faces: where the shaft says hidden, every sampled segment
+    // between the boxes crosses a face; some of them are hidden only by a building as a whole
+    // (no single piece crosses every segment: they enter through a wall and leave through the
+    // roof, or pass behind two walls).
+    let city = crate::scene::city(4, 4).unwrap();
+    let planner = PairPlanner::new(&city);
+    let mut rng = StdRng::seed_from_u64(11);
+    let mut point_on = |f: &Face, rng: &mut StdRng| {
+        let (u, v): (f64, f64) = (rng.random(), rng.random());
+        let w = &f.vertices;
+        w[0] + (w[1] - w[0]) * u + (w[3] - w[0]) * v
+    };
+    let (mut hidden, mut by_solid_only) = (0, 0);
+    for a in 0..city.faces.len() {
+        for b in (0..city.faces.len()).filter(|b| (b * 5 + a * 3) % 7 == 0 && *b != a) {
+            let (fa, fb) = (&city.faces[a], &city.faces[b]);
+            let (p0, p1) = (point_on(fa, &mut rng), point_on(fa, &mut rng));
+            let (q0, q1) = (point_on(fb, &mut rng), point_on(fb, &mut rng));
+            let (nodes, elements) = ((p0.min(p1), p0.max(p1)), (q0.min(q1), q0.max(q1)));
+            if planner.shaft(a, b, nodes, elements, None) != Shaft::Hidden {
+                continue;
+            }
+            hidden += 1;
+            let (found, _) = planner.shaft_occluders(a, b, nodes, elements);
+            let tol = 1e-12 * planner.faces[a].size.max(planner.faces[b].size);
+            let corners = |(lo, hi): (DVec3, DVec3)| -> Vec<DVec3> {
+                (0..8)
+                    .map(|k| {
+                        DVec3::select(glam::BVec3::new(k & 1 == 1, k & 2 == 2, k & 4 == 4), hi, lo)
+                    })
+                    .collect()
+            };
+            let (from, to) = (corners(nodes), corners(elements));
+            let single = found
+                .iter()
+                .any(|&o| planner.occluders.pieces[o].crosses_every_segment(&from, &to, tol, tol));
+            by_solid_only += usize::from(!single);
+            for _ in 0..50 {
+                let in_box = |(lo, hi): (DVec3, DVec3), rng: &mut StdRng| {
+                    lo + (hi - lo) * DVec3::new(rng.random(), rng.random(), rng.random())
+                };
+                let (p, q) = (in_box(nodes, &mut rng), in_box(elements, &mut rng));
+                let blocked = city
+                    .faces
+                    .iter()
+                    .enumerate()
+                    .any(|(k, f)| k != a && k != b && segment_hits(p, q, &f.vertices));
+                assert!(blocked, "faces {a} and {b}: {p} to {q} crosses no face");
+            }
+        }
+    }
+    assert!(hidden > 50 && by_solid_only > 10, "{hidden} hidden, {by_solid_only} by a solid only");
+}
