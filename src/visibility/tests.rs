@@ -495,7 +495,7 @@ fn a_building_hides_what_no_single_wall_hides_and_ray_casting_confirms_it() {
     let city = crate::scene::city(4, 4).unwrap();
     let planner = PairPlanner::new(&city);
     let mut rng = StdRng::seed_from_u64(11);
-    let mut point_on = |f: &Face, rng: &mut StdRng| {
+    let point_on = |f: &Face, rng: &mut StdRng| {
         let (u, v): (f64, f64) = (rng.random(), rng.random());
         let w = &f.vertices;
         w[0] + (w[1] - w[0]) * u + (w[3] - w[0]) * v
