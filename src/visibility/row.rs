@@ -8,6 +8,8 @@
 //! elements, an unobstructed one shows them all whole without per-element work, and otherwise
 //! each element is clipped to its exactly visible part ([`PairPlanner::visible`]).
 
+use std::collections::HashMap;
+
 use glam::{DVec2, DVec3};
 
 use super::{FaceView, PairPlanner, PairStats, RecentHiders, SkipReason, Visibility};
@@ -34,25 +36,21 @@ pub enum Views<'a> {
     Kept(&'a mut KeptViews),
 }
 
-/// One viewer's views of the faces met so far, and its recent hiders.
+/// One viewer's views of the faces met so far, and its recent hiders. A node of a city meets
+/// thousands of faces over its cluster's blocks: looked up by face, not searched in a list
+/// (the search took 63 % of `city:20x20`'s compressed setup).
 #[derive(Debug, Default)]
 pub struct KeptViews {
-    views: Vec<(usize, FaceView)>,
+    views: HashMap<usize, FaceView>,
     hiders: RecentHiders,
 }
 
 impl KeptViews {
     fn view(&mut self, planner: &PairPlanner, viewer: &Viewer, face: usize) -> &FaceView {
-        let k = match self.views.iter().position(|(f, _)| *f == face) {
-            Some(k) => k,
-            None => {
-                let (p, n) = (viewer.position, viewer.normal);
-                let view = planner.face_view_with(p, n, viewer.face, face, &mut self.hiders);
-                self.views.push((face, view));
-                self.views.len() - 1
-            }
-        };
-        &self.views[k].1
+        self.views.entry(face).or_insert_with(|| {
+            let (p, n) = (viewer.position, viewer.normal);
+            planner.face_view_with(p, n, viewer.face, face, &mut self.hiders)
+        })
     }
 }
 
