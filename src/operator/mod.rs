@@ -147,10 +147,13 @@ pub struct CompressionOptions {
 
 impl Default for CompressionOptions {
     fn default() -> Self {
-        // eta 2 and mixed leaves of 8: at n = 163 840 the setup took 17.4 s and 1.69 GB instead
-        // of 23.5 s and 2.46 GB with eta 1 and leaves of 4 (docs/performance.md); eta 3 made no
-        // difference, leaves of 16 or 2 were slower.
-        Self { tolerance: DEFAULT_TOLERANCE, eta: 2.0, leaf_size: 32, mixed_leaf_size: 8 }
+        // eta 2: at n = 163 840 the setup took 17.4 s and 1.69 GB instead of 23.5 s and 2.46 GB
+        // with eta 1 (docs/performance.md); eta 3 made no difference. Mixed leaves of 16, since
+        // each node's views of the faces are kept for its cluster's blocks: five-piece refine 7
+        // 10.9 s and 1.54 GB against 14.0 s and 1.64 GB with 8, the furnished room (refine 4)
+        // 4.5 s against 5.9 s, city:20x20 4.7 s against 10.7 s (EPYC, 2026-11-26); 32 was
+        // faster on the rooms and the city but slower on the paper's surface.
+        Self { tolerance: DEFAULT_TOLERANCE, eta: 2.0, leaf_size: 32, mixed_leaf_size: 16 }
     }
 }
 
