@@ -252,8 +252,15 @@ impl Walk<'_> {
             plan.far.push((t, s));
             return None;
         }
-        // Smooth neighbours gain nothing from small leaves; where visibility varies they do.
-        let leaf = if class == PairClass::Smooth { self.options.leaf_size } else { 0 };
+        // Smooth neighbours gain nothing from small leaves; where visibility varies they do,
+        // down to the mixed leaf size, also where a cluster spans several faces (a city's
+        // faces hold two elements each: split to single faces, city:35x36 made 36 million
+        // empty blocks and took 255 s instead of 38 s).
+        let leaf = if class == PairClass::Smooth {
+            self.options.leaf_size
+        } else {
+            self.options.mixed_leaf_size
+        };
         let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
         let children = match (split(tc), split(sc)) {
             (None, None) => {
