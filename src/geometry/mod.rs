@@ -1,12 +1,15 @@
-//! Geometry: plane frames, 2-D convex polygons (clipping, subtraction) and 3-D polygon clipping.
+//! Geometry: plane frames, 2-D convex polygons (clipping, subtraction), 3-D polygon clipping and
+//! distances.
 //!
 //! Everything the pair plan and the kernels need to describe "the part of an element a node can see"
 //! lives here, in plain f64 arithmetic with no snapping, so that visible pieces are exact up to
 //! rounding (paper sec. 2.7: an O(h) error in a partially visible element destroys the rates).
 
+mod distance;
 mod frame;
 mod polygon;
 
+pub use distance::convex_polygons_distance;
 pub use frame::PlaneFrame;
 pub use polygon::{
     HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, clip_convex, clip_convex_into,
