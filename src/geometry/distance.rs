@@ -8,13 +8,15 @@ use glam::DVec3;
 pub fn convex_polygons_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
     let mut d = f64::INFINITY;
     for (p, q) in [(a, b), (b, a)] {
+        // q's plane, found once for all of p's corners and edges.
+        let plane = normal(q);
         let m = p.len();
         for k in 0..m {
             let (s0, s1) = (p[k], p[(k + 1) % m]);
-            if segment_crosses(s0, s1, q) {
+            if plane.is_some_and(|n| segment_crosses(s0, s1, q, n)) {
                 return 0.0;
             }
-            d = d.min(point_to_polygon(s0, q));
+            d = d.min(point_to_polygon(s0, q, plane));
             let l = q.len();
             for k in 0..l {
                 d = d.min(segment_distance((s0, s1), (q[k], q[(k + 1) % l])));
@@ -38,9 +40,9 @@ fn inside(x: DVec3, polygon: &[DVec3], n: DVec3) -> bool {
     (0..m).all(|k| (polygon[(k + 1) % m] - polygon[k]).cross(x - polygon[k]).dot(n) >= 0.0)
 }
 
-/// Distance from a point to a convex planar polygon.
-fn point_to_polygon(v: DVec3, polygon: &[DVec3]) -> f64 {
-    if let Some(n) = normal(polygon) {
+/// Distance from a point to a convex planar polygon with unit normal `plane` (`None`: no area).
+fn point_to_polygon(v: DVec3, polygon: &[DVec3], plane: Option<DVec3>) -> f64 {
+    if let Some(n) = plane {
         let h = n.dot(v - polygon[0]);
         if inside(v - n * h, polygon, n) {
             return h.abs();
@@ -52,10 +54,9 @@ fn point_to_polygon(v: DVec3, polygon: &[DVec3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Whether the segment from `s0` to `s1` crosses the plane of the convex `polygon` strictly
-/// (its ends on opposite sides) at a point inside it.
-fn segment_crosses(s0: DVec3, s1: DVec3, polygon: &[DVec3]) -> bool {
-    let Some(n) = normal(polygon) else { return false };
+/// Whether the segment from `s0` to `s1` crosses the plane of the convex `polygon` (unit
+/// normal `n`) strictly (its ends on opposite sides) at a point inside it.
+fn segment_crosses(s0: DVec3, s1: DVec3, polygon: &[DVec3], n: DVec3) -> bool {
     let (h0, h1) = (n.dot(s0 - polygon[0]), n.dot(s1 - polygon[0]));
     if h0 * h1 >= 0.0 {
         return false;
