@@ -12,9 +12,9 @@ impl PairPlanner {
     /// face's plane) meet: nothing, when no occluder piece other than `a`'s and `b`'s reaches into
     /// the shaft (Haines and Wallace 1994), the convex hull of the two boxes in front of both
     /// planes; one piece that every such segment crosses, or a convex solid that hides one box
-    /// from the other (the block is hidden); or something in between. The shaft is bounded by supporting planes of the two boxes (their faces, and
-    /// planes along each axis through corresponding corners), so the test only errs towards
-    /// [`Shaft::Partial`].
+    /// from the other (the block is hidden); or something in between. The shaft is bounded by
+    /// supporting planes of the two boxes (their faces, and planes along each axis through
+    /// corresponding corners), so the test only errs towards [`Shaft::Partial`].
     ///
     /// With `candidates` (those of [`PairPlanner::shaft_candidates`] for these boxes or boxes
     /// around them), only those are tried; every piece that can meet a segment is among them.
