@@ -13,7 +13,7 @@ use radiosity::error::Result;
 fn run(cli: Cli) -> Result<()> {
     let distributed = match &cli.command {
         Command::Solve(_) | Command::Inspect(_) | Command::Bench(_) => true,
-        Command::Study { id, .. } => id == "compression",
+        Command::Study(args) => args.id == "compression",
         _ => false,
     };
     if cli::world().is_some() && !distributed {
@@ -26,9 +26,7 @@ fn run(cli: Cli) -> Result<()> {
         });
     }
     match cli.command {
-        Command::Study { id, max_n, backend, precision, figures, json, markdown } => {
-            cli::study::run(&id, max_n, backend, precision, &figures, json.as_deref(), markdown)
-        }
+        Command::Study(args) => cli::study::run(&args),
         Command::Solve(args) => cli::solve::run(&args),
         Command::Inspect(args) => cli::inspect::inspect(&args),
         Command::Bench(args) => cli::bench::run_bench(&args),

@@ -522,6 +522,53 @@ fn the_compression_study_compares_every_tolerance_with_the_dense_solution() {
 }
 
 #[test]
+fn the_compression_study_runs_on_any_scene() {
+    // The furnished room (no true solution: its lamp's emission) at n = 1 152 and 4 608.
+    let dir = std::env::temp_dir().join(format!("radiosity-scene-study-{}", std::process::id()));
+    let v = json(&[
+        "study",
+        "compression",
+        "--scene",
+        "examples/furnished-room.toml",
+        "--tolerances",
+        "1e-6,1e-9",
+        "--max-n",
+        "5000",
+        "--figures",
+        dir.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    assert_eq!(v["scene"], "furnished-room", "{v}");
+    let rows = v["rows"].as_array().unwrap();
+    let ns: Vec<u64> = rows.iter().map(|r| r["n"].as_u64().unwrap()).collect();
+    assert_eq!(ns, [1152, 1152, 1152, 4608, 4608, 4608], "{v}");
+    for r in rows {
+        assert!(r["error"].is_null(), "no true solution, no E_n: {r}");
+        assert_eq!(r["method"], "centroid");
+    }
+    for r in rows.iter().filter(|r| r["operator"] == "compressed") {
+        let tol = r["compression_tolerance"].as_f64().unwrap();
+        let diff = r["difference_from_dense"].as_f64().unwrap();
+        assert!(diff <= 10.0 * tol, "{r}");
+    }
+    let fits = v["fits"].as_array().unwrap();
+    assert_eq!(fits.len(), 3, "dense and two tolerances: {v}");
+    assert!(fits.iter().all(|f| f["time_exponent"].as_f64().unwrap().is_finite()), "{v}");
+    assert!(dir.join("compression.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // The scene and the tolerances belong to this study alone; bad ones are named.
+    let (ok, _, stderr) = radiosity(&["study", "table-3.1", "--scene", "cube"]);
+    assert!(!ok && stderr.contains("--scene belongs to study compression"), "{stderr}");
+    let (ok, _, stderr) =
+        radiosity(&["study", "compression", "--scene", "cube", "--tolerances", "2"]);
+    assert!(!ok && stderr.contains("must lie in (0, 1)"), "{stderr}");
+    let (ok, _, stderr) = radiosity(&["study", "compression", "--scene", "no-such.toml"]);
+    assert!(!ok && stderr.contains("no-such.toml"), "{stderr}");
+}
+
+#[test]
 fn bench_times_the_compressed_operator_against_the_dense_one() {
     let v = json(&[
         "bench",

@@ -43,29 +43,7 @@ pub(crate) struct Cli {
 pub(crate) enum Command {
     /// Reproduce a table or figure of the paper, or run a study (ids: table-3.1 .. table-3.5,
     /// table-4.1, table-4.2, figure-3.4 .. figure-3.7, error-vs-time, grading)
-    Study {
-        /// Study id
-        id: String,
-        /// Largest number of elements n to run (default: the paper's largest)
-        #[arg(long)]
-        max_n: Option<usize>,
-        /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
-        /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
-        #[arg(long, value_enum)]
-        backend: Option<BackendArg>,
-        /// Precision of the GPU kernels with --backend gpu
-        #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
-        precision: PrecisionArg,
-        /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
-        #[arg(long, value_name = "DIR", default_value = "figures")]
-        figures: String,
-        /// Also write JSON to PATH; `-`: JSON on standard output instead of the text table
-        #[arg(long, value_name = "PATH")]
-        json: Option<String>,
-        /// Print Markdown tables instead of aligned text
-        #[arg(long)]
-        markdown: bool,
-    },
+    Study(StudyArgs),
     /// Solve one problem and report its error and timings
     Solve(SolveArgs),
     /// Matrix statistics: row sums of K/rho and pair-class counts
@@ -101,6 +79,39 @@ pub(crate) enum Command {
         #[arg(long, value_name = "PATH")]
         json: Option<String>,
     },
+}
+
+/// `radiosity study`'s arguments.
+#[derive(Args)]
+pub(crate) struct StudyArgs {
+    /// Study id
+    pub(crate) id: String,
+    /// Largest number of elements n to run (default: the paper's largest)
+    #[arg(long)]
+    pub(crate) max_n: Option<usize>,
+    /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
+    /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
+    #[arg(long, value_enum)]
+    pub(crate) backend: Option<BackendArg>,
+    /// Precision of the GPU kernels with --backend gpu
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    pub(crate) precision: PrecisionArg,
+    /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
+    #[arg(long, value_name = "DIR", default_value = "figures")]
+    pub(crate) figures: String,
+    /// Also write JSON to PATH; `-`: JSON on standard output instead of the text table
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+    /// Print Markdown tables instead of aligned text
+    #[arg(long)]
+    pub(crate) markdown: bool,
+    /// `study compression` on this scene (built-in name, city:NXxNY[:lit], or a .toml, .obj or
+    /// .stl file) instead of the five-piece surface: centroid method, the scene's own emission
+    #[arg(long)]
+    pub(crate) scene: Option<String>,
+    /// `study compression`'s tolerances, comma-separated [default: 1e-3,1e-6,1e-9]
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) tolerances: Option<Vec<f64>>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]

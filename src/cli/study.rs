@@ -1,25 +1,32 @@
 //! `radiosity study`: the paper's tables and figures, and the stability studies.
 
-use radiosity::error::Result;
+use radiosity::error::{Error, Result};
+use radiosity::pipeline::SceneSource;
 use radiosity::report;
 use radiosity::report::TableFormat;
+use radiosity::study::compression::{CompressionSeries, TOLERANCES, run_compression};
 use radiosity::study::{StudyDevice, StudyOptions};
 
 use super::output::emit;
 use super::*;
 
-/// Runs study `id` and prints it (JSON to `json` when given, and the table unless the JSON goes
-/// to standard output); plots go to `figures`.
-pub(crate) fn run(
-    id: &str,
-    max_n: Option<usize>,
-    device: Option<BackendArg>,
-    precision: PrecisionArg,
-    figures: &str,
-    json: Option<&str>,
-    markdown: bool,
-) -> Result<()> {
-    let device = match (device, backend(BackendArg::Gpu, precision)) {
+/// Runs the study `args.id` and prints it (JSON to `--json` when given, and the table unless
+/// the JSON goes to standard output); plots go to `--figures`.
+pub(crate) fn run(args: &StudyArgs) -> Result<()> {
+    let StudyArgs { id, max_n, backend: device, precision, figures, markdown, .. } = args;
+    let (id, max_n, markdown) = (id.as_str(), *max_n, *markdown);
+    let json = args.json.as_deref();
+    if id != "compression" {
+        let given = [("scene", args.scene.is_some()), ("tolerances", args.tolerances.is_some())];
+        if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
+            return Err(Error::InvalidParameter {
+                name: flag,
+                value: id.to_string(),
+                reason: format!("--{flag} belongs to study compression"),
+            });
+        }
+    }
+    let device = match (*device, backend(BackendArg::Gpu, *precision)) {
         (None, _) => StudyDevice::Auto,
         (Some(BackendArg::Cpu), _) => StudyDevice::Cpu,
         (Some(BackendArg::Gpu), b) => StudyDevice::Gpu(b.precision()),
@@ -39,12 +46,12 @@ pub(crate) fn run(
                 _ => radiosity::pipeline::Backend::Cpu,
             };
             let ranks = world();
-            let mut result = radiosity::study::compression::run_compression(
+            let series = CompressionSeries {
+                scene: args.scene.as_deref().map(SceneSource::parse).transpose()?,
                 max_n,
-                backend,
-                &progress,
-                ranks.as_ref(),
-            )?;
+                tolerances: args.tolerances.clone().unwrap_or(TOLERANCES.to_vec()),
+            };
+            let mut result = run_compression(&series, backend, &progress, ranks.as_ref())?;
             // Every rank ran the compressed operators; rank 0 holds the rows and prints them.
             if !is_root() {
                 return Ok(());

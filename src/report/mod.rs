@@ -205,7 +205,7 @@ pub fn compression_table(
                 r.dof.to_string(),
                 r.operator.to_string(),
                 opt(r.compression_tolerance),
-                format!("{:.6e}", r.error),
+                r.error.map_or("-".into(), |e| format!("{e:.6e}")),
                 opt(r.difference_from_dense),
                 format!("{:.2}", r.setup_seconds),
                 format!("{:.2}", r.solve_seconds),
@@ -227,7 +227,8 @@ pub fn compression_table(
         "operator MB",
         "max rank",
     ];
-    let mut s = plain_table("Compressed operator, five-piece surface", &header, &rows, format);
+    let title = format!("Compressed operator, {}", study.scene);
+    let mut s = plain_table(&title, &header, &rows, format);
     let fits: Vec<Vec<String>> = study
         .fits
         .iter()
@@ -257,12 +258,21 @@ pub fn compression_table(
     s
 }
 
-/// `study compression`'s plot: E_n against setup + solve time, one line per method and
-/// tolerance (and dense), written to `dir` as PNG and SVG.
+/// `study compression`'s plot, one line per method and tolerance (and dense), written to `dir`
+/// as PNG and SVG: E_n against setup + solve time where every run knows E_n (the paper's
+/// surfaces), else setup + solve time against n.
 pub fn write_compression_figure(
     study: &crate::study::compression::CompressionStudy,
     dir: &std::path::Path,
 ) -> Result<Vec<String>> {
+    let errors = study.rows.iter().all(|r| r.error.is_some());
+    let point = |r: &crate::study::compression::CompressionRow| {
+        let seconds = r.setup_seconds + r.solve_seconds;
+        match r.error {
+            Some(e) if errors => (seconds, e),
+            _ => (r.n as f64, seconds),
+        }
+    };
     let mut lines: Vec<plot::Line> = Vec::new();
     for fit_key in study.rows.iter().map(|r| (r.method, r.compression_tolerance)) {
         if lines.iter().any(|l| l.label == line_label(fit_key)) {
@@ -272,7 +282,7 @@ pub fn write_compression_figure(
             .rows
             .iter()
             .filter(|r| (r.method, r.compression_tolerance) == fit_key)
-            .map(|r| (r.setup_seconds + r.solve_seconds, r.error))
+            .map(point)
             .collect();
         let color = lines.len();
         lines.push(plot::Line {
@@ -284,9 +294,13 @@ pub fn write_compression_figure(
     }
     let figure = plot::Figure {
         panels: vec![plot::Panel {
-            caption: "Five-piece surface: E_n against run time".into(),
-            x_label: "setup + solve (s)".into(),
-            y_label: "E_n".into(),
+            caption: if errors {
+                format!("{}: E_n against run time", study.scene)
+            } else {
+                format!("{}: run time against n", study.scene)
+            },
+            x_label: if errors { "setup + solve (s)" } else { "n" }.into(),
+            y_label: if errors { "E_n" } else { "setup + solve (s)" }.into(),
             lines,
             front: Vec::new(),
         }],

@@ -1,15 +1,18 @@
-//! `study compression`: the compressed operator ([`crate::operator`]) on the five-piece surface
-//! as n grows, centroid and linear, at several tolerances, against the dense operator where that
-//! fits: E_n, the difference of the solutions, time, memory, and fitted growth exponents.
+//! `study compression`: the compressed operator ([`crate::operator`]) as n grows, at several
+//! tolerances, against the dense operator where that fits: E_n (where the true solution is
+//! known), the difference of the solutions, time, memory, and fitted growth exponents. On the
+//! five-piece surface by default (centroid and linear), or on any scene (`--scene`: centroid,
+//! its own emission, from the first refinement with [`SCENE_MIN_N`] elements).
 
 use serde::Serialize;
 
 use crate::discretization::Method;
 use crate::distributed::Ranks;
 use crate::error::{Error, Result};
-use crate::operator::{CompressionOptions, OperatorChoice};
-use crate::pipeline::{self, Backend, RunConfig};
-use crate::progress::ProgressSink;
+use crate::mesh::{Mesh, MeshKind};
+use crate::operator::{CompressionOptions, DEFAULT_TOLERANCE, OperatorChoice};
+use crate::pipeline::{self, Backend, RunConfig, SceneSource};
+use crate::progress::{ProgressSink, in_stage};
 use crate::scene::BuiltinScene;
 use crate::solve::{SolverChoice, SolverOptions};
 
@@ -22,8 +25,12 @@ pub const DENSE_LIMIT: usize = 12_288;
 /// Largest n by default: the runs up to it take a few minutes on two cores.
 pub const DEFAULT_MAX_N: usize = 40_960;
 
-/// Smallest n of the study.
+/// Smallest n of the study on the five-piece surface.
 const FIRST_REFINE: u32 = 4;
+
+/// On other scenes, the first refinement with at least this many elements: timings of smaller
+/// ones say little about growth.
+pub const SCENE_MIN_N: usize = 1_000;
 
 /// One run.
 #[derive(Clone, Debug, Serialize)]
@@ -40,8 +47,9 @@ pub struct CompressionRow {
     pub backend: &'static str,
     /// Tolerance of the compressed operator.
     pub compression_tolerance: Option<f64>,
-    /// E_n, the largest nodal error against u = x² + y².
-    pub error: f64,
+    /// E_n, the largest nodal error against u = x² + y² (none where no true solution is known:
+    /// scenes other than the paper's surfaces).
+    pub error: Option<f64>,
     /// `max |u - u_dense| / max |u_dense|`, where the dense run fits.
     pub difference_from_dense: Option<f64>,
     /// Building the operator.
@@ -81,6 +89,8 @@ pub struct GrowthFit {
 pub struct CompressionStudy {
     /// Study id.
     pub study: &'static str,
+    /// The scene (`five-piece` unless another was asked for).
+    pub scene: String,
     /// Every run.
     pub rows: Vec<CompressionRow>,
     /// Growth exponents per method and tolerance.
@@ -91,26 +101,57 @@ pub struct CompressionStudy {
     pub figures: Vec<String>,
 }
 
-/// Runs the study up to `max_n` elements (default [`DEFAULT_MAX_N`]), every operator built on
-/// `backend` (the GPU: the compressed operator's entries by its pair kernel). With `ranks` (a
-/// distributed run: every rank calls this) the compressed operators are spread over them and
-/// the dense references run at rank 0 alone, whose rows are the study's.
+/// What the study runs: on which scene, up to which n, at which tolerances.
+#[derive(Clone, Debug)]
+pub struct CompressionSeries {
+    /// The scene; `None`: the five-piece surface, both methods, against u = x² + y².
+    pub scene: Option<SceneSource>,
+    /// Largest number of elements (default [`DEFAULT_MAX_N`]).
+    pub max_n: Option<usize>,
+    /// Tolerances of the compressed runs (default [`TOLERANCES`]).
+    pub tolerances: Vec<f64>,
+}
+
+/// Runs the study of `series`, every operator built on `backend` (the GPU: the compressed
+/// operator's entries by its pair kernel). With `ranks` (a distributed run: every rank calls
+/// this) the compressed operators are spread over them and the dense references run at rank 0
+/// alone, whose rows are the study's.
 pub fn run_compression(
-    max_n: Option<usize>,
+    series: &CompressionSeries,
     backend: Backend,
     progress: &ProgressSink,
     ranks: Option<&Ranks>,
 ) -> Result<CompressionStudy> {
     let is_root = ranks.is_none_or(|r| r.rank() == 0);
-    let max_n = max_n.unwrap_or(DEFAULT_MAX_N);
+    let max_n = series.max_n.unwrap_or(DEFAULT_MAX_N);
+    for &t in &series.tolerances {
+        CompressionOptions { tolerance: t, ..Default::default() }.validate()?;
+    }
+    let paper = SceneSource::Builtin(BuiltinScene::FivePiece);
+    let source = series.scene.clone().unwrap_or(paper);
+    // The first refinement and n = n_0 4^refine: n_0 from the scene's coarsest mesh.
+    let (name, methods, first_refine, n0) = match &series.scene {
+        None => {
+            let methods = vec![Method::Centroid, Method::linear(Method::PAPER_ALPHA)?];
+            ("five-piece".to_string(), methods, FIRST_REFINE, 10)
+        }
+        Some(scene) => {
+            let built = in_stage(&**progress, "scene", || scene.build(Default::default()))?;
+            let n0 = Mesh::new(&built, &MeshKind::Uniform, 0)?.len();
+            let first = (0..12).find(|&r| n0 * 4usize.pow(r) >= SCENE_MIN_N.min(max_n));
+            (built.name.clone(), vec![Method::Centroid], first.unwrap_or(12), n0)
+        }
+    };
     let mut rows = Vec::new();
     let mut left_out = Vec::new();
-    for method in [Method::Centroid, Method::linear(Method::PAPER_ALPHA)?] {
-        // Five-piece: n = 10 · 4^refine.
-        for refine in (FIRST_REFINE..=12).take_while(|&r| 10 * 4usize.pow(r) <= max_n) {
-            let dof = 10 * 4usize.pow(refine) * method.nodes_per_element();
+    for method in methods {
+        for refine in (first_refine..=12).take_while(|&r| n0 * 4usize.pow(r) <= max_n) {
+            let dof = n0 * 4usize.pow(refine) * method.nodes_per_element();
             let config = |operator, tolerance| {
                 let mut c = RunConfig::paper(BuiltinScene::FivePiece, refine);
+                c.scene = source.clone();
+                // The paper's true solution on its surfaces; elsewhere the scene's emission.
+                c.solution = c.solution.filter(|_| source.is_paper_surface());
                 c.method = method;
                 c.backend = backend;
                 c.operator = operator;
@@ -123,14 +164,14 @@ pub fn run_compression(
             };
             let dense = if dof <= DENSE_LIMIT && is_root {
                 progress.note(&format!("compression study: {method}, dof = {dof}, dense"));
-                let r = pipeline::run(&config(OperatorChoice::Dense, TOLERANCES[0]))?;
+                let r = pipeline::run(&config(OperatorChoice::Dense, DEFAULT_TOLERANCE))?;
                 let row = row_of(&r, None, None);
                 rows.push(row);
                 Some(r.u)
             } else {
                 None
             };
-            for tolerance in TOLERANCES {
+            for &tolerance in &series.tolerances {
                 progress.note(&format!(
                     "compression study: {method}, dof = {dof}, tolerance {tolerance:.0e}"
                 ));
@@ -155,7 +196,14 @@ pub fn run_compression(
         }
     }
     let fits = growth_fits(&rows);
-    Ok(CompressionStudy { study: "compression", rows, fits, left_out, figures: Vec::new() })
+    Ok(CompressionStudy {
+        study: "compression",
+        scene: name,
+        rows,
+        fits,
+        left_out,
+        figures: Vec::new(),
+    })
 }
 
 fn row_of(
@@ -170,7 +218,7 @@ fn row_of(
         operator: r.operator,
         backend: r.label.backend,
         compression_tolerance: tolerance,
-        error: r.error.unwrap_or(f64::NAN),
+        error: r.error,
         difference_from_dense: difference,
         setup_seconds: r.setup_seconds,
         solve_seconds: r.solve_seconds,
