@@ -915,3 +915,48 @@ fn emission_files_that_do_not_fit_the_run_are_refused() {
         assert!(!ok && stderr.contains(says), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn occluded_scenes_compress_to_within_ten_times_the_tolerance_of_their_dense_matrix() {
+    // Rooms with furniture and slats, a lit city and a box around a floating cube: products of
+    // the compressed operator against the dense matrix's at 1e-6 and 1e-9 (three vectors, the
+    // ones among them), and in the closed scenes every row of K/rho summing to 1 (Lemma 2.1).
+    use radiosity::assembly::{AssemblyOptions, assemble};
+    use radiosity::operator::{CompressedOperator, CompressionOptions};
+    use radiosity::pipeline::{self, RunConfig, SceneSource};
+    use radiosity::progress::Silent;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let file = |name: &str| root.join(name).to_str().unwrap().to_string();
+    let cases = [
+        (file("examples/furnished-room.toml"), 3, true),
+        (file("examples/louvre-room.toml"), 3, true),
+        (file("examples/occluded-box.toml"), 3, true),
+        ("city:4x4:lit".to_string(), 2, false),
+    ];
+    for (scene, refine, closed) in cases {
+        let mut config = RunConfig::paper(radiosity::scene::BuiltinScene::Cube, refine);
+        config.scene = SceneSource::parse(&scene).unwrap();
+        config.solution = None;
+        let problem = pipeline::build(&config).unwrap();
+        let assembly = AssemblyOptions::default();
+        let k = assemble(&problem, &assembly, &Silent).unwrap().matrix;
+        for tolerance in [1e-6, 1e-9] {
+            let options = CompressionOptions { tolerance, ..Default::default() };
+            let op =
+                CompressedOperator::build(&problem, &assembly, &options, None, &Silent).unwrap();
+            let name = format!("{scene} refine {refine} at {tolerance:e}");
+            assert!(op.stats.far_blocks > 0, "{name}: nothing compressed: {:?}", op.stats);
+            let d = op.max_product_difference(&|x| k.apply(x));
+            assert!(d <= 10.0 * tolerance, "{name}: products differ by {d:.2e}");
+            if closed {
+                let sums = op.apply(&vec![1.0; problem.disc.dof()]);
+                for (node, sum) in problem.disc.nodes.iter().zip(sums) {
+                    if node.rho > 0.0 {
+                        let off = (sum / node.rho - 1.0).abs();
+                        assert!(off <= 10.0 * tolerance, "{name}: a row sums to 1 + {off:.1e}");
+                    }
+                }
+            }
+        }
+    }
+}
