@@ -83,6 +83,15 @@ pub fn real_bytes(values: &[f64], precision: Precision) -> Vec<u8> {
     }
 }
 
+/// The bytes of `values` in the given precision, borrowed where they are f64 already (no copy
+/// of a batch's views on their way to the device).
+pub fn reals_as_bytes(values: &[f64], precision: Precision) -> std::borrow::Cow<'_, [u8]> {
+    match precision {
+        Precision::F64 => std::borrow::Cow::Borrowed(bytemuck::cast_slice(values)),
+        Precision::F32 => std::borrow::Cow::Owned(real_bytes(values, precision)),
+    }
+}
+
 /// Reals from bytes in the given precision.
 pub fn reals_from_bytes(bytes: &[u8], precision: Precision) -> Vec<f64> {
     match precision {

@@ -40,6 +40,34 @@ pub struct PairEvaluator<'a> {
     budget: u64,
     /// What crossed: the elements once, then each batch's records up and values down.
     traffic: Mutex<DeviceTraffic>,
+    /// The batches' buffers, kept from one batch to the next.
+    buffers: Mutex<BatchBuffers>,
+}
+
+/// A batch's device buffers, made when first needed and again only when a batch outgrows them:
+/// a new set for every batch (four buffers of up to 64 MB each, thousands of batches on a large
+/// operator) spent the GPU build's time in allocation rather than in the kernels.
+#[derive(Default)]
+struct BatchBuffers {
+    views: Option<wgpu::Buffer>,
+    records: Option<wgpu::Buffer>,
+    vertices: Option<wgpu::Buffer>,
+    output: Option<(wgpu::Buffer, wgpu::Buffer)>,
+}
+
+/// `slot`'s buffer if it holds `size` bytes, else a new one from `make` of at least that size
+/// (the next power of two, so that growing batches do not make a buffer each).
+fn fitted<T>(
+    slot: &mut Option<T>,
+    size: u64,
+    capacity: impl Fn(&T) -> u64,
+    make: impl FnOnce(u64) -> T,
+) -> &T {
+    let size = size.max(16);
+    if slot.as_ref().is_none_or(|b| capacity(b) < size) {
+        *slot = Some(make(size.next_power_of_two()));
+    }
+    slot.as_ref().expect("made above")
 }
 
 impl<'a> PairEvaluator<'a> {
@@ -74,6 +102,7 @@ impl<'a> PairEvaluator<'a> {
             counts,
             budget,
             traffic: Mutex::new(traffic),
+            buffers: Mutex::new(BatchBuffers::default()),
         })
     }
 
@@ -122,6 +151,7 @@ impl<'a> PairEvaluator<'a> {
 
         let (ctx, p) = (self.assembler.ctx, self.assembler.precision);
         let per = disc.method.nodes_per_element();
+        let mut buffers = self.buffers.lock().unwrap_or_else(|e| e.into_inner());
         let values = compute::checked(ctx, "GPU pair evaluation", || {
             let (x, y, stride) = compute::grid(ctx, tasks.len() as u64);
             let params = Params {
@@ -139,26 +169,35 @@ impl<'a> PairEvaluator<'a> {
                 _pad: 0,
             };
             let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
-            let views = compute::storage(ctx, &layout::real_bytes(&views, p));
-            let records = compute::storage(ctx, bytemuck::cast_slice(&records));
-            let vertices = compute::storage(ctx, &layout::real_bytes(&vertices, p));
+            let BatchBuffers { views: v, records: r, vertices: w, output: o } = &mut *buffers;
+            let upload = |slot: &mut Option<wgpu::Buffer>, bytes: &[u8]| {
+                let buffer = fitted(slot, bytes.len() as u64, wgpu::Buffer::size, |size| {
+                    compute::input(ctx, size)
+                });
+                if !bytes.is_empty() {
+                    ctx.queue.write_buffer(buffer, 0, bytes);
+                }
+                bytes.len() as u64
+            };
+            let up = [
+                upload(v, &layout::reals_as_bytes(&views, p)),
+                upload(r, bytemuck::cast_slice(&records)),
+                upload(w, &layout::reals_as_bytes(&vertices, p)),
+            ];
+            let (views, records, vertices) = (
+                v.as_ref().expect("uploaded"),
+                r.as_ref().expect("uploaded"),
+                w.as_ref().expect("uploaded"),
+            );
             // Bound by the layout, unused by this kernel.
             let near = compute::storage(ctx, &[0u8; layout::NEAR_HEADER_BYTES as usize + 8]);
             let size = (tasks.len() * per * p.bytes()) as u64;
-            let (output, staging) = compute::output(ctx, size);
+            let (output, staging) =
+                fitted(o, size, |(out, _)| out.size(), |size| compute::output(ctx, size));
             let group = compute::bind_group(
                 ctx,
                 &self.assembler.layout,
-                &[
-                    &params,
-                    &views,
-                    &self.elements,
-                    &self.tables,
-                    &records,
-                    &vertices,
-                    &output,
-                    &near,
-                ],
+                &[&params, views, &self.elements, &self.tables, records, vertices, output, &near],
             );
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             {
@@ -167,14 +206,13 @@ impl<'a> PairEvaluator<'a> {
                 pass.set_bind_group(0, &group, &[]);
                 pass.dispatch_workgroups(x, y, 1);
             }
-            encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, size.max(16));
+            encoder.copy_buffer_to_buffer(output, 0, staging, 0, size.max(16));
             ctx.queue.submit([encoder.finish()]);
             let started = Instant::now();
-            let values = compute::read_back(ctx, &staging, size, p);
+            let values = compute::read_back(ctx, staging, size, p);
             let waited = started.elapsed().as_secs_f64();
-            let up = [&params, &views, &records, &vertices].iter().map(|b| b.size()).sum::<u64>();
             let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
-            t.bytes_uploaded += up;
+            t.bytes_uploaded += params.size() + up.iter().sum::<u64>();
             t.bytes_read_back += size;
             t.gpu_submissions += 1;
             t.device_wait_seconds += waited;

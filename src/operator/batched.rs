@@ -83,23 +83,21 @@ fn cross_approximate(
         for range in rounds(&sizes) {
             advance(entries, faces, device, &mut crossings[range])?;
         }
-        let mut running = Vec::with_capacity(crossings.len());
-        for x in crossings {
-            if x.aca.request().is_some() {
-                running.push(x);
-                continue;
-            }
-            match x.aca.finish() {
+        // On all cores: a large operator has hundreds of thousands of crossings, and the
+        // host's serial share bounds the GPU build.
+        let (running, finished): (Vec<Crossing>, Vec<Crossing>) =
+            crossings.into_par_iter().partition(|x| x.aca.request().is_some());
+        let finished: Vec<(usize, usize, Option<_>)> =
+            finished.into_par_iter().map(|x| (x.t, x.s, x.aca.finish())).collect();
+        for (t, s, lr) in finished {
+            match lr {
                 Some(lr) => {
                     guard.add(8 * lr.len() as u64);
-                    built.push((
-                        entries.block(x.t, x.s, BlockData::LowRank(lr)),
-                        PairStats::default(),
-                        false,
-                    ));
+                    let block = entries.block(t, s, BlockData::LowRank(lr));
+                    built.push((block, PairStats::default(), false));
                     progress.advance(1);
                 }
-                None => exact.push((x.t, x.s, true)),
+                None => exact.push((t, s, true)),
             }
         }
         crossings = running;
@@ -149,7 +147,8 @@ fn exact_blocks(
             })
             .collect();
         let offsets = offsets(planned.iter().map(|p| p.0.len()));
-        let tasks: Vec<PairTask> = planned.iter_mut().flat_map(|p| p.0.drain(..)).collect();
+        let tasks: Vec<PairTask> =
+            planned.par_iter_mut().flat_map_iter(|p| p.0.drain(..)).collect();
         let values = device.evaluate(&tasks)?;
         drop(tasks);
         let per = entries.per;
@@ -187,7 +186,7 @@ fn advance(
     let mut samples: Vec<(Vec<PairTask>, Vec<Slot>)> =
         crossings.par_iter().map(|x| sample(entries, faces, x)).collect();
     let offsets = offsets(samples.iter().map(|s| s.0.len()));
-    let tasks: Vec<PairTask> = samples.iter_mut().flat_map(|s| s.0.drain(..)).collect();
+    let tasks: Vec<PairTask> = samples.par_iter_mut().flat_map_iter(|s| s.0.drain(..)).collect();
     let values = device.evaluate(&tasks)?;
     crossings.par_iter_mut().zip(samples.par_iter()).zip(offsets.par_iter()).for_each(
         |((x, (_, slots)), &offset)| {
