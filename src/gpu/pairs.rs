@@ -126,7 +126,31 @@ impl<'a> PairEvaluator<'a> {
                 [p.x, p.y, p.z, n.x, n.y, n.z, node.rho / std::f64::consts::PI, 0.0]
             })
             .collect();
-        let (records, piece_offset, vertices) = self.records(tasks);
+        let mut records = Vec::with_capacity(4 * tasks.len());
+        let mut piece_records = Vec::new();
+        let mut vertices = Vec::new();
+        for (k, t) in tasks.iter().enumerate() {
+            let (first, count) = match &t.visible {
+                Visibility::Partial(pieces) => {
+                    let first = (piece_records.len() / 2) as u32;
+                    let c = disc.elements[t.element].centroid_in_face;
+                    for piece in pieces {
+                        piece_records
+                            .extend_from_slice(&[(vertices.len() / 2) as u32, piece.len() as u32]);
+                        vertices.extend(piece.iter().flat_map(|&q| {
+                            let q = (q - c) * unit;
+                            [q.x, q.y]
+                        }));
+                    }
+                    (first, pieces.len() as u32)
+                }
+                _ => (0, WHOLE_ELEMENT),
+            };
+            records.extend_from_slice(&[k as u32, t.element as u32, first, count]);
+        }
+        let piece_offset = records.len() as u32;
+        records.extend(piece_records);
+
         let (ctx, p) = (self.assembler.ctx, self.assembler.precision);
         let per = disc.method.nodes_per_element();
         let mut buffers = self.buffers.lock().unwrap_or_else(|e| e.into_inner());
@@ -201,88 +225,6 @@ impl<'a> PairEvaluator<'a> {
         }
         Ok(())
     }
-}
-
-impl PairEvaluator<'_> {
-    /// A batch's records (task, element, first piece, piece count; the pieces' first vertex
-    /// and count after them, from the returned offset) and the pieces' vertices (element-centred
-    /// face coordinates, scaled), built on all cores: one thread building them took a third of
-    /// the compressed operator's GPU build on a 16-core host.
-    fn records(&self, tasks: &[PairTask]) -> (Vec<u32>, u32, Vec<f64>) {
-        const CHUNK: usize = 4096;
-        let pieces_of = |t: &PairTask| match &t.visible {
-            Visibility::Partial(pieces) => (pieces.len(), pieces.iter().map(Vec::len).sum()),
-            _ => (0, 0),
-        };
-        // Pieces and vertices per chunk of tasks, and where each chunk's start.
-        let totals: Vec<(usize, usize)> = tasks
-            .par_chunks(CHUNK)
-            .map(|chunk| chunk.iter().map(pieces_of).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1)))
-            .collect();
-        let starts: Vec<(usize, usize)> = offsets(&totals);
-        let (pieces, points) = totals.iter().fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        let mut words = vec![0u32; 4 * tasks.len() + 2 * pieces];
-        let mut vertices = vec![0.0; 2 * points];
-        let (records, mut piece_words) = words.split_at_mut(4 * tasks.len());
-        let mut vertex_values = &mut vertices[..];
-        let mut parts = Vec::with_capacity(totals.len());
-        for &(p, v) in &totals {
-            let (here, rest) = std::mem::take(&mut piece_words).split_at_mut(2 * p);
-            let (points_here, points_rest) = std::mem::take(&mut vertex_values).split_at_mut(2 * v);
-            parts.push((here, points_here));
-            (piece_words, vertex_values) = (rest, points_rest);
-        }
-        let (disc, unit) = (self.disc, self.unit);
-        records
-            .par_chunks_mut(4 * CHUNK)
-            .zip(tasks.par_chunks(CHUNK))
-            .zip(parts.into_par_iter().zip(starts.par_iter()))
-            .enumerate()
-            .for_each(|(c, ((records, chunk), ((piece_words, points), &(p0, v0))))| {
-                let (mut p, mut v) = (0, 0);
-                for (k, t) in chunk.iter().enumerate() {
-                    let (first, count) = match &t.visible {
-                        Visibility::Partial(pieces) => {
-                            let first = (p0 + p) as u32;
-                            let centre = disc.elements[t.element].centroid_in_face;
-                            for piece in pieces {
-                                piece_words[2 * p] = (v0 + v) as u32;
-                                piece_words[2 * p + 1] = piece.len() as u32;
-                                p += 1;
-                                for &q in piece {
-                                    let q = (q - centre) * unit;
-                                    points[2 * v] = q.x;
-                                    points[2 * v + 1] = q.y;
-                                    v += 1;
-                                }
-                            }
-                            (first, pieces.len() as u32)
-                        }
-                        _ => (0, WHOLE_ELEMENT),
-                    };
-                    let index = (c * CHUNK + k) as u32;
-                    records[4 * k..4 * k + 4].copy_from_slice(&[
-                        index,
-                        t.element as u32,
-                        first,
-                        count,
-                    ]);
-                }
-            });
-        (words, (4 * tasks.len()) as u32, vertices)
-    }
-}
-
-/// Where each of a sequence of (pieces, vertices) counts starts in their running sums.
-fn offsets(counts: &[(usize, usize)]) -> Vec<(usize, usize)> {
-    counts
-        .iter()
-        .scan((0, 0), |next, &(p, v)| {
-            let at = *next;
-            *next = (next.0 + p, next.1 + v);
-            Some(at)
-        })
-        .collect()
 }
 
 impl PairEvaluation for PairEvaluator<'_> {

@@ -83,8 +83,8 @@ fn cross_approximate(
         for range in rounds(&sizes) {
             advance(entries, faces, device, &mut crossings[range])?;
         }
-        // On all cores: a large operator has hundreds of thousands of crossings, and the
-        // host's serial share bounds the GPU build.
+        // Finishing a block transposes its factors: on all cores, as a large operator has
+        // hundreds of thousands of them.
         let (running, finished): (Vec<Crossing>, Vec<Crossing>) =
             crossings.into_par_iter().partition(|x| x.aca.request().is_some());
         let finished: Vec<(usize, usize, Option<_>)> =
@@ -147,8 +147,7 @@ fn exact_blocks(
             })
             .collect();
         let offsets = offsets(planned.iter().map(|p| p.0.len()));
-        let tasks: Vec<PairTask> =
-            planned.par_iter_mut().flat_map_iter(|p| p.0.drain(..)).collect();
+        let tasks: Vec<PairTask> = planned.iter_mut().flat_map(|p| p.0.drain(..)).collect();
         let values = device.evaluate(&tasks)?;
         drop(tasks);
         let per = entries.per;
@@ -186,7 +185,7 @@ fn advance(
     let mut samples: Vec<(Vec<PairTask>, Vec<Slot>)> =
         crossings.par_iter().map(|x| sample(entries, faces, x)).collect();
     let offsets = offsets(samples.iter().map(|s| s.0.len()));
-    let tasks: Vec<PairTask> = samples.par_iter_mut().flat_map_iter(|s| s.0.drain(..)).collect();
+    let tasks: Vec<PairTask> = samples.iter_mut().flat_map(|s| s.0.drain(..)).collect();
     let values = device.evaluate(&tasks)?;
     crossings.par_iter_mut().zip(samples.par_iter()).zip(offsets.par_iter()).for_each(
         |((x, (_, slots)), &offset)| {
