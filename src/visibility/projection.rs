@@ -162,18 +162,47 @@ const PROJECTION_REACH: f64 = 0.9;
 /// building's far side, inside those of its near side).
 #[derive(Default)]
 pub(super) struct ShadowSet {
-    /// Each shadow with an outline that holds it: the whole projection of its occluder when
-    /// known (whose part in the window is the shadow), else the shadow itself.
-    pub(super) casts: Vec<(SmallPolygon<DVec2>, Vec<DVec2>)>,
+    /// The shadows kept, each with an outline that holds it ([`Cast`]).
+    pub(super) casts: Vec<Cast>,
     /// The convex solids met so far, and whether each was cast whole.
     solids: SmallVec<[(usize, bool); 4]>,
+}
+
+/// A shadow with an outline that holds it: the whole projection of its occluder when known
+/// (whose part in the window is the shadow), else the shadow itself; and the boxes that let
+/// most containment tests end at four comparisons (a view over a large face, a sky over a
+/// city, keeps hundreds of shadows, and each new one is tested against them all).
+pub(super) struct Cast {
+    outline: SmallPolygon<DVec2>,
+    /// The outline's box, grown by [`convex_contains`]'s tolerance: a polygon that it holds
+    /// lies in this box.
+    reach: (DVec2, DVec2),
+    shadow: Vec<DVec2>,
+    shadow_box: (DVec2, DVec2),
+}
+
+/// Whether the box `inner` lies in the box `outer`.
+fn box_inside((ilo, ihi): (DVec2, DVec2), (olo, ohi): (DVec2, DVec2)) -> bool {
+    ilo.cmpge(olo).all() && ihi.cmple(ohi).all()
+}
+
+/// The box of `outline` grown beyond the tolerance of [`convex_contains`] (1e-13 of the
+/// polygon's diagonal past each side, which reaches further out at a sharp corner: 1e-9 covers
+/// corners down to 0.01 degrees).
+fn reach_of(outline: &[DVec2]) -> (DVec2, DVec2) {
+    let (lo, hi) = bounding_box(outline);
+    let grow = DVec2::splat(1e-9 * (hi - lo).length());
+    (lo - grow, hi + grow)
 }
 
 impl ShadowSet {
     /// Whether one of the outlines holds the convex `polygon` (boundary included, up to the
     /// rounding tolerance of [`convex_contains`]).
     fn holds(&self, polygon: &[DVec2]) -> bool {
-        self.casts.iter().any(|(outline, _)| convex_contains(outline, polygon))
+        let bounds = bounding_box(polygon);
+        self.casts
+            .iter()
+            .any(|c| box_inside(bounds, c.reach) && convex_contains(&c.outline, polygon))
     }
 
     /// Adds `shadow` (with its occluder's whole projection, if known) unless an outline holds
@@ -183,12 +212,15 @@ impl ShadowSet {
             return;
         }
         let outline = projection.unwrap_or_else(|| shadow.iter().copied().collect());
-        self.casts.retain(|(_, s)| !convex_contains(&outline, s));
-        self.casts.push((outline, shadow));
+        let reach = reach_of(&outline);
+        self.casts
+            .retain(|c| !(box_inside(c.shadow_box, reach) && convex_contains(&outline, &c.shadow)));
+        let shadow_box = bounding_box(&shadow);
+        self.casts.push(Cast { outline, reach, shadow, shadow_box });
     }
 
     pub(super) fn into_shadows(self) -> Vec<Vec<DVec2>> {
-        self.casts.into_iter().map(|(_, s)| s).collect()
+        self.casts.into_iter().map(|c| c.shadow).collect()
     }
 }
 
