@@ -243,7 +243,8 @@ pub(crate) struct OperatorArgs {
     /// low-rank blocks far), or auto (compressed above 12 000 unknowns)
     #[arg(long, value_enum, default_value_t = OperatorArg::Auto)]
     pub(crate) operator: OperatorArg,
-    /// Relative error of each low-rank block of the compressed operator, in (0, 1)
+    /// Relative error of each low-rank block of the compressed operator, in (0, 1): its cross
+    /// approximation's, and half as much again from its recompression
     #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
     pub(crate) compression_tolerance: f64,
     /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
