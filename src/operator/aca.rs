@@ -336,15 +336,15 @@ fn recompressed(m: usize, c: usize, us: &[Vec<f64>], vs: &[Vec<f64>], drop: f64)
 
 /// `a · b` in four interleaved partial sums, which the compiler keeps in vector registers (a
 /// single running sum is a chain of dependent additions); the order of the additions is fixed,
-/// so the result is the same on every run.
-pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+/// so the result is the same on every run. `a` may be stored in f32 (taken to f64 as read).
+pub(super) fn dot<T: Copy + Into<f64>>(a: &[T], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a4, b4) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
-    let tail: f64 = a4.remainder().iter().zip(b4.remainder()).map(|(x, y)| x * y).sum();
+    let tail: f64 = a4.remainder().iter().zip(b4.remainder()).map(|(&x, y)| x.into() * y).sum();
     let mut s = [0.0; 4];
     for (x, y) in a4.zip(b4) {
         for l in 0..4 {
-            s[l] += x[l] * y[l];
+            s[l] += x[l].into() * y[l];
         }
     }
     (s[0] + s[2]) + (s[1] + s[3]) + tail

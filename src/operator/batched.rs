@@ -92,8 +92,8 @@ fn cross_approximate(
         for (t, s, lr) in finished {
             match lr {
                 Some(lr) => {
-                    guard.add(8 * lr.len() as u64);
-                    let block = entries.block(t, s, BlockData::LowRank(lr));
+                    let block = entries.block(t, s, BlockData::low_rank(lr, entries.precision));
+                    guard.add(block.bytes());
                     built.push((block, PairStats::default(), false));
                     progress.advance(1);
                 }
@@ -161,8 +161,8 @@ fn exact_blocks(
                 for (&a, v) in at.iter().zip(&values[offset..]) {
                     data[a..a + per].copy_from_slice(&v[..per]);
                 }
-                let mut block = entries.block(t, s, BlockData::Dense(data));
-                block.compact();
+                let mut block = entries.block(t, s, BlockData::exact(data));
+                block.compact(entries.precision);
                 (block, *stats, incompressible)
             })
             .collect();

@@ -24,8 +24,10 @@ pub mod cluster;
 pub mod packed;
 mod saved;
 mod share;
+mod stored;
 
 pub use saved::{BinaryReader, BinaryWriter};
+pub use stored::{F32_FROM_TOLERANCE, Precision};
 
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -43,9 +45,9 @@ use crate::mesh::Mesh;
 use crate::progress::{Progress, in_stage};
 use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face};
 
-use aca::LowRank;
 use blocks::{BlockPlan, FacePairs};
 use cluster::{ClusterTree, Item};
+use stored::BlockData;
 
 /// Which operator a run stores.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -278,110 +280,6 @@ struct Block {
     data: BlockData,
 }
 
-#[derive(Clone, Debug)]
-enum BlockData {
-    /// Row-major, rows × (elements · per).
-    Dense(Vec<f64>),
-    /// An exact block most of whose pairs are hidden: its non-zero entries row by row.
-    Sparse(SparseRows),
-    LowRank(LowRank),
-}
-
-impl BlockData {
-    /// `y += B x`.
-    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
-        match self {
-            BlockData::Dense(d) => {
-                for (yi, row) in y.iter_mut().zip(d.chunks_exact(x.len())) {
-                    *yi += aca::dot(row, x);
-                }
-            }
-            BlockData::Sparse(rows) => rows.apply_add(x, y),
-            BlockData::LowRank(lr) => lr.apply_add(x, y),
-        }
-    }
-
-    /// `y += B x` for `m` vectors interleaved: `x[c * m + v]`, `y[r * m + v]`.
-    fn apply_add_many(&self, x: &[f64], y: &mut [f64], m: usize) {
-        let c = x.len() / m;
-        let axpy = |y: &mut [f64], a: f64, x: &[f64]| {
-            y.iter_mut().zip(x).for_each(|(y, x)| *y += a * x);
-        };
-        match self {
-            BlockData::Dense(d) => {
-                for (row, y) in d.chunks_exact(c.max(1)).zip(y.chunks_exact_mut(m)) {
-                    for (&a, x) in row.iter().zip(x.chunks_exact(m)) {
-                        axpy(y, a, x);
-                    }
-                }
-            }
-            BlockData::Sparse(rows) => {
-                for (r, y) in y.chunks_exact_mut(m).enumerate() {
-                    let range = rows.starts[r] as usize..rows.starts[r + 1] as usize;
-                    for (&col, &a) in rows.columns[range.clone()].iter().zip(&rows.values[range]) {
-                        axpy(y, a, &x[col as usize * m..(col as usize + 1) * m]);
-                    }
-                }
-            }
-            BlockData::LowRank(lr) => {
-                // t = V^T x (k x m), then y += U t.
-                let mut t = vec![0.0; lr.k * m];
-                for (v_row, x) in lr.v.chunks_exact(lr.k.max(1)).zip(x.chunks_exact(m)) {
-                    for (&a, t) in v_row.iter().zip(t.chunks_exact_mut(m)) {
-                        axpy(t, a, x);
-                    }
-                }
-                for (u_row, y) in lr.u.chunks_exact(lr.k.max(1)).zip(y.chunks_exact_mut(m)) {
-                    for (&a, t) in u_row.iter().zip(t.chunks_exact(m)) {
-                        axpy(y, a, t);
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// The non-zero entries of a block, row by row: row r's are `values[starts[r]..starts[r + 1]]`
-/// in the columns `columns[..]` of the same range.
-#[derive(Clone, Debug)]
-struct SparseRows {
-    starts: Vec<u32>,
-    columns: Vec<u32>,
-    values: Vec<f64>,
-}
-
-impl SparseRows {
-    /// The non-zero entries of a row-major block of `width` columns.
-    fn from_dense(d: &[f64], width: usize) -> Self {
-        let mut rows = Self { starts: vec![0], columns: Vec::new(), values: Vec::new() };
-        for row in d.chunks_exact(width) {
-            for (c, &v) in row.iter().enumerate().filter(|(_, v)| **v != 0.0) {
-                rows.columns.push(c as u32);
-                rows.values.push(v);
-            }
-            rows.starts.push(rows.values.len() as u32);
-        }
-        rows
-    }
-
-    /// `y += M x`.
-    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
-        for (r, yi) in y.iter_mut().enumerate() {
-            let range = self.starts[r] as usize..self.starts[r + 1] as usize;
-            let columns = &self.columns[range.clone()];
-            *yi += columns
-                .iter()
-                .zip(&self.values[range])
-                .map(|(&c, v)| v * x[c as usize])
-                .sum::<f64>();
-        }
-    }
-
-    fn bytes(&self) -> u64 {
-        (4 * (self.starts.len() + self.columns.len()) + 8 * self.values.len()) as u64
-    }
-}
-
 /// K as exact near blocks and low-rank far blocks.
 #[derive(Clone, Debug)]
 pub struct CompressedOperator {
@@ -477,7 +375,8 @@ impl CompressedOperator {
         });
         // The exact blocks alone must fit before any is computed; then every block built counts.
         let guard = MemoryGuard::new(disc.dof());
-        guard.check(8 * plan.near_entries(&nodes, &elements, per))?;
+        let precision = Precision::for_tolerance(options.tolerance);
+        guard.check(precision.bytes() * plan.near_entries(&nodes, &elements, per))?;
 
         let integrator = PairIntegrator::new(disc.method, assembly);
         let entries = Entries {
@@ -488,6 +387,7 @@ impl CompressedOperator {
             nodes: &nodes,
             elements: &elements,
             per,
+            precision,
         };
         progress.start("compression", plan.near.len() + plan.far.len());
         let tolerance = options.tolerance;
@@ -615,30 +515,18 @@ impl CompressedOperator {
 }
 
 impl Block {
-    /// Stores an exact block by what it holds, as soon as it is built: nothing where every pair
-    /// is hidden (it is then counted empty and left out), its non-zero entries alone where they
-    /// are fewer than half (hidden pairs in a block seen through slats or between buildings),
-    /// so that memory follows the pairs that are seen.
-    fn compact(&mut self) {
-        // Columns and entry counts are stored as u32: a block beyond that stays dense.
-        if let BlockData::Dense(d) = &self.data {
-            let non_zero = d.iter().filter(|&&v| v != 0.0).count();
-            if non_zero == 0 {
-                self.data = BlockData::Dense(Vec::new());
-            } else if 2 * non_zero < d.len() && d.len() <= u32::MAX as usize {
-                let width = d.len() / self.rows.len();
-                self.data = BlockData::Sparse(SparseRows::from_dense(d, width));
-            }
-        }
+    /// Stores an exact block by what it holds, as soon as it is built, in `precision`:
+    /// nothing where every pair is hidden (it is then counted empty and left out), its
+    /// non-zero entries alone where they are fewer than half (hidden pairs in a block seen
+    /// through slats or between buildings), so that memory follows the pairs that are seen.
+    fn compact(&mut self, precision: Precision) {
+        let data = std::mem::replace(&mut self.data, BlockData::exact(Vec::new()));
+        self.data = data.compacted(self.rows.len(), precision);
     }
 
     /// Bytes of its stored values (and of the column indices of a sparse block).
     fn bytes(&self) -> u64 {
-        match &self.data {
-            BlockData::Dense(d) => 8 * d.len() as u64,
-            BlockData::Sparse(rows) => rows.bytes(),
-            BlockData::LowRank(lr) => 8 * lr.len() as u64,
-        }
+        self.data.bytes()
     }
 }
 
@@ -791,7 +679,7 @@ fn build_block_by_block(
             .filter(|_| !guard.is_over())
             .map(|&(t, s, incompressible)| {
                 let (mut block, stats) = entries.exact_block(t, s, &mut views);
-                block.compact();
+                block.compact(entries.precision);
                 guard.add(block.bytes());
                 (block, stats, incompressible)
             })
@@ -804,7 +692,7 @@ fn build_block_by_block(
             Some(block) => (block, PairStats::default(), false),
             None => {
                 let (mut block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
-                block.compact();
+                block.compact(entries.precision);
                 (block, stats, true)
             }
         };
@@ -836,20 +724,18 @@ fn kept_blocks(built: Vec<BuiltBlock>, empty: usize) -> (Vec<Block>, OperatorSta
                 }
                 stats.near_blocks += 1;
                 stats.near_entries += d.len() as u64;
-                stats.operator_bytes += 8 * d.len() as u64 + index_bytes;
             }
             BlockData::Sparse(rows) => {
                 stats.near_blocks += 1;
                 stats.near_entries += rows.values.len() as u64;
-                stats.operator_bytes += rows.bytes() + index_bytes;
             }
-            BlockData::LowRank(lr) => {
+            BlockData::LowRank(f) => {
                 stats.far_blocks += 1;
-                stats.far_entries += (lr.m * lr.c) as u64;
-                stats.max_rank = stats.max_rank.max(lr.k);
-                stats.operator_bytes += 8 * lr.len() as u64 + index_bytes;
+                stats.far_entries += (block.rows.len() * f.c) as u64;
+                stats.max_rank = stats.max_rank.max(f.k);
             }
         }
+        stats.operator_bytes += block.bytes() + index_bytes;
         blocks.push(block);
     }
     (blocks, stats, pairs)
@@ -899,6 +785,8 @@ struct Entries<'a> {
     nodes: &'a ClusterTree,
     elements: &'a ClusterTree,
     per: usize,
+    /// The precision the blocks store their values in (from the tolerance).
+    precision: Precision,
 }
 
 impl Entries<'_> {
@@ -963,7 +851,7 @@ impl Entries<'_> {
                 data[at + c] = node.rho / PI * v;
             }
         });
-        (self.block(t, s, BlockData::Dense(data)), stats)
+        (self.block(t, s, BlockData::exact(data)), stats)
     }
 
     /// Rows and columns (elements × basis functions) of block (t, s).
@@ -1041,7 +929,7 @@ impl Entries<'_> {
             node_ids.iter().map(|&i| self.smooth_pair(i, j, faces)[basis]).collect()
         };
         let lr = aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)?;
-        Some(self.block(t, s, BlockData::LowRank(lr)))
+        Some(self.block(t, s, BlockData::low_rank(lr, self.precision)))
     }
 }
 

@@ -129,22 +129,22 @@ impl CompressedOperator {
             match &block.data {
                 BlockData::Dense(values) => {
                     d[field::KIND] = DENSE;
-                    p.values.extend_from_slice(values);
+                    values.extend_f64(&mut p.values);
                 }
                 BlockData::Sparse(rows) => {
                     d[field::KIND] = SPARSE;
                     d[field::INDEX_AT] = fits(sparse_index.len())?;
                     sparse_index.extend_from_slice(&rows.starts);
                     sparse_index.extend_from_slice(&rows.columns);
-                    p.values.extend_from_slice(&rows.values);
+                    rows.values.extend_f64(&mut p.values);
                 }
                 BlockData::LowRank(lr) => {
                     d[field::KIND] = LOW_RANK;
                     d[field::RANK] = fits(lr.k)?;
                     d[field::T_AT] = fits(scratch)?;
                     scratch += lr.k;
-                    p.values.extend_from_slice(&lr.u);
-                    p.values.extend_from_slice(&lr.v);
+                    lr.u.extend_f64(&mut p.values);
+                    lr.v.extend_f64(&mut p.values);
                     low_rank.push(fits(b)?);
                 }
             }

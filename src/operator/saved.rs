@@ -6,8 +6,8 @@
 
 use std::io::{Read, Write};
 
-use super::aca::LowRank;
-use super::{Block, BlockData, CompressedOperator, OperatorStats, SparseRows};
+use super::stored::{Factors, SparseRows, Values};
+use super::{Block, BlockData, CompressedOperator, OperatorStats};
 use crate::error::{Error, Result};
 use crate::visibility::PairStats;
 
@@ -140,6 +140,13 @@ impl<W: Write> BinaryWriter<W> {
         Ok(())
     }
 
+    /// Numbers stored in f32, with their length.
+    pub fn f32s(&mut self, v: &[f32]) -> Result<()> {
+        self.u64(v.len() as u64)?;
+        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.raw(&bytes)
+    }
+
     /// Indices with their length.
     pub fn u32s(&mut self, v: &[u32]) -> Result<()> {
         self.u64(v.len() as u64)?;
@@ -254,6 +261,13 @@ impl<R: Read> BinaryReader<R> {
         Ok(values)
     }
 
+    /// Numbers stored in f32, with their length.
+    pub fn f32s(&mut self, what: &str) -> Result<Vec<f32>> {
+        let len = self.len(what, 4)?;
+        let bytes = self.raw(4 * len as u64, what)?;
+        Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("4"))).collect())
+    }
+
     /// Indices with their length.
     pub fn u32s(&mut self, what: &str) -> Result<Vec<u32>> {
         let len = self.len(what, 4)?;
@@ -306,19 +320,19 @@ impl CompressedOperator {
             match &b.data {
                 BlockData::Dense(values) => {
                     out.u64(DENSE)?;
-                    out.f64s(values)?;
+                    write_values(out, values)?;
                 }
                 BlockData::Sparse(rows) => {
                     out.u64(SPARSE)?;
                     out.u32s(&rows.starts)?;
                     out.u32s(&rows.columns)?;
-                    out.f64s(&rows.values)?;
+                    write_values(out, &rows.values)?;
                 }
                 BlockData::LowRank(lr) => {
                     out.u64(LOW_RANK)?;
                     out.u64(lr.k as u64)?;
-                    out.f64s(&lr.u)?;
-                    out.f64s(&lr.v)?;
+                    write_values(out, &lr.u)?;
+                    write_values(out, &lr.v)?;
                 }
             }
         }
@@ -362,16 +376,17 @@ impl CompressedOperator {
             let cols = range(dof / per)?;
             let (m, c) = (rows.len(), cols.len() * per);
             let data = match input.u64("a block's kind")? {
-                DENSE => BlockData::Dense(input.f64s("a dense block")?),
+                DENSE => BlockData::Dense(read_values(input, "a dense block")?),
                 SPARSE => BlockData::Sparse(SparseRows {
                     starts: input.u32s("a sparse block")?,
                     columns: input.u32s("a sparse block")?,
-                    values: input.f64s("a sparse block")?,
+                    values: read_values(input, "a sparse block")?,
                 }),
                 LOW_RANK => {
                     let k = input.u64("a rank")? as usize;
-                    let (u, v) = (input.f64s("a low-rank block")?, input.f64s("a low-rank block")?);
-                    BlockData::LowRank(LowRank { m, c, k, u, v })
+                    let u = read_values(input, "a low-rank block")?;
+                    let v = read_values(input, "a low-rank block")?;
+                    BlockData::LowRank(Factors { c, k, u, v })
                 }
                 other => return Err(input.error(format!("damaged: block kind {other}"))),
             };
@@ -407,7 +422,30 @@ fn fits(data: &BlockData, m: usize, c: usize) -> bool {
                 && rows.columns.len() == rows.values.len()
                 && rows.columns.iter().all(|&col| (col as usize) < c)
         }
-        BlockData::LowRank(lr) => lr.u.len() == m * lr.k && lr.v.len() == c * lr.k,
+        BlockData::LowRank(lr) => lr.c == c && lr.u.len() == m * lr.k && lr.v.len() == c * lr.k,
+    }
+}
+
+/// Stored values with their precision first (the bits of a value: 64 or 32).
+fn write_values<W: Write>(out: &mut BinaryWriter<W>, values: &Values) -> Result<()> {
+    match values {
+        Values::F64(v) => {
+            out.u64(64)?;
+            out.f64s(v)
+        }
+        Values::F32(v) => {
+            out.u64(32)?;
+            out.f32s(v)
+        }
+    }
+}
+
+/// Values [`write_values`] wrote.
+fn read_values<R: Read>(input: &mut BinaryReader<R>, what: &str) -> Result<Values> {
+    match input.u64(what)? {
+        64 => Ok(Values::F64(input.f64s(what)?)),
+        32 => Ok(Values::F32(input.f32s(what)?)),
+        bits => Err(input.error(format!("damaged: {what} of {bits}-bit values"))),
     }
 }
 

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 
+use super::stored::{SparseRows, Values};
 use super::*;
 use crate::assembly::{AssemblyOptions, CollocationMatrix, assemble};
 use crate::discretization::Method;
@@ -205,14 +206,22 @@ fn the_automatic_choice_keeps_small_faces_dense_and_compresses_large_ones() {
     assert_eq!(OperatorChoice::Dense.decide(shape(40_960, 40_960, 5)), (false, None));
 }
 
+/// A dense block of `width` columns stored by its non-zero entries, in its own precision.
+fn stored_sparse(data: &BlockData, width: usize) -> BlockData {
+    let BlockData::Dense(d) = data else { panic!("not dense: {data:?}") };
+    let mut values = Vec::new();
+    d.extend_f64(&mut values);
+    BlockData::Sparse(SparseRows::from_dense(&values, width, d.precision()))
+}
+
 #[test]
 fn exact_blocks_are_stored_by_what_they_hold() {
-    let block = |data: Vec<f64>| Block { rows: 0..3, cols: 0..4, data: BlockData::Dense(data) };
+    let block = |data: Vec<f64>| Block { rows: 0..3, cols: 0..4, data: BlockData::exact(data) };
     let x = [1.0, -2.0, 0.5, 3.0];
     // Mostly hidden: sparse rows, with the dense block's product.
     let entries = vec![0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, -1.0];
     let mut sparse = block(entries.clone());
-    sparse.compact();
+    sparse.compact(Precision::F64);
     let BlockData::Sparse(rows) = &sparse.data else { panic!("{:?}", sparse.data) };
     assert_eq!(
         (rows.starts.as_slice(), rows.columns.as_slice()),
@@ -220,7 +229,7 @@ fn exact_blocks_are_stored_by_what_they_hold() {
     );
     assert!(sparse.bytes() < 8 * entries.len() as u64);
     let mut y = vec![10.0; 3];
-    rows.apply_add(&x, &mut y);
+    sparse.data.apply_add(&x, &mut y);
     let dense: Vec<f64> = entries
         .chunks(4)
         .map(|r| 10.0 + r.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>())
@@ -228,58 +237,60 @@ fn exact_blocks_are_stored_by_what_they_hold() {
     assert_eq!(y, dense);
     // Mostly seen: dense; all hidden: nothing stored.
     let mut seen = block((1..=12).map(f64::from).collect());
-    seen.compact();
-    assert!(matches!(&seen.data, BlockData::Dense(d) if d.len() == 12));
+    seen.compact(Precision::F64);
+    assert!(matches!(&seen.data, BlockData::Dense(Values::F64(d)) if d.len() == 12));
     let mut hidden = block(vec![0.0; 12]);
-    hidden.compact();
+    hidden.compact(Precision::F64);
     assert!(matches!(&hidden.data, BlockData::Dense(d) if d.is_empty()) && hidden.bytes() == 0);
 }
 
 #[test]
 fn a_written_operator_reads_back_block_for_block() {
-    // The five-piece surface has low-rank and dense blocks; one is stored sparse below.
+    // The five-piece surface has low-rank and dense blocks; one is stored sparse below. Values
+    // in f64 (1e-8) and in f32 (1e-6).
     let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 4);
-    let mut op = compressed(&c, 1e-8, 16);
-    // One block of each kind at least.
-    let kinds = |op: &CompressedOperator| {
-        let mut kinds = [0; 3];
-        for b in &op.blocks {
-            kinds[match b.data {
-                BlockData::Dense(_) => 0,
-                BlockData::Sparse(_) => 1,
-                BlockData::LowRank(_) => 2,
-            }] += 1;
+    for tolerance in [1e-8, 1e-6] {
+        let mut op = compressed(&c, tolerance, 16);
+        // One block of each kind at least.
+        let kinds = |op: &CompressedOperator| {
+            let mut kinds = [0; 3];
+            for b in &op.blocks {
+                kinds[match b.data {
+                    BlockData::Dense(_) => 0,
+                    BlockData::Sparse(_) => 1,
+                    BlockData::LowRank(_) => 2,
+                }] += 1;
+            }
+            kinds
+        };
+        if kinds(&op)[1] == 0 {
+            // Store one exact block sparse, as a mostly hidden one would be.
+            let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
+            b.data = stored_sparse(&b.data, b.cols.len() * op.per);
         }
-        kinds
-    };
-    if kinds(&op)[1] == 0 {
-        // Store one exact block sparse, as a mostly hidden one would be.
-        let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
-        let BlockData::Dense(d) = &b.data else { unreachable!() };
-        b.data = BlockData::Sparse(SparseRows::from_dense(d, b.cols.len() * op.per));
-    }
-    assert!(kinds(&op).iter().all(|&k| k > 0), "{:?}", kinds(&op));
-    let mut out = BinaryWriter::new(Vec::new());
-    op.write(&mut out).unwrap();
-    let bytes = out.finish().unwrap();
-    let mut input = BinaryReader::new(bytes.as_slice(), bytes.len() as u64, "op.bin");
-    let read = CompressedOperator::read(&mut input).unwrap();
-    input.finish().unwrap();
-    assert_eq!((read.stats, read.pairs, read.zero_rows), (op.stats, op.pairs, op.zero_rows));
-    assert_eq!(kinds(&read), kinds(&op));
-    let x: Vec<f64> = (0..op.dof()).map(|i| (i as f64 * 0.7).sin()).collect();
-    // Sums in parallel are not ordered: the products agree to rounding.
-    let (a, b) = (read.apply(&x), op.apply(&x));
-    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    assert!(a.iter().zip(&b).all(|(p, q)| (p - q).abs() <= 1e-14 * scale));
+        assert!(kinds(&op).iter().all(|&k| k > 0), "{:?}", kinds(&op));
+        let mut out = BinaryWriter::new(Vec::new());
+        op.write(&mut out).unwrap();
+        let bytes = out.finish().unwrap();
+        let mut input = BinaryReader::new(bytes.as_slice(), bytes.len() as u64, "op.bin");
+        let read = CompressedOperator::read(&mut input).unwrap();
+        input.finish().unwrap();
+        assert_eq!((read.stats, read.pairs, read.zero_rows), (op.stats, op.pairs, op.zero_rows));
+        assert_eq!(kinds(&read), kinds(&op));
+        let x: Vec<f64> = (0..op.dof()).map(|i| (i as f64 * 0.7).sin()).collect();
+        // Sums in parallel are not ordered: the products agree to rounding.
+        let (a, b) = (read.apply(&x), op.apply(&x));
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(a.iter().zip(&b).all(|(p, q)| (p - q).abs() <= 1e-14 * scale));
 
-    // One bit changed anywhere: refused, by the checks of sizes or by the checksum.
-    for at in (0..bytes.len()).step_by(bytes.len() / 97) {
-        let mut damaged = bytes.clone();
-        damaged[at] ^= 0x10;
-        let mut input = BinaryReader::new(damaged.as_slice(), damaged.len() as u64, "op.bin");
-        let read = CompressedOperator::read(&mut input).and_then(|_| input.finish());
-        assert!(read.is_err(), "byte {at} of {}", bytes.len());
+        // One bit changed anywhere: refused, by the checks of sizes or by the checksum.
+        for at in (0..bytes.len()).step_by(bytes.len() / 97) {
+            let mut damaged = bytes.clone();
+            damaged[at] ^= 0x10;
+            let mut input = BinaryReader::new(damaged.as_slice(), damaged.len() as u64, "op.bin");
+            let read = CompressedOperator::read(&mut input).and_then(|_| input.finish());
+            assert!(read.is_err(), "byte {at} of {}", bytes.len());
+        }
     }
 }
 
@@ -291,8 +302,7 @@ fn products_of_many_vectors_are_each_vector_s_product() {
         case(five_piece(SurfaceParameters::default()).unwrap(), Method::Linear { alpha: 0.2 }, 2);
     let mut op = compressed(&c, 1e-8, 8);
     let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
-    let BlockData::Dense(d) = &b.data else { unreachable!() };
-    b.data = BlockData::Sparse(SparseRows::from_dense(d, b.cols.len() * op.per));
+    b.data = stored_sparse(&b.data, b.cols.len() * op.per);
     assert!(op.blocks.iter().any(|b| matches!(b.data, BlockData::LowRank(_))));
     let n = op.dof();
     let xs: Vec<Vec<f64>> =

@@ -23,8 +23,8 @@ use crate::operator::{BinaryReader, BinaryWriter, CompressedOperator, OperatorCh
 /// The first bytes of every operator file.
 const MAGIC: &[u8] = b"radiosity operator\n";
 
-/// The layout's version: files of another are refused.
-const VERSION: u64 = 1;
+/// The layout's version: files of another are refused (2: block values carry their precision).
+const VERSION: u64 = 2;
 
 /// What an operator was built for: everything that decides its entries.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

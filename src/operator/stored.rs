@@ -1,0 +1,327 @@
+//! How a block of the compressed operator holds its values, and its products: exact blocks
+//! dense or by their non-zero entries, low-rank blocks by their factors; the values in f64, or
+//! in f32 where the operator's tolerance leaves room for f32's rounding (mixed-precision
+//! storage of hierarchical matrices: the low-rank blocks' error is the tolerance the user set,
+//! and values rounded to f32 add 2^-24 of each entry, 16 times less at the threshold).
+
+use super::aca::{LowRank, dot};
+
+/// The precision of a compressed operator's stored values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// Values as computed.
+    F64,
+    /// Values rounded to f32 (relative error at most 2^-24 each), arithmetic in f64.
+    F32,
+}
+
+/// The smallest compression tolerance at which values are stored in f32: 16 times f32's unit
+/// roundoff, so that rounding adds at most a sixteenth of the tolerance to a product. The
+/// default tolerance 1e-6 is above it; at 1e-9 the values stay in f64.
+pub const F32_FROM_TOLERANCE: f64 = 16.0 * f32::EPSILON as f64 / 2.0;
+
+impl Precision {
+    /// The precision an operator of compression tolerance `tolerance` stores its values in.
+    pub fn for_tolerance(tolerance: f64) -> Self {
+        if tolerance >= F32_FROM_TOLERANCE { Precision::F32 } else { Precision::F64 }
+    }
+
+    /// Bytes of a value.
+    pub fn bytes(self) -> u64 {
+        match self {
+            Precision::F64 => 8,
+            Precision::F32 => 4,
+        }
+    }
+
+    /// Its name, as reports print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
+}
+
+/// Stored values: f64, or rounded to f32.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) enum Values {
+    F64(Vec<f64>),
+    F32(Vec<f32>),
+}
+
+/// `$body` with `$v` bound to the slice of `$values` in its own precision: the products are
+/// generic over it, so that each block is dispatched once, not each value.
+macro_rules! on_values {
+    ($values:expr, $v:ident => $body:expr) => {
+        match $values {
+            Values::F64($v) => $body,
+            Values::F32($v) => $body,
+        }
+    };
+}
+
+impl Values {
+    /// `values` in `precision`.
+    pub(super) fn new(values: Vec<f64>, precision: Precision) -> Self {
+        match precision {
+            Precision::F64 => Values::F64(values),
+            Precision::F32 => Values::F32(values.into_iter().map(|v| v as f32).collect()),
+        }
+    }
+
+    /// Their precision.
+    #[cfg(test)]
+    pub(super) fn precision(&self) -> Precision {
+        match self {
+            Values::F64(_) => Precision::F64,
+            Values::F32(_) => Precision::F32,
+        }
+    }
+
+    pub(super) fn len(&self) -> usize {
+        on_values!(self, v => v.len())
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes they take.
+    pub(super) fn bytes(&self) -> u64 {
+        match self {
+            Values::F64(v) => 8 * v.len() as u64,
+            Values::F32(v) => 4 * v.len() as u64,
+        }
+    }
+
+    /// Them all in f64, appended to `out`.
+    pub(super) fn extend_f64(&self, out: &mut Vec<f64>) {
+        on_values!(self, v => out.extend(v.iter().map(|&x| wide(x))))
+    }
+}
+
+/// A stored value in f64 (the macro's arms take both precisions through it).
+#[inline]
+fn wide<T: Into<f64>>(value: T) -> f64 {
+    value.into()
+}
+
+/// A block's values.
+#[derive(Clone, Debug)]
+pub(super) enum BlockData {
+    /// Row-major, rows × (elements · per).
+    Dense(Values),
+    /// An exact block most of whose pairs are hidden: its non-zero entries row by row.
+    Sparse(SparseRows),
+    /// `U V^T`.
+    LowRank(Factors),
+}
+
+impl BlockData {
+    /// An exact block as computed, row-major (stored in f64 until [`BlockData::compacted`]).
+    pub(super) fn exact(values: Vec<f64>) -> Self {
+        BlockData::Dense(Values::F64(values))
+    }
+
+    /// A low-rank block's factors in `precision`.
+    pub(super) fn low_rank(lr: LowRank, precision: Precision) -> Self {
+        BlockData::LowRank(Factors {
+            c: lr.c,
+            k: lr.k,
+            u: Values::new(lr.u, precision),
+            v: Values::new(lr.v, precision),
+        })
+    }
+
+    /// An exact block of `rows` rows as it is worth storing, in `precision`: nothing where
+    /// every entry is zero (an empty dense block), its non-zero entries alone where they are
+    /// fewer than half, else dense. Other blocks as they are.
+    pub(super) fn compacted(self, rows: usize, precision: Precision) -> Self {
+        let BlockData::Dense(Values::F64(d)) = self else { return self };
+        let non_zero = d.iter().filter(|&&v| v != 0.0).count();
+        if non_zero == 0 {
+            BlockData::Dense(Values::F64(Vec::new()))
+        } else if 2 * non_zero < d.len() && d.len() <= u32::MAX as usize {
+            // Columns and entry counts are stored as u32: a block beyond that stays dense.
+            BlockData::Sparse(SparseRows::from_dense(&d, d.len() / rows, precision))
+        } else {
+            BlockData::Dense(Values::new(d, precision))
+        }
+    }
+
+    /// Bytes of its values (and of the column indices of a sparse block).
+    pub(super) fn bytes(&self) -> u64 {
+        match self {
+            BlockData::Dense(d) => d.bytes(),
+            BlockData::Sparse(rows) => rows.bytes(),
+            BlockData::LowRank(f) => f.u.bytes() + f.v.bytes(),
+        }
+    }
+
+    /// `y += B x`.
+    pub(super) fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        match self {
+            BlockData::Dense(d) => on_values!(d, d => {
+                for (yi, row) in y.iter_mut().zip(d.chunks_exact(x.len())) {
+                    *yi += dot(row, x);
+                }
+            }),
+            BlockData::Sparse(rows) => on_values!(&rows.values, values => {
+                for (r, yi) in y.iter_mut().enumerate() {
+                    let range = rows.starts[r] as usize..rows.starts[r + 1] as usize;
+                    *yi += rows.columns[range.clone()]
+                        .iter()
+                        .zip(&values[range])
+                        .map(|(&c, &v)| wide(v) * x[c as usize])
+                        .sum::<f64>();
+                }
+            }),
+            BlockData::LowRank(f) => {
+                let k = f.k;
+                let mut t = vec![0.0; k];
+                on_values!(&f.v, v => {
+                    for (row, xj) in v.chunks_exact(k.max(1)).zip(x) {
+                        t.iter_mut().zip(row).for_each(|(t, &v)| *t += wide(v) * xj);
+                    }
+                });
+                on_values!(&f.u, u => {
+                    for (yi, row) in y.iter_mut().zip(u.chunks_exact(k.max(1))) {
+                        *yi += dot(row, &t);
+                    }
+                });
+            }
+        }
+    }
+
+    /// `y += B x` for `m` vectors interleaved: `x[c * m + v]`, `y[r * m + v]`.
+    pub(super) fn apply_add_many(&self, x: &[f64], y: &mut [f64], m: usize) {
+        let c = x.len() / m;
+        let axpy = |y: &mut [f64], a: f64, x: &[f64]| {
+            y.iter_mut().zip(x).for_each(|(y, x)| *y += a * x);
+        };
+        match self {
+            BlockData::Dense(d) => on_values!(d, d => {
+                for (row, y) in d.chunks_exact(c.max(1)).zip(y.chunks_exact_mut(m)) {
+                    for (&a, x) in row.iter().zip(x.chunks_exact(m)) {
+                        axpy(y, wide(a), x);
+                    }
+                }
+            }),
+            BlockData::Sparse(rows) => on_values!(&rows.values, values => {
+                for (r, y) in y.chunks_exact_mut(m).enumerate() {
+                    let range = rows.starts[r] as usize..rows.starts[r + 1] as usize;
+                    for (&col, &a) in rows.columns[range.clone()].iter().zip(&values[range]) {
+                        axpy(y, wide(a), &x[col as usize * m..(col as usize + 1) * m]);
+                    }
+                }
+            }),
+            BlockData::LowRank(f) => {
+                // t = V^T x (k x m), then y += U t.
+                let k = f.k;
+                let mut t = vec![0.0; k * m];
+                on_values!(&f.v, v => {
+                    for (v_row, x) in v.chunks_exact(k.max(1)).zip(x.chunks_exact(m)) {
+                        for (&a, t) in v_row.iter().zip(t.chunks_exact_mut(m)) {
+                            axpy(t, wide(a), x);
+                        }
+                    }
+                });
+                on_values!(&f.u, u => {
+                    for (u_row, y) in u.chunks_exact(k.max(1)).zip(y.chunks_exact_mut(m)) {
+                        for (&a, t) in u_row.iter().zip(t.chunks_exact(m)) {
+                            axpy(y, wide(a), t);
+                        }
+                    }
+                });
+            }
+        }
+    }
+}
+
+/// The non-zero entries of a block, row by row: row r's are `values[starts[r]..starts[r + 1]]`
+/// in the columns `columns[..]` of the same range.
+#[derive(Clone, Debug)]
+pub(super) struct SparseRows {
+    pub(super) starts: Vec<u32>,
+    pub(super) columns: Vec<u32>,
+    pub(super) values: Values,
+}
+
+impl SparseRows {
+    /// The non-zero entries of a row-major block of `width` columns, in `precision`.
+    pub(super) fn from_dense(d: &[f64], width: usize, precision: Precision) -> Self {
+        let (mut starts, mut columns, mut values) = (vec![0], Vec::new(), Vec::new());
+        for row in d.chunks_exact(width) {
+            for (c, &v) in row.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+                columns.push(c as u32);
+                values.push(v);
+            }
+            starts.push(values.len() as u32);
+        }
+        Self { starts, columns, values: Values::new(values, precision) }
+    }
+
+    pub(super) fn bytes(&self) -> u64 {
+        4 * (self.starts.len() + self.columns.len()) as u64 + self.values.bytes()
+    }
+}
+
+/// A low-rank block `U V^T`: U rows × k and V columns × k, both row-major.
+#[derive(Clone, Debug)]
+pub(super) struct Factors {
+    /// Columns.
+    pub(super) c: usize,
+    /// Rank.
+    pub(super) k: usize,
+    pub(super) u: Values,
+    pub(super) v: Values,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A block stored in f32 gives the products of its f64 values to f32's rounding, and
+    /// takes half the bytes.
+    #[test]
+    fn values_in_f32_give_the_products_of_f64_to_their_rounding() {
+        let (m, c) = (5, 7);
+        let values: Vec<f64> =
+            (0..m * c).map(|k| if k % 3 == 0 { 0.0 } else { 1.0 / (1.0 + k as f64) }).collect();
+        let x: Vec<f64> = (0..c).map(|j| (j as f64 * 0.7).cos()).collect();
+        let lr = LowRank {
+            m,
+            c,
+            k: 2,
+            u: (0..2 * m).map(|k| (k as f64).sin()).collect(),
+            v: (0..2 * c).map(|k| (k as f64 * 0.3).cos()).collect(),
+        };
+        let blocks = |p: Precision| {
+            [
+                BlockData::exact(values.clone()).compacted(m, p),
+                BlockData::Sparse(SparseRows::from_dense(&values, c, p)),
+                BlockData::low_rank(lr.clone(), p),
+            ]
+        };
+        for (wide, narrow) in blocks(Precision::F64).iter().zip(&blocks(Precision::F32)) {
+            assert!(narrow.bytes() < wide.bytes());
+            let (mut a, mut b) = (vec![0.0; m], vec![0.0; m]);
+            wide.apply_add(&x, &mut a);
+            narrow.apply_add(&x, &mut b);
+            let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            let worst = a.iter().zip(&b).fold(0.0f64, |s, (p, q)| s.max((p - q).abs()));
+            assert!(worst > 0.0 && worst <= 4.0 * f32::EPSILON as f64 * scale, "{worst}");
+            // Two vectors at once give each one's product.
+            let xx: Vec<f64> = x.iter().flat_map(|&v| [v, 2.0 * v]).collect();
+            let mut yy = vec![0.0; 2 * m];
+            narrow.apply_add_many(&xx, &mut yy, 2);
+            for r in 0..m {
+                assert!((yy[2 * r] - b[r]).abs() <= 1e-15 * scale);
+                assert!((yy[2 * r + 1] - 2.0 * b[r]).abs() <= 1e-15 * scale);
+            }
+        }
+        assert_eq!(Precision::for_tolerance(1e-6), Precision::F32);
+        assert_eq!(Precision::for_tolerance(1e-9), Precision::F64);
+    }
+}
