@@ -87,12 +87,18 @@ fn accelerated_plan_assembles_the_core_solvers_matrix() {
 }
 
 /// The centroid method's closed forms in vector lanes assemble the scalar reference's matrix to a
-/// few ulps, with full, partly visible and far-field (banded) pairs all present.
+/// few ulps, with full, partly visible (each visible piece as a fan of triangles) and far-field
+/// (banded) pairs all present.
 #[test]
 fn lanes_assemble_the_scalar_matrix() {
-    for (scene, refine) in
-        [(crate::scene::five_piece(Default::default()).unwrap(), 2), (baffled_box().unwrap(), 2)]
-    {
+    let room =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/furnished-room.toml");
+    for (scene, refine) in [
+        (crate::scene::five_piece(Default::default()).unwrap(), 2),
+        (baffled_box().unwrap(), 2),
+        // Pieces seen past furniture, shadowed by several occluders at once.
+        (crate::scene::load(&room).unwrap(), 1),
+    ] {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
         let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
         let problem = Problem::new(scene, mesh, disc);
@@ -122,30 +128,31 @@ fn fingerprint(matrix: &CollocationMatrix) -> u64 {
 fn the_row_walk_keeps_every_matrix_bit_for_bit() {
     // Fingerprints of K as `radiosity assemble` wrote it before the pair plan's row walk was made
     // one (x86-64, glibc's libm): a change in how any pair is classified, or in the order of the
-    // arithmetic, shows here. A change that is meant to alter the matrices updates them.
+    // arithmetic, shows here. A change that is meant to alter the matrices updates them (the
+    // centroid cases last when partly visible elements' pieces went into the lanes).
     let example = |name: &str| {
         crate::scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap()
     };
     let five = || crate::scene::five_piece(Default::default()).unwrap();
     let linear = Method::linear(1.0 / 6.0).unwrap();
     let cases: [(&str, Scene, Method, u32, u64); 6] = [
-        ("five-piece", five(), Method::Centroid, 3, 0x641e_9db2_bd7e_9b50),
+        ("five-piece", five(), Method::Centroid, 3, 0x6f0a_70c2_9d99_dc4c),
         ("five-piece linear", five(), linear, 2, 0xca39_1789_78e4_cbb1),
         (
             "furnished room",
             example("examples/furnished-room.toml"),
             Method::Centroid,
             1,
-            0xb343_62e9_daa5_ecc8,
+            0xffc3_1daa_6180_fd0b,
         ),
         (
             "occluded box",
             example("examples/occluded-box.toml"),
             Method::Centroid,
             1,
-            0x77a0_e887_2253_02fe,
+            0x084b_6db5_d7e5_7b54,
         ),
-        ("city 4x4", crate::scene::city(4, 4).unwrap(), Method::Centroid, 0, 0x471b_6f1a_a165_7ead),
+        ("city 4x4", crate::scene::city(4, 4).unwrap(), Method::Centroid, 0, 0xccf0_0b92_d64f_51c5),
         ("baffled box linear", baffled_box().unwrap(), linear, 2, 0x11b8_8288_ee40_8135),
     ];
     for (name, scene, method, refine, expected) in cases {

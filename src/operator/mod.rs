@@ -41,6 +41,7 @@ use crate::assembly::{
 use crate::discretization::Discretization;
 use crate::distributed::{Collective, Ranks};
 use crate::error::{Error, Result};
+use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::progress::{Progress, in_stage};
 use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face};
@@ -839,22 +840,35 @@ impl Entries<'_> {
     fn exact_block(&self, t: usize, s: usize, views: &mut NodeViews) -> (Block, PairStats) {
         let per = self.per;
         let (m, width) = self.block_size(t, s);
-        let mut data = vec![0.0; m * width];
+        // Zeros written, not mapped (`vec!` of zeros would leave a large block's pages to the
+        // zero page, which the lanes' additions read before they write).
+        let mut data = Vec::with_capacity(m * width);
+        data.resize(m * width, 0.0);
+        // The centroid method's closed forms wait in lanes, each with where its value goes and
+        // the node's rho / pi; a partly visible element's pieces add into its entry.
+        let mut batch = lanes::Batch::<(usize, f64)>::default();
         let stats = self.visible_pairs(t, s, views, |r, k, i, j, vis| {
             let node = &self.disc.nodes[i];
             let el = &self.disc.elements[j];
-            let values = self.integrator.integrate(
+            let at = r * width + k * per;
+            let scale = node.rho / PI;
+            let sink = |(at, scale): (usize, f64), v: f64| data[at] += scale * v;
+            let Some(values) = self.integrator.integrate_or_batch(
                 el,
                 &self.disc.bases[j],
                 node.position,
                 node.normal,
                 &vis,
-            );
-            let at = r * width + k * per;
+                ((at, scale), &mut batch),
+                sink,
+            ) else {
+                return;
+            };
             for (c, v) in values.iter().take(per).enumerate() {
-                data[at + c] = node.rho / PI * v;
+                data[at + c] = scale * v;
             }
         });
+        batch.flush(|(at, scale), v| data[at] += scale * v);
         (self.block(t, s, BlockData::exact(data)), stats)
     }
 
@@ -883,20 +897,45 @@ impl Entries<'_> {
             )
     }
 
-    /// The values of node i against element j in a smooth block.
-    fn smooth_pair(&self, i: usize, j: usize, faces: &FacePairs) -> [f64; 3] {
-        if !self.smooth_sees(i, j, faces) {
-            return [0.0; 3];
+    /// The values of the pairs (node i, element j) of a smooth block, in order: all of each
+    /// element's basis functions, or only `basis`. The centroid method's closed forms are
+    /// evaluated in lanes.
+    fn smooth_values(
+        &self,
+        pairs: impl Iterator<Item = (usize, usize)>,
+        basis: Option<usize>,
+        faces: &FacePairs,
+    ) -> Vec<f64> {
+        let take = if basis.is_some() { 1 } else { self.per };
+        let mut out = Vec::new();
+        let mut batch = lanes::Batch::<(usize, f64)>::default();
+        for (i, j) in pairs {
+            let at = out.len();
+            out.resize(at + take, 0.0);
+            if !self.smooth_sees(i, j, faces) {
+                continue;
+            }
+            let node = &self.disc.nodes[i];
+            let scale = node.rho / PI;
+            let sink = |(at, scale): (usize, f64), v: f64| out[at] += scale * v;
+            let Some(values) = self.integrator.integrate_or_batch(
+                &self.disc.elements[j],
+                &self.disc.bases[j],
+                node.position,
+                node.normal,
+                &Visibility::Full,
+                ((at, scale), &mut batch),
+                sink,
+            ) else {
+                continue;
+            };
+            match basis {
+                Some(b) => out[at] = scale * values[b],
+                None => (0..take).for_each(|c| out[at + c] = scale * values[c]),
+            }
         }
-        let node = &self.disc.nodes[i];
-        let values = self.integrator.integrate(
-            &self.disc.elements[j],
-            &self.disc.bases[j],
-            node.position,
-            node.normal,
-            &Visibility::Full,
-        );
-        values.map(|v| v * node.rho / PI)
+        batch.flush(|(at, scale), v| out[at] += scale * v);
+        out
     }
 
     /// Rank beyond which block (t, s)'s factors take more memory than the block itself, or
@@ -922,15 +961,11 @@ impl Entries<'_> {
         let element_ids = &self.elements.order[sc.start..sc.end];
         let row = |r: usize| {
             let i = node_ids[r];
-            let mut out = Vec::with_capacity(c);
-            for &j in element_ids {
-                out.extend_from_slice(&self.smooth_pair(i, j, faces)[..per]);
-            }
-            out
+            self.smooth_values(element_ids.iter().map(|&j| (i, j)), None, faces)
         };
         let col = |q: usize| {
             let (j, basis) = (element_ids[q / per], q % per);
-            node_ids.iter().map(|&i| self.smooth_pair(i, j, faces)[basis]).collect()
+            self.smooth_values(node_ids.iter().map(|&i| (i, j)), Some(basis), faces)
         };
         let lr = aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)?;
         Some(self.block(t, s, BlockData::low_rank(lr, self.precision)))
