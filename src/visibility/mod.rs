@@ -115,6 +115,10 @@ pub struct PairPlanner {
 /// Largest scene whose pairs of faces are tabulated (512² entries).
 const PAIR_TABLE_FACES: usize = 512;
 
+/// Candidate occluders of a view taken in the search's order before the rest are sorted nearest
+/// first ([`PairPlanner::face_view_with`]).
+const IN_TREE_ORDER: usize = 16;
+
 #[derive(Clone, Debug)]
 struct PlannerFace {
     face: crate::scene::Face,
@@ -301,12 +305,31 @@ impl PairPlanner {
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         let solids = &self.occluders.solids;
-        for o in found {
+        // The first candidates in the tree's order (most views end or are done there); the
+        // rest of a large view (a sky over a city) nearest first: a near occluder's large shadow
+        // holds the far ones' (which are then not kept), and one that hides the whole face ends
+        // the view sooner.
+        let mut cast = |o: usize| {
             let solid = self.occluders.solid_for_view(o, own_face, face);
-            if pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows) {
-                hiders.remember(o, &pieces[o]);
-                return FaceView::Skip(SkipReason::Hidden);
+            pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows)
+        };
+        let mut found = found;
+        let hider = match found.by_ref().take(IN_TREE_ORDER).find(|&o| cast(o)) {
+            Some(o) => Some(o),
+            None => {
+                let mut rest: Vec<(f64, usize)> = found
+                    .map(|o| {
+                        let (lo, hi) = pieces[o].bounding_box();
+                        ((lo - p).max(p - hi).max(DVec3::ZERO).length_squared(), o)
+                    })
+                    .collect();
+                rest.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                rest.into_iter().map(|(_, o)| o).find(|&o| cast(o))
             }
+        };
+        if let Some(o) = hider {
+            hiders.remember(o, &pieces[o]);
+            return FaceView::Skip(SkipReason::Hidden);
         }
         FaceView::Visible { clip, shadows: shadows.into_shadows() }
     }
