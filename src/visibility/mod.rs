@@ -31,8 +31,8 @@ mod stats;
 
 use hiders::Hider;
 pub use hiders::RecentHiders;
-use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder};
+use occluders::{Unit, ViewVolume};
 use projection::{Pyramid, ShadowSet, convex_hull, polygon_scale, pyramid_sides, shadow};
 pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
@@ -295,36 +295,72 @@ impl PairPlanner {
         // seen from most nodes): the search stops there.
         let mut shadows = ShadowSet::default();
         // The pair's list holds every occluder in the box of the two faces, a superset of those
-        // in the pyramid; the same filter then finds the same ones as the tree.
-        let found: Box<dyn Iterator<Item = usize>> = match pair {
-            Some((_, list)) => {
-                Box::new(list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])))
-            }
-            None => self.occluders.inside(own_face, face, &volume, None),
+        // in the pyramid; the same filter then finds the same ones as the tree. The tree gives
+        // units: solids whole, and the pieces of none.
+        let with_box = |k: usize| {
+            let (lo, hi) = pieces[k].bounding_box();
+            (Unit::Piece(k), lo, hi)
         };
+        let found: Box<dyn Iterator<Item = (Unit, DVec3, DVec3)>> =
+            match (pair, self.occluders.units_reaching(&volume)) {
+                (Some((_, list)), _) => Box::new(
+                    list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])).map(with_box),
+                ),
+                (None, Some(units)) => Box::new(units),
+                (None, None) => {
+                    Box::new(self.occluders.inside(own_face, face, &volume, None).map(with_box))
+                }
+            };
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         let solids = &self.occluders.solids;
-        // The first candidates in the tree's order (most views end or are done there); the
+        let candidate =
+            |o: usize| !pieces[o].faces.contains(&own_face) && !pieces[o].faces.contains(&face);
+        // The piece of `unit` that hides the whole face, if one does.
+        let mut cast = |unit: Unit| match unit {
+            Unit::Piece(o) => {
+                let solid = self.occluders.solid_for_view(o, own_face, face);
+                (candidate(o)
+                    && volume.may_hold(&pieces[o])
+                    && pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows))
+                .then_some(o)
+            }
+            Unit::Solid(s) => {
+                let list = &self.occluders.solid_pieces[s];
+                // Seen from or on one of its own faces, a solid casts piece by piece.
+                let mut whole =
+                    list.first().and_then(|&o| self.occluders.solid_for_view(o, own_face, face));
+                for &o in list {
+                    if !candidate(o) || !volume.may_hold(&pieces[o]) {
+                        continue;
+                    }
+                    if pyramid.cast_part(&pieces[o], whole, solids, || hides(o), &mut shadows) {
+                        return Some(o);
+                    }
+                    match whole.and_then(|s| shadows.solid_cast(s)) {
+                        // Cast whole: its other pieces cast nothing more.
+                        Some(true) => return None,
+                        // Not projectable whole: each piece casts its own.
+                        Some(false) => whole = None,
+                        None => {}
+                    }
+                }
+                None
+            }
+        };
+        // The first candidates in the search's order (most views end or are done there); the
         // rest of a large view (a sky over a city) nearest first: a near occluder's large shadow
         // holds the far ones' (which are then not kept), and one that hides the whole face ends
         // the view sooner.
-        let mut cast = |o: usize| {
-            let solid = self.occluders.solid_for_view(o, own_face, face);
-            pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows)
-        };
         let mut found = found;
-        let hider = match found.by_ref().take(IN_TREE_ORDER).find(|&o| cast(o)) {
+        let hider = match found.by_ref().take(IN_TREE_ORDER).find_map(|(u, _, _)| cast(u)) {
             Some(o) => Some(o),
             None => {
-                let mut rest: Vec<(f64, usize)> = found
-                    .map(|o| {
-                        let (lo, hi) = pieces[o].bounding_box();
-                        ((lo - p).max(p - hi).max(DVec3::ZERO).length_squared(), o)
-                    })
+                let mut rest: Vec<(f64, Unit)> = found
+                    .map(|(u, lo, hi)| ((lo - p).max(p - hi).max(DVec3::ZERO).length_squared(), u))
                     .collect();
                 rest.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                rest.into_iter().map(|(_, o)| o).find(|&o| cast(o))
+                rest.into_iter().find_map(|(_, u)| cast(u))
             }
         };
         if let Some(o) = hider {

@@ -47,6 +47,16 @@ pub enum Acceleration {
 
 type Boxed = GeomWithData<Rectangle<[f64; 3]>, usize>;
 
+/// What a view searches for ([`OccluderIndex::units_reaching`]): a convex solid whole (by its
+/// number), or a piece that bounds no solid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Unit {
+    Solid(usize),
+    Piece(usize),
+}
+
+type BoxedUnit = GeomWithData<Rectangle<[f64; 3]>, Unit>;
+
 /// The occluders and the structure that finds those overlapping a box.
 #[derive(Clone, Debug)]
 pub(super) struct OccluderIndex {
@@ -57,6 +67,12 @@ pub(super) struct OccluderIndex {
     solid_of: Vec<Option<usize>>,
     pub(super) acceleration: Acceleration,
     tree: Option<RTree<Boxed>>,
+    /// The pieces of each solid, in index order.
+    pub(super) solid_pieces: Vec<Vec<usize>>,
+    /// An R*-tree over the units (each solid by the box of its pieces, each other piece by its
+    /// own), which the views search: a building is one leaf, not its walls and roof, and is
+    /// met once.
+    units: Option<RTree<BoxedUnit>>,
 }
 
 impl OccluderIndex {
@@ -78,7 +94,42 @@ impl OccluderIndex {
         } else {
             convex_solids(&pieces)
         };
-        Self { pieces, solids, solid_of, acceleration, tree }
+        let mut solid_pieces = vec![Vec::new(); solids.len()];
+        for (k, solid) in solid_of.iter().enumerate() {
+            if let Some(s) = solid {
+                solid_pieces[*s].push(k);
+            }
+        }
+        let units = (acceleration == Acceleration::Tree).then(|| {
+            let boxed = |(lo, hi): (DVec3, DVec3), unit| {
+                GeomWithData::new(Rectangle::from_corners(lo.into(), hi.into()), unit)
+            };
+            let solid_boxes = solid_pieces.iter().enumerate().map(|(s, list)| {
+                let bounds = list.iter().fold(
+                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                    |(lo, hi), &k| (lo.min(pieces[k].lo), hi.max(pieces[k].hi)),
+                );
+                boxed(bounds, Unit::Solid(s))
+            });
+            let free = (0..pieces.len())
+                .filter(|&k| solid_of[k].is_none())
+                .map(|k| boxed((pieces[k].lo, pieces[k].hi), Unit::Piece(k)));
+            RTree::bulk_load(solid_boxes.chain(free).collect())
+        });
+        Self { pieces, solids, solid_of, acceleration, tree, solid_pieces, units }
+    }
+
+    /// The units whose boxes may reach into `volume`, in the tree's order, each with its box;
+    /// `None` without the tree.
+    pub(super) fn units_reaching<'a>(
+        &'a self,
+        volume: &'a ViewVolume,
+    ) -> Option<impl Iterator<Item = (Unit, DVec3, DVec3)> + 'a> {
+        let tree = self.units.as_ref()?;
+        Some(tree.locate_with_selection_function(volume).map(|g| {
+            let r = g.geom();
+            (g.data, DVec3::from(r.lower()), DVec3::from(r.upper()))
+        }))
     }
 
     /// The solid that piece `o` bounds, unless it has a face of `a` or `b` (seen from or seen on
@@ -210,6 +261,17 @@ impl ViewVolume {
                 let far = DVec3::select(n.cmpge(DVec3::ZERO), hi, lo);
                 n.dot(far) + d > margin
             })
+    }
+}
+
+impl SelectionFunction<BoxedUnit> for &ViewVolume {
+    fn should_unpack_parent(&self, envelope: &AABB<[f64; 3]>) -> bool {
+        self.may_hold_box(DVec3::from(envelope.lower()), DVec3::from(envelope.upper()))
+    }
+
+    fn should_unpack_leaf(&self, leaf: &BoxedUnit) -> bool {
+        let r = leaf.geom();
+        self.may_hold_box(DVec3::from(r.lower()), DVec3::from(r.upper()))
     }
 }
 

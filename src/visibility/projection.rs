@@ -219,6 +219,12 @@ impl ShadowSet {
         self.casts.push(Cast { outline, reach, shadow, shadow_box });
     }
 
+    /// Whether solid `s` was cast whole (`Some(true)`) or piece by piece (`Some(false)`), if it
+    /// was the last solid met (a view that meets each solid once asks right after casting it).
+    pub(super) fn solid_cast(&self, s: usize) -> Option<bool> {
+        self.solids.last().filter(|&&(t, _)| t == s).map(|&(_, whole)| whole)
+    }
+
     pub(super) fn into_shadows(self) -> Vec<Vec<DVec2>> {
         self.casts.into_iter().map(|c| c.shadow).collect()
     }
