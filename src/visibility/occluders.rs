@@ -264,23 +264,14 @@ impl ViewVolume {
     }
 }
 
-impl SelectionFunction<BoxedUnit> for &ViewVolume {
+/// The search of both trees (pieces and units): a node or leaf is entered where its box may
+/// reach inside the volume.
+impl<T: Copy> SelectionFunction<GeomWithData<Rectangle<[f64; 3]>, T>> for &ViewVolume {
     fn should_unpack_parent(&self, envelope: &AABB<[f64; 3]>) -> bool {
         self.may_hold_box(DVec3::from(envelope.lower()), DVec3::from(envelope.upper()))
     }
 
-    fn should_unpack_leaf(&self, leaf: &BoxedUnit) -> bool {
-        let r = leaf.geom();
-        self.may_hold_box(DVec3::from(r.lower()), DVec3::from(r.upper()))
-    }
-}
-
-impl SelectionFunction<Boxed> for &ViewVolume {
-    fn should_unpack_parent(&self, envelope: &AABB<[f64; 3]>) -> bool {
-        self.may_hold_box(DVec3::from(envelope.lower()), DVec3::from(envelope.upper()))
-    }
-
-    fn should_unpack_leaf(&self, leaf: &Boxed) -> bool {
+    fn should_unpack_leaf(&self, leaf: &GeomWithData<Rectangle<[f64; 3]>, T>) -> bool {
         let r = leaf.geom();
         self.may_hold_box(DVec3::from(r.lower()), DVec3::from(r.upper()))
     }
