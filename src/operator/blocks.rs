@@ -11,7 +11,7 @@ use super::cluster::{Cluster, ClusterTree};
 use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
 use crate::scene::Scene;
-use crate::visibility::{PairPlanner, Shaft};
+use crate::visibility::{OccluderUnit, PairPlanner, Shaft};
 
 /// What a block of nodes on face a and elements on face b needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,23 +96,28 @@ impl<'a> FacePairs<'a> {
 /// list, so the walk narrows the occluders as it descends instead of searching the scene's
 /// index from its root for every block.
 struct Between<'a> {
-    parent: Option<&'a [usize]>,
-    found: OnceCell<Vec<usize>>,
+    parent: Option<&'a [OccluderUnit]>,
+    found: OnceCell<Vec<OccluderUnit>>,
 }
 
 impl<'a> Between<'a> {
-    fn new(parent: Option<&'a [usize]>) -> Self {
+    fn new(parent: Option<&'a [OccluderUnit]>) -> Self {
         Self { parent, found: OnceCell::new() }
     }
 
-    fn candidates(&self, planner: &PairPlanner, nodes: &Cluster, elements: &Cluster) -> &[usize] {
+    fn candidates(
+        &self,
+        planner: &PairPlanner,
+        nodes: &Cluster,
+        elements: &Cluster,
+    ) -> &[OccluderUnit] {
         self.found.get_or_init(|| {
             planner.shaft_candidates(nodes.bounds(), elements.bounds(), self.parent)
         })
     }
 
     /// The list for the sub-blocks: this block's if found, else its parent's.
-    fn for_children(&self) -> Option<&[usize]> {
+    fn for_children(&self) -> Option<&[OccluderUnit]> {
         self.found.get().map(Vec::as_slice).or(self.parent)
     }
 }
@@ -238,7 +243,7 @@ impl Walk<'_> {
         plan: &mut BlockPlan,
         t: usize,
         s: usize,
-        within: Option<&'b [usize]>,
+        within: Option<&'b [OccluderUnit]>,
     ) -> Option<(Vec<(usize, usize)>, Between<'b>)> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let between = Between::new(within);
@@ -275,7 +280,7 @@ impl Walk<'_> {
     }
 
     /// Plans block (t, s) and everything below it, its occluders among `within`.
-    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize, within: Option<&[usize]>) {
+    fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize, within: Option<&[OccluderUnit]>) {
         let Some((children, between)) = self.step(plan, t, s, within) else {
             return;
         };
@@ -311,7 +316,7 @@ impl Walk<'_> {
             let mut next = Vec::new();
             for (t, s, within) in &frontier {
                 if let Some((children, between)) = self.step(plan, *t, *s, within.as_deref()) {
-                    let list = between.for_children().map(<[usize]>::to_vec);
+                    let list = between.for_children().map(<[OccluderUnit]>::to_vec);
                     next.extend(children.into_iter().map(|(a, b)| (a, b, list.clone())));
                 }
             }
@@ -322,7 +327,7 @@ impl Walk<'_> {
 }
 
 /// A block still to be walked, with the occluders it inherits.
-type Pending = (usize, usize, Option<Vec<usize>>);
+type Pending = (usize, usize, Option<Vec<OccluderUnit>>);
 
 /// Blocks of the frontier per rank when the walk is shared: enough for the ranks' parts to
 /// cost about the same.

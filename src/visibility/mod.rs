@@ -31,8 +31,8 @@ mod stats;
 
 use hiders::Hider;
 pub use hiders::RecentHiders;
-pub use occluders::{Acceleration, Occluder};
-use occluders::{Unit, ViewVolume};
+use occluders::ViewVolume;
+pub use occluders::{Acceleration, Occluder, OccluderUnit};
 use projection::{Pyramid, ShadowSet, convex_hull, polygon_scale, pyramid_sides, shadow};
 pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
@@ -299,9 +299,9 @@ impl PairPlanner {
         // units: solids whole, and the pieces of none.
         let with_box = |k: usize| {
             let (lo, hi) = pieces[k].bounding_box();
-            (Unit::Piece(k), lo, hi)
+            (OccluderUnit::Piece(k), lo, hi)
         };
-        let found: Box<dyn Iterator<Item = (Unit, DVec3, DVec3)>> =
+        let found: Box<dyn Iterator<Item = (OccluderUnit, DVec3, DVec3)>> =
             match (pair, self.occluders.units_reaching(&volume)) {
                 (Some((_, list)), _) => Box::new(
                     list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])).map(with_box),
@@ -317,15 +317,15 @@ impl PairPlanner {
         let candidate =
             |o: usize| !pieces[o].faces.contains(&own_face) && !pieces[o].faces.contains(&face);
         // The piece of `unit` that hides the whole face, if one does.
-        let mut cast = |unit: Unit| match unit {
-            Unit::Piece(o) => {
+        let mut cast = |unit: OccluderUnit| match unit {
+            OccluderUnit::Piece(o) => {
                 let solid = self.occluders.solid_for_view(o, own_face, face);
                 (candidate(o)
                     && volume.may_hold(&pieces[o])
                     && pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows))
                 .then_some(o)
             }
-            Unit::Solid(s) => {
+            OccluderUnit::Solid(s) => {
                 let list = &self.occluders.solid_pieces[s];
                 // Seen from or on one of its own faces, a solid casts piece by piece.
                 let mut whole =
@@ -356,7 +356,7 @@ impl PairPlanner {
         let hider = match found.by_ref().take(IN_TREE_ORDER).find_map(|(u, _, _)| cast(u)) {
             Some(o) => Some(o),
             None => {
-                let mut rest: Vec<(f64, Unit)> = found
+                let mut rest: Vec<(f64, OccluderUnit)> = found
                     .map(|(u, lo, hi)| ((lo - p).max(p - hi).max(DVec3::ZERO).length_squared(), u))
                     .collect();
                 rest.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));

@@ -23,7 +23,7 @@ pub struct Occluder {
     hi: DVec3,
     /// The diagonal of its bounding box.
     pub(super) diameter: f64,
-    /// Unit normal of its plane (the orientation of `polygon`).
+    /// OccluderUnit normal of its plane (the orientation of `polygon`).
     normal: DVec3,
     /// Per edge (from vertex k to k + 1), the unit normal in the plane pointing into the polygon.
     edge_normals: Vec<DVec3>,
@@ -47,15 +47,17 @@ pub enum Acceleration {
 
 type Boxed = GeomWithData<Rectangle<[f64; 3]>, usize>;
 
-/// What a view searches for ([`OccluderIndex::units_reaching`]): a convex solid whole (by its
-/// number), or a piece that bounds no solid.
+/// What a view or a shaft searches for ([`OccluderIndex::units_reaching`]): a convex solid whole
+/// (by its number), or a piece that bounds no solid (by its number).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub(super) enum Unit {
+pub enum OccluderUnit {
+    /// A convex solid.
     Solid(usize),
+    /// An occluder piece.
     Piece(usize),
 }
 
-type BoxedUnit = GeomWithData<Rectangle<[f64; 3]>, Unit>;
+type BoxedUnit = GeomWithData<Rectangle<[f64; 3]>, OccluderUnit>;
 
 /// The occluders and the structure that finds those overlapping a box.
 #[derive(Clone, Debug)]
@@ -67,8 +69,9 @@ pub(super) struct OccluderIndex {
     solid_of: Vec<Option<usize>>,
     pub(super) acceleration: Acceleration,
     tree: Option<RTree<Boxed>>,
-    /// The pieces of each solid, in index order.
+    /// The pieces of each solid, in index order, and the box around them.
     pub(super) solid_pieces: Vec<Vec<usize>>,
+    solid_boxes: Vec<(DVec3, DVec3)>,
     /// An R*-tree over the units (each solid by the box of its pieces, each other piece by its
     /// own), which the views search: a building is one leaf, not its walls and roof, and is
     /// met once.
@@ -100,23 +103,77 @@ impl OccluderIndex {
                 solid_pieces[*s].push(k);
             }
         }
+        let solid_boxes: Vec<(DVec3, DVec3)> = solid_pieces
+            .iter()
+            .map(|list| {
+                list.iter().fold(
+                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                    |(lo, hi), &k| (lo.min(pieces[k].lo), hi.max(pieces[k].hi)),
+                )
+            })
+            .collect();
         let units = (acceleration == Acceleration::Tree).then(|| {
             let boxed = |(lo, hi): (DVec3, DVec3), unit| {
                 GeomWithData::new(Rectangle::from_corners(lo.into(), hi.into()), unit)
             };
-            let solid_boxes = solid_pieces.iter().enumerate().map(|(s, list)| {
-                let bounds = list.iter().fold(
-                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-                    |(lo, hi), &k| (lo.min(pieces[k].lo), hi.max(pieces[k].hi)),
-                );
-                boxed(bounds, Unit::Solid(s))
-            });
+            let solids =
+                solid_boxes.iter().enumerate().map(|(s, &b)| boxed(b, OccluderUnit::Solid(s)));
             let free = (0..pieces.len())
                 .filter(|&k| solid_of[k].is_none())
-                .map(|k| boxed((pieces[k].lo, pieces[k].hi), Unit::Piece(k)));
-            RTree::bulk_load(solid_boxes.chain(free).collect())
+                .map(|k| boxed((pieces[k].lo, pieces[k].hi), OccluderUnit::Piece(k)));
+            RTree::bulk_load(solids.chain(free).collect())
         });
-        Self { pieces, solids, solid_of, acceleration, tree, solid_pieces, units }
+        Self { pieces, solids, solid_of, acceleration, tree, solid_pieces, solid_boxes, units }
+    }
+
+    /// The units that may reach into `volume` (a solid where one of its pieces may), among
+    /// `within` in its order, else in the unit tree's order; without that tree, each piece
+    /// that may reach as a unit of its own.
+    pub(super) fn units_within(
+        &self,
+        volume: &ViewVolume,
+        within: Option<&[OccluderUnit]>,
+    ) -> Vec<OccluderUnit> {
+        let reaches = |unit: &OccluderUnit| match *unit {
+            OccluderUnit::Piece(k) => volume.may_hold(&self.pieces[k]),
+            OccluderUnit::Solid(s) => {
+                self.solid_pieces[s].iter().any(|&k| volume.may_hold(&self.pieces[k]))
+            }
+        };
+        match (within, self.units_reaching(volume)) {
+            (Some(list), _) => list.iter().copied().filter(reaches).collect(),
+            (None, Some(units)) => units.map(|(u, _, _)| u).filter(reaches).collect(),
+            (None, None) => self.reaching(volume, None).map(OccluderUnit::Piece).collect(),
+        }
+    }
+
+    /// The pieces of `units` that may block a segment between faces `a` and `b` in `volume`
+    /// (not part of `a` or `b`, reaching inside): the same as [`OccluderIndex::inside`] among
+    /// the pieces of the units, with a solid's pieces left out at once where its box misses.
+    pub(super) fn pieces_within(
+        &self,
+        a: usize,
+        b: usize,
+        volume: &ViewVolume,
+        units: &[OccluderUnit],
+    ) -> Vec<usize> {
+        let keep = |k: usize| {
+            let o = &self.pieces[k];
+            !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(o)
+        };
+        let mut found = Vec::new();
+        for &unit in units {
+            match unit {
+                OccluderUnit::Piece(k) => found.extend(Some(k).filter(|&k| keep(k))),
+                OccluderUnit::Solid(s) => {
+                    let (lo, hi) = self.solid_boxes[s];
+                    if volume.may_hold_box(lo, hi) {
+                        found.extend(self.solid_pieces[s].iter().copied().filter(|&k| keep(k)));
+                    }
+                }
+            }
+        }
+        found
     }
 
     /// The units whose boxes may reach into `volume`, in the tree's order, each with its box;
@@ -124,7 +181,7 @@ impl OccluderIndex {
     pub(super) fn units_reaching<'a>(
         &'a self,
         volume: &'a ViewVolume,
-    ) -> Option<impl Iterator<Item = (Unit, DVec3, DVec3)> + 'a> {
+    ) -> Option<impl Iterator<Item = (OccluderUnit, DVec3, DVec3)> + 'a> {
         let tree = self.units.as_ref()?;
         Some(tree.locate_with_selection_function(volume).map(|g| {
             let r = g.geom();
@@ -435,7 +492,7 @@ impl Occluder {
         0.5 * (self.lo + self.hi)
     }
 
-    /// Unit normal of its plane.
+    /// OccluderUnit normal of its plane.
     pub fn normal(&self) -> DVec3 {
         self.normal
     }

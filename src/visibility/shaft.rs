@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::PairPlanner;
-use super::occluders::ViewVolume;
+use super::occluders::{OccluderUnit, ViewVolume};
 use crate::geometry::bounding_box_3d;
 
 impl PairPlanner {
@@ -17,17 +17,21 @@ impl PairPlanner {
     /// corresponding corners), so the test only errs towards [`Shaft::Partial`].
     ///
     /// With `candidates` (those of [`PairPlanner::shaft_candidates`] for these boxes or boxes
-    /// around them), only those are tried; every piece that can meet a segment is among them.
+    /// around them), only their pieces are tried (a solid's not at all where its box misses the
+    /// shaft); every piece that can meet a segment is among them.
     pub fn shaft(
         &self,
         a: usize,
         b: usize,
         nodes: (DVec3, DVec3),
         elements: (DVec3, DVec3),
-        candidates: Option<&[usize]>,
+        candidates: Option<&[OccluderUnit]>,
     ) -> Shaft {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let found: Vec<usize> = self.occluders.inside(a, b, &volume, candidates).collect();
+        let found: Vec<usize> = match candidates {
+            Some(units) => self.occluders.pieces_within(a, b, &volume, units),
+            None => self.occluders.inside(a, b, &volume, None).collect(),
+        };
         if found.is_empty() {
             return Shaft::Clear;
         }
@@ -38,21 +42,22 @@ impl PairPlanner {
         }
     }
 
-    /// The occluder pieces, of `within` (all when `None`), that may meet a segment between the
-    /// boxes `nodes` and `elements`: those reaching into the boxes' shaft, without the faces'
-    /// planes and without the shrink of [`PairPlanner::shaft`], so a superset of what that finds
-    /// for any faces. Boxes inside these have their segments among these boxes' segments, so
-    /// the list of a block of the compressed operator serves as `within` for its sub-blocks,
-    /// which then never search the whole scene.
+    /// The occluders, as units (convex solids whole, the other pieces alone), of `within` (all
+    /// when `None`), that may meet a segment between the boxes `nodes` and `elements`: those
+    /// with a piece reaching into the boxes' shaft, without the faces' planes and without the
+    /// shrink of [`PairPlanner::shaft`], so a superset of what that finds for any faces. Boxes
+    /// inside these have their segments among these boxes' segments, so the list of a block of
+    /// the compressed operator serves as `within` for its sub-blocks, which then never search
+    /// the whole scene; a building is one entry of it, not its walls and roof.
     pub fn shaft_candidates(
         &self,
         nodes: (DVec3, DVec3),
         elements: (DVec3, DVec3),
-        within: Option<&[usize]>,
-    ) -> Vec<usize> {
+        within: Option<&[OccluderUnit]>,
+    ) -> Vec<OccluderUnit> {
         let mut volume = ViewVolume::default();
         push_shaft(&mut volume, nodes, elements, 0.0);
-        self.occluders.reaching(&volume, within).collect()
+        self.occluders.units_within(&volume, within)
     }
 
     /// The occluder pieces that reach into the shaft of [`PairPlanner::shaft`], and whether they
