@@ -480,9 +480,9 @@ pub(crate) fn assemble_row(
 
 /// The entries of the elements `range` of one face in `node`'s row (zero before): all whole, or
 /// each as `part` sees it. Whole elements and visible pieces wait in `batch` where the centroid
-/// method's closed form applies, and add into their entries. (A function of its own, with every reference a parameter, so that the compiler
-/// knows the row's stores leave the discretization alone: as a closure over them, the loop
-/// took a sixth longer on the five-piece surface.)
+/// method's closed form applies, and add into their entries. (A function of its own, with every
+/// reference a parameter, so that the compiler knows the row's stores leave the discretization
+/// alone: as a closure over them, the loop took a sixth longer on the five-piece surface.)
 fn fill_row(
     range: Range<usize>,
     mut part: Option<PartSight<'_>>,

@@ -23,7 +23,7 @@ pub struct Occluder {
     hi: DVec3,
     /// The diagonal of its bounding box.
     pub(super) diameter: f64,
-    /// OccluderUnit normal of its plane (the orientation of `polygon`).
+    /// Unit normal of its plane (the orientation of `polygon`).
     normal: DVec3,
     /// Per edge (from vertex k to k + 1), the unit normal in the plane pointing into the polygon.
     edge_normals: Vec<DVec3>,
@@ -492,7 +492,7 @@ impl Occluder {
         0.5 * (self.lo + self.hi)
     }
 
-    /// OccluderUnit normal of its plane.
+    /// Unit normal of its plane.
     pub fn normal(&self) -> DVec3 {
         self.normal
     }
