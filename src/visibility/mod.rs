@@ -297,6 +297,13 @@ impl PairPlanner {
         // The pair's list holds every occluder in the box of the two faces, a superset of those
         // in the pyramid; the same filter then finds the same ones as the tree. The tree gives
         // units: solids whole, and the pieces of none.
+        // Each piece found is one of neither face and reaches into the volume: the tree's units
+        // by their boxes only, so its pieces are filtered here, once.
+        let candidate = |o: usize| {
+            !pieces[o].faces.contains(&own_face)
+                && !pieces[o].faces.contains(&face)
+                && volume.may_hold(&pieces[o])
+        };
         let with_box = |k: usize| {
             let (lo, hi) = pieces[k].bounding_box();
             (OccluderUnit::Piece(k), lo, hi)
@@ -306,7 +313,10 @@ impl PairPlanner {
                 (Some((_, list)), _) => Box::new(
                     list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])).map(with_box),
                 ),
-                (None, Some(units)) => Box::new(units),
+                (None, Some(units)) => Box::new(units.filter(|&(unit, _, _)| match unit {
+                    OccluderUnit::Piece(o) => candidate(o),
+                    OccluderUnit::Solid(_) => true,
+                })),
                 (None, None) => {
                     Box::new(self.occluders.inside(own_face, face, &volume, None).map(with_box))
                 }
@@ -314,16 +324,11 @@ impl PairPlanner {
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         let solids = &self.occluders.solids;
-        let candidate =
-            |o: usize| !pieces[o].faces.contains(&own_face) && !pieces[o].faces.contains(&face);
         // The piece of `unit` that hides the whole face, if one does.
         let mut cast = |unit: OccluderUnit| match unit {
             OccluderUnit::Piece(o) => {
                 let solid = self.occluders.solid_for_view(o, own_face, face);
-                (candidate(o)
-                    && volume.may_hold(&pieces[o])
-                    && pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows))
-                .then_some(o)
+                pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows).then_some(o)
             }
             OccluderUnit::Solid(s) => {
                 let list = &self.occluders.solid_pieces[s];
@@ -331,7 +336,7 @@ impl PairPlanner {
                 let mut whole =
                     list.first().and_then(|&o| self.occluders.solid_for_view(o, own_face, face));
                 for &o in list {
-                    if !candidate(o) || !volume.may_hold(&pieces[o]) {
+                    if !candidate(o) {
                         continue;
                     }
                     if pyramid.cast_part(&pieces[o], whole, solids, || hides(o), &mut shadows) {
