@@ -137,11 +137,7 @@ impl PairIntegrator {
             LaneObserver::Scalar => Some(self.integrate(el, basis, p, normal, visibility)),
             LaneObserver::Lane(obs) => {
                 for piece in pieces {
-                    let first = el.to_scaled(piece[0]);
-                    for m in 1..piece.len().saturating_sub(1) {
-                        let tri = [first, el.to_scaled(piece[m]), el.to_scaled(piece[m + 1])];
-                        batch.push(tag, obs, tri, &mut sink);
-                    }
+                    push_fan(el, obs, piece, (tag, batch), &mut sink);
                 }
                 None
             }
@@ -450,6 +446,23 @@ pub fn apply_at(
             },
         )
         .collect())
+}
+
+/// Hands the convex `piece` of element `el` (face coordinates, counter-clockwise) to `batch`
+/// for the observer `obs`, as the fan of triangles from its first corner in the element's units,
+/// each with `tag`: the values `sink` receives add up to the piece's closed form.
+pub(crate) fn push_fan<T: Copy>(
+    el: &ElementFrame,
+    obs: Observer,
+    piece: &[DVec2],
+    (tag, batch): (T, &mut lanes::Batch<T>),
+    mut sink: impl FnMut(T, f64),
+) {
+    let first = el.to_scaled(piece[0]);
+    for m in 1..piece.len().saturating_sub(1) {
+        let tri = [first, el.to_scaled(piece[m]), el.to_scaled(piece[m + 1])];
+        batch.push(tag, obs, tri, &mut sink);
+    }
 }
 
 /// The row of K for a point `node` of S against every element (entries of elements it does not

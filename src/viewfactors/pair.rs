@@ -13,7 +13,7 @@ use super::patch::{GaussRules, Patch};
 use super::poles::poles;
 use super::sight::{PointView, Sight};
 use super::{Context, MAX_SPLITS, Tally};
-use crate::assembly::{FullPair, LaneObserver};
+use crate::assembly::{FullPair, LaneObserver, push_fan};
 use crate::geometry::{bounding_box_3d, convex_polygons_distance};
 use crate::kernels::lanes;
 use crate::quadrature::TanhSinh;
@@ -240,15 +240,9 @@ impl Context<'_> {
                     lane_sink((k, w), self.signed_integral(j, p, normal, added, taken));
                 }
                 LaneObserver::Lane(obs) => {
-                    // Each convex piece as the fan of triangles from its first corner.
                     for (pieces, weight) in [(added, w), (taken, -w)] {
                         for piece in &pieces {
-                            let first = el.to_scaled(piece[0]);
-                            for m in 1..piece.len() - 1 {
-                                let tri =
-                                    [first, el.to_scaled(piece[m]), el.to_scaled(piece[m + 1])];
-                                batch.push((k, weight), obs, tri, &mut lane_sink);
-                            }
+                            push_fan(el, obs, piece, ((k, weight), &mut batch), &mut lane_sink);
                         }
                     }
                 }
