@@ -90,6 +90,14 @@ impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
                 if diff <= self.options.tolerance {
                     return (value, diff);
                 }
+                // Past the first two levels the digits double per level: the last three
+                // levels' estimate may already meet the tolerance (louvre room at 1e-6:
+                // 41.0 M -> 20.9 M evaluations, 31.7 -> 22.5 s, no entry further from a 1e-10
+                // reference; level 2 to 3 differed by 1e-10 where level 1 to 2 by 3e-6).
+                let kept = kept_error(value, before, diff);
+                if before.is_some() && kept <= self.options.tolerance {
+                    return (value, kept);
+                }
                 if level == self.rule.max_level && depth < self.options.max_depth {
                     let (mut sum, mut error) = (0.0, 0.0);
                     for child in triangle_quarters(t) {
