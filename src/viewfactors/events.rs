@@ -12,21 +12,25 @@ use crate::visibility::PairPlanner;
 /// occluder is an edge, and its shadow changes side); through a vertex of the target and an edge
 /// of the occluder (EV: the viewer sees the vertex just past the edge), through an edge of the
 /// target and a vertex of the occluder (VE), and between two occluders the same (a shadow's
-/// corner crossing another shadow's edge). A vertex–edge plane counts only where the viewer can
-/// be on it: on the rays through the vertex and the edge on the side the event needs, which cut
-/// the viewing element (most planes do not). Curved (EEE) events between three mutually skew
-/// edges are not among them.
+/// corner crossing another shadow's edge). A vertex–edge event happens only where the viewer can
+/// be on its plane: on the rays through the vertex and the edge on the side the event needs,
+/// a segment of the viewing element (most planes miss it), and only the pieces that segment
+/// reaches are cut along it. Curved (EEE) events between three mutually skew edges are not
+/// among them.
 pub(super) fn event_planes(
     viewer: &[DVec3; 3],
     target: &[DVec3; 3],
     occluders: &[usize],
     planner: &PairPlanner,
-) -> Vec<(DVec3, DVec3)> {
+) -> Vec<Event> {
     let polygons: Vec<&[DVec3]> =
         occluders.iter().map(|&o| planner.occluders()[o].polygon.as_slice()).collect();
     let normals: Vec<DVec3> = occluders.iter().map(|&o| planner.occluders()[o].normal()).collect();
-    let mut planes: Vec<(DVec3, DVec3)> =
-        normals.iter().zip(&polygons).map(|(&n, polygon)| (n, polygon[0])).collect();
+    let mut planes: Vec<Event> = normals
+        .iter()
+        .zip(&polygons)
+        .map(|(&normal, polygon)| Event { normal, point: polygon[0], extent: None })
+        .collect();
     let twins = EdgeTwins::new(&polygons, &normals);
     // The vertices of one polygon against the edges of another; `None` is the target.
     let mut vertex_edge = |vertex_owner: Option<usize>, edge_owner: Option<usize>, side| {
@@ -42,10 +46,10 @@ pub(super) fn event_planes(
                     && cuts(normal, v, viewer)
                     && (!matches!(side, EventSide::Either) || cuts(normal, v, target))
                     && edge_owner.is_none_or(|o| twins.edge_may_outline(o, k, v))
-                    && wedge.meets(viewer, side)
+                    && let Some(extent) = wedge.extent(viewer, side)
                     && vertex_owner.is_none_or(|o| twins.vertex_may_outline(o, l, e0, e1))
                 {
-                    planes.push((normal, v));
+                    planes.push(Event { normal, point: v, extent: Some(extent) });
                 }
             }
         }
@@ -62,6 +66,60 @@ pub(super) fn event_planes(
         }
     }
     planes
+}
+
+/// How far past its ends, as a share of the viewing element's chord on its plane, an event's
+/// segment is taken to reach. Where a segment ends (the vertex lines up with an end of the
+/// edge) the integrand is not smooth in any direction, so every piece around that point must
+/// have it as a corner, also where rounding puts the end on a piece's side: occluded box at the
+/// default tolerance (2-core EPYC) with the bare segments 2.9 s, reciprocity 2.5e-9; with 0.02
+/// 3.2 s, 1.0e-9, as with whole planes (4.5 s).
+const END_MARGIN: f64 = 0.02;
+
+/// A plane across which the integrand stops being smooth, and where on the viewing element it
+/// does so.
+pub(super) struct Event {
+    /// The plane's unit normal and a point of it.
+    pub(super) normal: DVec3,
+    pub(super) point: DVec3,
+    /// The segment of the viewing element where the event happens (a vertex–edge event happens
+    /// only on the rays through its vertex and edge), or `None` across the whole element.
+    pub(super) extent: Option<[DVec3; 2]>,
+}
+
+impl Event {
+    /// Whether the event happens inside the convex planar polygon `piece` (unit normal
+    /// `normal`), so that the piece must be cut along its plane: a piece its segment misses is
+    /// smooth across the plane.
+    pub(super) fn crosses(&self, piece: &[DVec3], normal: DVec3) -> bool {
+        let Some([x1, x2]) = self.extent else { return true };
+        let m = piece.len();
+        let area = (0..m).map(|k| piece[k].cross(piece[(k + 1) % m])).sum::<DVec3>().dot(normal);
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for k in 0..m {
+            let (a, b) = (piece[k], piece[(k + 1) % m]);
+            // Inside edge k: c0 + λ (c1 - c0) >= 0, with the piece's orientation.
+            let inside = |x: DVec3| (b - a).cross(x - a).dot(normal) * area.signum();
+            let (c0, c1) = (inside(x1), inside(x2));
+            let slope = c1 - c0;
+            if slope == 0.0 {
+                if c0 <= 0.0 {
+                    return false;
+                }
+            } else if slope > 0.0 {
+                lo = lo.max(-c0 / slope);
+            } else {
+                hi = hi.min(-c0 / slope);
+            }
+        }
+        // Rounding: a segment that only touches the piece's boundary leaves it whole.
+        (hi - lo) * (x2 - x1).length() > 1e-12 * bounding_box_diameter(piece)
+    }
+}
+
+fn bounding_box_diameter(polygon: &[DVec3]) -> f64 {
+    let (lo, hi) = bounding_box_3d(polygon);
+    (hi - lo).length()
 }
 
 /// For each edge of the occluder polygons, the normal of another polygon among them that shares
@@ -169,9 +227,9 @@ impl Wedge {
         (n.length_squared() > 0.0).then(|| n.normalize())
     }
 
-    /// Whether the region of the plane on `side` cuts the convex polygon `viewer` (which must
-    /// straddle the plane for the plane to split it at all).
-    fn meets(&self, viewer: &[DVec3], side: EventSide) -> bool {
+    /// The segment where the region of the plane on `side` cuts the convex polygon `viewer`
+    /// (which must straddle the plane for the plane to split it at all), if it does.
+    fn extent(&self, viewer: &[DVec3], side: EventSide) -> Option<[DVec3; 2]> {
         let n = self.d1.cross(self.d2);
         let h: SmallVec<[f64; 4]> = viewer.iter().map(|&x| n.dot(x - self.apex)).collect();
         let m = viewer.len();
@@ -185,7 +243,7 @@ impl Wedge {
             .collect();
         let [x1, x2] = match crossings[..] {
             [x1, x2] => [x1, x2],
-            _ => return false,
+            _ => return None,
         };
         // Coordinates (α, β) of x - apex = α d1 + β d2 along the segment x1 + λ (x2 - x1).
         let nn = n.length_squared();
@@ -201,7 +259,7 @@ impl Wedge {
                 let slope = c1 - c0;
                 if slope == 0.0 {
                     if c0 < 0.0 {
-                        return false;
+                        return None;
                     }
                 } else if slope > 0.0 {
                     lo = lo.max(-c0 / slope);
@@ -209,15 +267,21 @@ impl Wedge {
                     hi = hi.min(-c0 / slope);
                 }
             }
-            lo <= hi
+            (lo <= hi).then_some((lo, hi))
         };
         let beyond = || admits(&[(a1, a2), (b1, b2), (a1 + b1 - 1.0, a2 + b2 - 1.0)]);
         let behind = || admits(&[(-a1, -a2), (-b1, -b2)]);
-        match side {
-            EventSide::Beyond => beyond(),
-            EventSide::Behind => behind(),
-            EventSide::Either => beyond() || behind(),
-        }
+        let (lo, hi) = match side {
+            EventSide::Beyond => beyond()?,
+            EventSide::Behind => behind()?,
+            // The two regions are apart on the chord: the span of both covers them.
+            EventSide::Either => match (beyond(), behind()) {
+                (Some((l1, h1)), Some((l2, h2))) => (l1.min(l2), h1.max(h2)),
+                (one, other) => one.or(other)?,
+            },
+        };
+        let (lo, hi) = ((lo - END_MARGIN).max(0.0), (hi + END_MARGIN).min(1.0));
+        Some([x1 + (x2 - x1) * lo, x1 + (x2 - x1) * hi])
     }
 }
 

@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use super::events::{centroid, clip_polygon_3d, contact_cuts, event_planes, split};
+use super::events::{Event, centroid, clip_polygon_3d, contact_cuts, event_planes, split};
 use super::outer::Outer;
 use super::patch::{GaussRules, Patch};
 use super::poles::poles;
@@ -167,10 +167,16 @@ impl Context<'_> {
         }
         let (ti, tj) = ((&ei.vertices, &fa.frame), (&ej.vertices, &fb.frame));
         let events = event_planes(&ei.vertices, &ej.vertices, occluders, self.planner);
-        for (normal, point) in contact_cuts(ti, tj, tol).into_iter().chain(events) {
+        let cuts = contact_cuts(ti, tj, tol);
+        let cuts = cuts.into_iter().map(|(normal, point)| Event { normal, point, extent: None });
+        for event in cuts.chain(events) {
             let mut next = Vec::with_capacity(pieces.len() + 1);
             for piece in pieces {
-                match split(&piece, normal, point) {
+                if !event.crosses(&piece, fa.frame.normal) {
+                    next.push(piece);
+                    continue;
+                }
+                match split(&piece, event.normal, event.point) {
                     Some(parts) => next.extend(parts),
                     None => next.push(piece),
                 }
