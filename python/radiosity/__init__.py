@@ -169,11 +169,15 @@ class ViewFactors(scipy.sparse.csr_matrix):
     (reciprocity, row sums, error estimate)."""
 
 
-def view_factors(scene, refine=0, tolerance=1e-10, max_depth=0, progress=None):
+def view_factors(
+    scene, refine=0, tolerance=1e-10, max_depth=0, each_direction=False, progress=None
+):
     """View factors between the elements of the scene's uniform mesh at ``refine``, each to
-    the absolute ``tolerance``, as ``radiosity viewfactors`` computes them."""
+    the absolute ``tolerance``, as ``radiosity viewfactors`` computes them: each pair
+    integrated once, over the smaller element (F_ji = A_i F_ij / A_j), or with
+    ``each_direction`` both, so that reciprocity checks the accuracy."""
     indptr, indices, data, n, areas, summary = _native.view_factors(
-        scene, refine, tolerance, max_depth, progress
+        scene, refine, tolerance, max_depth, each_direction, progress
     )
     f = ViewFactors((data, indices, indptr), shape=(n, n))
     f.areas = areas

@@ -543,7 +543,7 @@ fn operator(
 /// viewfactors` computes them: (indptr, indices, data, n, areas, summary JSON) of the CSR
 /// matrix of its non-zero entries.
 #[pyfunction]
-#[pyo3(signature = (scene, refine, tolerance, max_depth, progress=None))]
+#[pyo3(signature = (scene, refine, tolerance, max_depth, each_direction=false, progress=None))]
 #[allow(clippy::type_complexity)]
 fn view_factors<'py>(
     py: Python<'py>,
@@ -551,6 +551,7 @@ fn view_factors<'py>(
     refine: u32,
     tolerance: f64,
     max_depth: u32,
+    each_direction: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(
     Bound<'py, PyArray1<i64>>,
@@ -560,7 +561,7 @@ fn view_factors<'py>(
     Bound<'py, PyArray1<f64>>,
     String,
 )> {
-    let options = ViewFactorOptions { tolerance, max_depth, ..Default::default() };
+    let options = ViewFactorOptions { tolerance, max_depth, each_direction, ..Default::default() };
     options.validate().map_err(raised)?;
     let mut config = RunConfig::paper(BuiltinScene::Cube, refine);
     config.progress = progress_to(progress);

@@ -409,6 +409,11 @@ pub(crate) struct ViewFactorArgs {
     /// difference says: on the paper's surface, reciprocity is 5e-11 without splitting)
     #[arg(long, default_value_t = 0)]
     pub(crate) max_depth: u32,
+    /// Integrate F_ij and F_ji each, so that reciprocity checks the accuracy (twice the time);
+    /// by default each pair is integrated once, over the smaller element, and the other entry
+    /// is A_i F_ij / A_j
+    #[arg(long)]
+    pub(crate) each_direction: bool,
     /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv (dense), or only its non-zero
     /// entries as SciPy sparse CSR .npz (scipy.sparse.load_npz) or Matrix Market .mtx
     #[arg(long, value_name = "FILE")]

@@ -10,8 +10,9 @@
 //!   whole shaft, and F_ij = 0;
 //! - otherwise T_i is cut along the planes where the visible part of T_j changes shape (each
 //!   occluder's plane, and the vertex–edge event planes between T_j and the occluders and between
-//!   occluders, the EV and VE events of `mesh/shadow_lines.rs`), and where it crosses T_j's
-//!   plane, so that the integrand is smooth on every piece. An event at an edge that two
+//!   occluders, the EV and VE events of `mesh/shadow_lines.rs`, each only across the pieces
+//!   that its segment of T_i reaches), and where it crosses T_j's plane, so that the integrand
+//!   is smooth on every piece. An event at an edge that two
 //!   occluders share, seen on its plane from the same side of both (inside a solid's shadow),
 //!   changes nothing and is not cut along, nor one at a vertex all of whose edges are such.
 //!   Where a corner of T_j lies on T_i (a contact along part of an edge, a point contact), or
@@ -35,8 +36,10 @@
 //!   together are within `--tolerance` on F_ij. The estimates also find what the a priori order
 //!   does not see: the curved events of three mutually skew edges, which are not cut along.
 //!
-//! Reciprocity A_i F_ij = A_j F_ji then comes from accuracy (1e-12 on the paper's surfaces, 1e-9
-//! on the occluded box), not from averaging.
+//! Each pair is integrated once, over the element of smaller area: F_ji = A_i F_ij / A_j then
+//! has the error of F_ij times A_i / A_j <= 1 (as View3D computes A_i F_ij once per pair). With
+//! [`ViewFactorOptions::each_direction`] both are integrated, and reciprocity measures the
+//! accuracy (1e-12 on the paper's surfaces, 1e-9 on the occluded box).
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -67,11 +70,14 @@ pub struct ViewFactorOptions {
     pub max_level: u32,
     /// Most times a touching part is split into four when the levels disagree (default 0).
     pub max_depth: u32,
+    /// Integrate F_ij and F_ji each, so that reciprocity checks the accuracy (twice the work);
+    /// otherwise each pair once, over the element of smaller area (default).
+    pub each_direction: bool,
 }
 
 impl Default for ViewFactorOptions {
     fn default() -> Self {
-        Self { tolerance: 1e-10, max_level: 3, max_depth: 0 }
+        Self { tolerance: 1e-10, max_level: 3, max_depth: 0, each_direction: false }
     }
 }
 
@@ -120,6 +126,9 @@ pub struct ViewFactors {
     pub error_estimate: f64,
     /// Point-to-element integrals evaluated.
     pub evaluations: u64,
+    /// Whether F_ij and F_ji were integrated each ([`ViewFactorOptions::each_direction`]);
+    /// otherwise reciprocity holds by construction, to rounding.
+    pub each_direction: bool,
 }
 
 /// Summary of a view factor computation, for reports.
@@ -139,6 +148,9 @@ pub struct ViewFactorSummary {
     pub error_estimate: f64,
     /// Point-to-element integrals evaluated.
     pub evaluations: u64,
+    /// Whether F_ij and F_ji were integrated each, so that `reciprocity_error` measures the
+    /// accuracy; otherwise each pair once, and reciprocity holds by construction.
+    pub each_direction: bool,
     /// Entries F_ij that are not zero (what a sparse output stores).
     pub nonzeros: usize,
     /// Wall time.
@@ -162,6 +174,7 @@ impl ViewFactors {
             reciprocity_error: self.reciprocity_error(),
             error_estimate: self.error_estimate,
             evaluations: self.evaluations,
+            each_direction: self.each_direction,
             nonzeros: self.nonzeros(),
             seconds,
         }
@@ -258,7 +271,12 @@ pub fn view_factors(
     let context = Context { scene, mesh, disc: &disc, planner, integrator: &integrator, options };
     let n = mesh.len();
     let faces = mesh.face_count();
-    let rows: Vec<(Vec<(u32, f64)>, Tally)> = (0..n)
+    let areas: Vec<f64> = mesh.elements().iter().map(Element::area).collect();
+    // Row i integrates F_ij where T_i is the smaller of the two (by index between equals).
+    let integrated = |i: usize, j: usize| {
+        options.each_direction || areas[i].total_cmp(&areas[j]).then(i.cmp(&j)).is_lt()
+    };
+    let mut rows: Vec<(Vec<(u32, f64)>, Tally)> = (0..n)
         .into_par_iter()
         .map(|i| {
             let mut row = Vec::new();
@@ -266,7 +284,7 @@ pub fn view_factors(
             // Whether any occluder can lie between the two faces: asked once per face.
             let mut occluded: Vec<Option<bool>> = vec![None; faces];
             let face = mesh.elements()[i].face;
-            for j in 0..n {
+            for j in (0..n).filter(|&j| integrated(i, j)) {
                 let other = mesh.elements()[j].face;
                 let occluded = *occluded[other]
                     .get_or_insert_with(|| !planner.candidates(face, other).is_empty());
@@ -279,6 +297,19 @@ pub fn view_factors(
             (row, tally)
         })
         .collect();
+    if !options.each_direction {
+        // F_ji = A_i F_ij / A_j, whose error is F_ij's times A_i / A_j <= 1.
+        let mut mirrored: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+        for (i, (row, _)) in rows.iter().enumerate() {
+            for &(j, v) in row {
+                mirrored[j as usize].push((i as u32, areas[i] * v / areas[j as usize]));
+            }
+        }
+        for ((row, _), more) in rows.iter_mut().zip(mirrored) {
+            row.extend(more);
+            row.sort_unstable_by_key(|&(j, _)| j);
+        }
+    }
     let nonzeros = rows.iter().map(|(row, _)| row.len()).sum();
     let mut row_starts = Vec::with_capacity(n + 1);
     row_starts.push(0);
@@ -293,8 +324,16 @@ pub fn view_factors(
         error_estimate = error_estimate.max(tally.error);
         evaluations += tally.evaluations;
     }
-    let areas = mesh.elements().iter().map(Element::area).collect();
-    Ok(ViewFactors { row_starts, columns, values, areas, error_estimate, evaluations })
+    let each_direction = options.each_direction;
+    Ok(ViewFactors {
+        row_starts,
+        columns,
+        values,
+        areas,
+        error_estimate,
+        evaluations,
+        each_direction,
+    })
 }
 
 /// What the pairs of one computation share.
