@@ -27,7 +27,8 @@
 //!   their separation from T_j and from the poles of the shadow corners the piece has (the
 //!   Bernstein-ellipse bound), and again with one order more, whose difference is the error
 //!   estimate; the nested tensor tanh-sinh rule takes the triangles that touch T_j (d log d
-//!   behaviour beside a common edge), collapsed at the corner nearest a corner of T_j, with
+//!   behaviour beside a common edge) or a point where an occluder's edge meets T_i (where the
+//!   shadow's limit depends on the direction), collapsed at the corner nearest either, with
 //!   Bailey's estimate from its last three levels (`kept_error`); where points see T_j
 //!   clipped or shadowed, the triangle's four quarters are integrated too, their sum kept and
 //!   its difference from the whole's counted in the estimate (the levels of one rule can agree
