@@ -154,37 +154,38 @@ fn example_before(file: &str, name: &str) -> Scene {
     crate::scene::parse_toml(&text[..end], &path).unwrap()
 }
 
-/// The occluded box at refine 0 and what a [`Context`] of its view factors borrows.
-struct OccludedBox {
+/// A scene at refine 0 and what a [`Context`] of its view factors borrows.
+struct Fixture {
     scene: Scene,
     mesh: Mesh,
     planner: PairPlanner,
     disc: Discretization,
     integrator: PairIntegrator,
-    options: ViewFactorOptions,
 }
 
-impl OccludedBox {
-    fn new() -> Self {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
-        let scene = crate::scene::load(&path).unwrap();
+impl Fixture {
+    fn new(scene: Scene) -> Self {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
         let planner = PairPlanner::new(&scene);
         let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
         let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
-        let options = ViewFactorOptions::default();
-        Self { scene, mesh, planner, disc, integrator, options }
+        Self { scene, mesh, planner, disc, integrator }
     }
 
-    fn context(&self) -> Context<'_> {
+    /// The scene `examples/FILE`.
+    fn example(file: &str) -> Self {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
+        Self::new(crate::scene::load(&path).unwrap())
+    }
+
+    fn context<'a>(&'a self, options: &'a ViewFactorOptions) -> Context<'a> {
         Context {
             scene: &self.scene,
             mesh: &self.mesh,
             disc: &self.disc,
             planner: &self.planner,
             integrator: &self.integrator,
-            options: &self.options,
+            options,
         }
     }
 }
@@ -194,9 +195,10 @@ impl OccludedBox {
 /// a tilted plate and an L plate between the walls), to rounding.
 #[test]
 fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
-    let fixture = OccludedBox::new();
-    let context = fixture.context();
-    let OccludedBox { scene, mesh, planner, disc, integrator, .. } = &fixture;
+    let fixture = Fixture::example("occluded-box.toml");
+    let options = ViewFactorOptions::default();
+    let context = fixture.context(&options);
+    let Fixture { scene, mesh, planner, disc, integrator } = &fixture;
     let mut shadows_seen = [0usize; INCLUSION_EXCLUSION + 1];
     for (i, ei) in mesh.elements().iter().enumerate() {
         for (j, ej) in mesh.elements().iter().enumerate() {
@@ -234,9 +236,10 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
 /// box's shadowed pairs.
 #[test]
 fn shadowed_points_in_lanes_equal_the_scalar_closed_forms() {
-    let fixture = OccludedBox::new();
-    let context = fixture.context();
-    let OccludedBox { mesh, planner, .. } = &fixture;
+    let fixture = Fixture::example("occluded-box.toml");
+    let options = ViewFactorOptions::default();
+    let context = fixture.context(&options);
+    let Fixture { mesh, planner, .. } = &fixture;
     let rules = GaussRules::new(6);
     let (mut pairs, mut partial) = (0, 0);
     for (i, ei) in mesh.elements().iter().enumerate() {
@@ -396,35 +399,23 @@ fn monte_carlo(mesh: &Mesh, i: usize, j: usize, samples: usize, seed: u64) -> (f
 /// orders that agreed to 2e-8 there had left them 4.5e-6 and 2.2e-6 off.
 #[test]
 fn estimates_hold_where_occluders_meet_the_element_at_a_point() {
-    let louvre = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/louvre-room.toml");
     let cases = [
-        (crate::scene::load(&louvre).unwrap(), [(46, 2), (50, 2), (47, 3)]),
-        (crate::scene::city(4, 4).unwrap(), [(123, 182), (222, 160), (111, 170)]),
+        (Fixture::example("louvre-room.toml"), [(46, 2), (50, 2), (47, 3)]),
+        (Fixture::new(crate::scene::city(4, 4).unwrap()), [(123, 182), (222, 160), (111, 170)]),
     ];
-    for (scene, pairs) in cases {
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
+    for (fixture, pairs) in cases {
         let rules = OuterRules::new(ViewFactorOptions::default().max_level);
         let at = |tolerance: f64, (i, j): (usize, usize)| {
             let options = ViewFactorOptions { tolerance, ..Default::default() };
-            let context = Context {
-                scene: &scene,
-                mesh: &mesh,
-                disc: &disc,
-                planner: &planner,
-                integrator: &integrator,
-                options: &options,
-            };
             let mut tally = Tally::default();
-            (context.pair(i, j, true, &rules, &mut tally), tally.error)
+            (fixture.context(&options).pair(i, j, true, &rules, &mut tally), tally.error)
         };
+        let name = &fixture.scene.name;
         for (i, j) in pairs {
             let ((loose, estimate), (tight, _)) = (at(1e-6, (i, j)), at(1e-10, (i, j)));
             let off = (loose - tight).abs();
-            assert!(estimate <= 1e-6, "{}: F({i}, {j}) estimate {estimate}", scene.name);
-            assert!(off <= 1e-6, "{}: F({i}, {j}) = {loose}, {off} off", scene.name);
+            assert!(estimate <= 1e-6, "{name}: F({i}, {j}) estimate {estimate}");
+            assert!(off <= 1e-6, "{name}: F({i}, {j}) = {loose}, {off} off");
         }
     }
 }
@@ -434,21 +425,12 @@ fn estimates_hold_where_occluders_meet_the_element_at_a_point() {
 /// 4.0 misses one such city pair by 8.5e-4 (docs/performance.md).
 #[test]
 fn partly_shadowed_pairs_agree_with_monte_carlo() {
-    let louvre = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/louvre-room.toml");
-    for scene in [crate::scene::city(4, 4).unwrap(), crate::scene::load(&louvre).unwrap()] {
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
+    let scenes =
+        [Fixture::new(crate::scene::city(4, 4).unwrap()), Fixture::example("louvre-room.toml")];
+    for fixture in scenes {
+        let Fixture { scene, mesh, planner, .. } = &fixture;
         let options = ViewFactorOptions { tolerance: 1e-6, ..Default::default() };
-        let context = Context {
-            scene: &scene,
-            mesh: &mesh,
-            disc: &disc,
-            planner: &planner,
-            integrator: &integrator,
-            options: &options,
-        };
+        let context = fixture.context(&options);
         let rules = OuterRules::new(options.max_level);
         let n = mesh.len();
         // Pairs apart (the kernel's variance stays bounded), some of whose segments are
@@ -462,7 +444,7 @@ fn partly_shadowed_pairs_agree_with_monte_carlo() {
             if !apart || planner.candidates(ei.face, ej.face).is_empty() {
                 continue;
             }
-            let (_, _, seen) = monte_carlo(&mesh, i, j, 2_000, k as u64);
+            let (_, _, seen) = monte_carlo(mesh, i, j, 2_000, k as u64);
             if (0.2..0.8).contains(&seen) {
                 pairs.push((i, j));
             }
@@ -476,7 +458,7 @@ fn partly_shadowed_pairs_agree_with_monte_carlo() {
             .map(|&(i, j)| {
                 let mut tally = Tally::default();
                 let f = context.pair(i, j, true, &rules, &mut tally);
-                let (mean, error, _) = monte_carlo(&mesh, i, j, 400_000, (i * n + j) as u64);
+                let (mean, error, _) = monte_carlo(mesh, i, j, 400_000, (i * n + j) as u64);
                 (i, j, f, mean, error)
             })
             .collect();
