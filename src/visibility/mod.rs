@@ -215,7 +215,7 @@ impl PairPlanner {
         let tol = 1e-12 * fa.size.max(fb.size);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
         volume.push_box(fa.lo.min(fb.lo), fa.hi.max(fb.hi), tol);
-        let mut found: Vec<usize> = self.occluders.inside(a, b, &volume, None).collect();
+        let mut found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
         found.sort_unstable();
         found
     }
@@ -299,11 +299,7 @@ impl PairPlanner {
         // units: solids whole, and the pieces of none.
         // Each piece found is one of neither face and reaches into the volume: the tree's units
         // by their boxes only, so its pieces are filtered here, once.
-        let candidate = |o: usize| {
-            !pieces[o].faces.contains(&own_face)
-                && !pieces[o].faces.contains(&face)
-                && volume.may_hold(&pieces[o])
-        };
+        let candidate = |o: usize| self.occluders.may_block(o, own_face, face, &volume);
         let with_box = |k: usize| {
             let (lo, hi) = pieces[k].bounding_box();
             (OccluderUnit::Piece(k), lo, hi)
@@ -318,7 +314,7 @@ impl PairPlanner {
                     OccluderUnit::Solid(_) => true,
                 })),
                 (None, None) => {
-                    Box::new(self.occluders.inside(own_face, face, &volume, None).map(with_box))
+                    Box::new(self.occluders.inside(own_face, face, &volume).map(with_box))
                 }
             };
         let pyramid =

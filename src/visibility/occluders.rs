@@ -143,12 +143,15 @@ impl OccluderIndex {
         match (within, self.units_reaching(volume)) {
             (Some(list), _) => list.iter().copied().filter(reaches).collect(),
             (None, Some(units)) => units.map(|(u, _, _)| u).filter(reaches).collect(),
-            (None, None) => self.reaching(volume, None).map(OccluderUnit::Piece).collect(),
+            (None, None) => (0..self.pieces.len())
+                .filter(|&k| volume.may_hold(&self.pieces[k]))
+                .map(OccluderUnit::Piece)
+                .collect(),
         }
     }
 
     /// The pieces of `units` that may block a segment between faces `a` and `b` in `volume`
-    /// (not part of `a` or `b`, reaching inside): the same as [`OccluderIndex::inside`] among
+    /// ([`OccluderIndex::may_block`]): the same as [`OccluderIndex::inside`] among
     /// the pieces of the units, with a solid's pieces left out at once where its box misses.
     pub(super) fn pieces_within(
         &self,
@@ -157,10 +160,7 @@ impl OccluderIndex {
         volume: &ViewVolume,
         units: &[OccluderUnit],
     ) -> Vec<usize> {
-        let keep = |k: usize| {
-            let o = &self.pieces[k];
-            !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(o)
-        };
+        let keep = |k: usize| self.may_block(k, a, b, volume);
         let mut found = Vec::new();
         for &unit in units {
             match unit {
@@ -219,38 +219,28 @@ impl OccluderIndex {
         })
     }
 
-    /// Occluders that may block a segment between faces `a` and `b` that lies in `volume`: not
-    /// part of `a` or `b`, and not wholly outside one of the volume's planes; found lazily
-    /// among `within` (a list known to hold all that can reach the volume), else in the tree's
-    /// order or in index order.
+    /// Occluders that may block a segment between faces `a` and `b` that lies in `volume`
+    /// ([`OccluderIndex::may_block`]), found lazily in the tree's order or in index order.
     pub(super) fn inside<'a>(
         &'a self,
         a: usize,
         b: usize,
         volume: &'a ViewVolume,
-        within: Option<&'a [usize]>,
     ) -> Box<dyn Iterator<Item = usize> + 'a> {
-        Box::new(self.reaching(volume, within).filter(move |&k| {
-            let o = &self.pieces[k];
-            !o.faces.contains(&a) && !o.faces.contains(&b)
-        }))
-    }
-
-    /// Occluders not wholly outside one of the volume's planes, among `within` in its order,
-    /// else in the tree's order or in index order.
-    pub(super) fn reaching<'a>(
-        &'a self,
-        volume: &'a ViewVolume,
-        within: Option<&'a [usize]>,
-    ) -> Box<dyn Iterator<Item = usize> + 'a> {
-        let keep = move |&k: &usize| volume.may_hold(&self.pieces[k]);
-        match (within, &self.tree) {
-            (Some(list), _) => Box::new(list.iter().copied().filter(keep)),
-            (None, Some(tree)) => {
+        let keep = move |&k: &usize| self.may_block(k, a, b, volume);
+        match &self.tree {
+            Some(tree) => {
                 Box::new(tree.locate_with_selection_function(volume).map(|g| g.data).filter(keep))
             }
-            (None, None) => Box::new((0..self.pieces.len()).filter(keep)),
+            None => Box::new((0..self.pieces.len()).filter(keep)),
         }
+    }
+
+    /// Whether piece `k` may block a segment between faces `a` and `b` that lies in `volume`:
+    /// it is part of neither face, and not wholly outside one of the volume's planes.
+    pub(super) fn may_block(&self, k: usize, a: usize, b: usize, volume: &ViewVolume) -> bool {
+        let o = &self.pieces[k];
+        !o.faces.contains(&a) && !o.faces.contains(&b) && volume.may_hold(o)
     }
 }
 

@@ -30,7 +30,7 @@ impl PairPlanner {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
         let found: Vec<usize> = match candidates {
             Some(units) => self.occluders.pieces_within(a, b, &volume, units),
-            None => self.occluders.inside(a, b, &volume, None).collect(),
+            None => self.occluders.inside(a, b, &volume).collect(),
         };
         if found.is_empty() {
             return Shaft::Clear;
@@ -70,7 +70,7 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
     ) -> (Vec<usize>, bool) {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let found: Vec<usize> = self.occluders.inside(a, b, &volume, None).collect();
+        let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
         let hidden =
             self.hides_shaft(&found, (a, b), &box_corners(nodes), &box_corners(elements), tol);
         (found, hidden)
