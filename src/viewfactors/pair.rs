@@ -115,6 +115,7 @@ impl Context<'_> {
                     blocking,
                     self.planner,
                 ),
+                obstacles: self.obstacles(i, blocking),
                 sight: if blocking.is_empty() && in_front(hj) {
                     Sight::Whole
                 } else {
@@ -324,7 +325,7 @@ impl Context<'_> {
         };
         let distance = part.distance(patch.corners(), size, to_target);
         let checked = matches!(part.sight, Sight::PerPoint(_)) && distance <= TOUCHING * size;
-        let distance = distance.min(self.occluders_distance(i, patch.corners(), part));
+        let distance = distance.min(part.obstacle_distance(patch.corners()));
         if distance <= TOUCHING * size {
             for t in patch.triangles() {
                 let (value, error) = self.touching_triangle(i, j, t, part, checked, rules, tally);
@@ -382,43 +383,38 @@ impl Context<'_> {
         cell
     }
 
-    /// The distance from the convex polygon (or point) `corners` of a patch of element `i` to
-    /// the nearest point where an occluder that shadows T_j from `part` makes the integrand
-    /// not analytic: for an occluder apart from T_i's plane, the occluder itself (where the
-    /// viewing point reaches it, its shadow runs off to infinity); for one that meets T_i's
-    /// plane, the points where its edges meet that plane (a building's corners on the ground, a
-    /// jamb's edge through a louvre's slat), where the shadow's limit depends on the direction
-    /// the point comes from. Along the rest of the contact (a wall's foot) it hides a
-    /// half-space, whatever the direction. A slat touching the jamb at its patch's corner took
-    /// Gauss orders 5 and 6 that agreed to 1.7e-8 and missed the integral by 1.3e-6; a ground
-    /// patch at a building's corner, 2e-6.
-    fn occluders_distance(&self, i: usize, corners: &[DVec3], part: &Part) -> f64 {
-        let Sight::PerPoint(among) = part.sight else { return f64::INFINITY };
+    /// Where the occluders `blocking` make the integrand over a piece of element `i` not
+    /// analytic: an occluder apart from T_i's plane, where the viewing point would reach it
+    /// (its shadow runs off to infinity); for one that meets T_i's plane, the points where its
+    /// edges meet that plane (a building's corners on the ground, a jamb's edge through a
+    /// louvre's slat), where the shadow's limit depends on the direction the point comes from.
+    /// Along the rest of the contact (a wall's foot) it hides a half-space, whatever the
+    /// direction. A slat touching the jamb at its patch's corner took Gauss orders 5 and 6 that
+    /// agreed to 1.7e-8 and missed the integral by 1.3e-6; a ground patch at a building's
+    /// corner, 2e-6.
+    fn obstacles(&self, i: usize, blocking: &[usize]) -> Vec<Obstacle<'_>> {
         let frame = &self.scene.faces[self.mesh.elements()[i].face].frame;
         let tol = 1e-12 * self.mesh.elements()[i].diameter();
         let occluders = self.planner.occluders();
-        let mut nearest = f64::INFINITY;
-        for &o in among {
-            let polygon = &occluders[o].polygon;
+        let mut obstacles = Vec::new();
+        for &o in blocking {
+            let polygon = occluders[o].polygon.as_slice();
             let h: SmallVec<[f64; 8]> = polygon.iter().map(|&v| frame.height(v)).collect();
             if h.iter().all(|&x| x > tol) || h.iter().all(|&x| x < -tol) {
-                nearest = nearest.min(convex_polygons_distance(corners, polygon));
+                obstacles.push(Obstacle::Polygon(polygon));
                 continue;
             }
             let m = polygon.len();
             for k in 0..m {
                 let (a, b, ha, hb) = (polygon[k], polygon[(k + 1) % m], h[k], h[(k + 1) % m]);
-                let point = if ha.abs() <= tol {
-                    a
+                if ha.abs() <= tol {
+                    obstacles.push(Obstacle::Point(a));
                 } else if (ha < 0.0) != (hb < 0.0) && hb.abs() > tol {
-                    a + (b - a) * (ha / (ha - hb))
-                } else {
-                    continue;
-                };
-                nearest = nearest.min(convex_polygons_distance(corners, &[point]));
+                    obstacles.push(Obstacle::Point(a + (b - a) * (ha / (ha - hb))));
+                }
             }
         }
-        nearest
+        obstacles
     }
 
     /// `∫_t g dA` and its estimated error over a triangle `t` that touches an obstacle, by the
@@ -444,11 +440,11 @@ impl Context<'_> {
             return (0.0, 0.0);
         }
         let corners = &self.mesh.elements()[j].vertices;
-        let near = |v: DVec3| {
+        let near = t.map(|v| {
             let corner = corners.iter().map(|&w| v.distance(w)).fold(f64::MAX, f64::min);
-            corner.min(self.occluders_distance(i, &[v], part))
-        };
-        let k = (0..3).min_by(|&k, &l| near(t[k]).total_cmp(&near(t[l]))).unwrap_or(2);
+            corner.min(part.obstacle_distance(&[v]))
+        });
+        let k = (0..3).min_by(|&k, &l| near[k].total_cmp(&near[l])).unwrap_or(2);
         let t = [t[(k + 1) % 3], t[(k + 2) % 3], t[k]];
         let mut outer = Outer {
             rule: &rules.tanh_sinh,
@@ -541,11 +537,32 @@ struct Part<'a> {
     /// Planes (unit normal, a point, the sine of their angle with T_i's plane) whose lines in
     /// T_i's plane may carry poles of the integrand.
     poles: Vec<(DVec3, DVec3, f64)>,
+    /// Where its occluders make the integrand not analytic ([`Context::obstacles`]).
+    obstacles: Vec<Obstacle<'a>>,
     /// How its points see the other element.
     sight: Sight<'a>,
 }
 
+/// Where an occluder makes a piece's integrand not analytic: the whole occluder polygon, or a
+/// point where an occluder's edge meets T_i's plane.
+enum Obstacle<'a> {
+    Polygon(&'a [DVec3]),
+    Point(DVec3),
+}
+
 impl Part<'_> {
+    /// The distance from the convex polygon (or point) `corners` to the nearest of the
+    /// piece's [`Obstacle`]s.
+    fn obstacle_distance(&self, corners: &[DVec3]) -> f64 {
+        self.obstacles
+            .iter()
+            .map(|o| match *o {
+                Obstacle::Polygon(polygon) => convex_polygons_distance(corners, polygon),
+                Obstacle::Point(point) => convex_polygons_distance(corners, &[point]),
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// A lower bound of the distance from the outer patch with corners `t` (longest side
     /// `size`) to the points where the integrand is not analytic, given its distance
     /// `to_target` from T_j itself (not from T_j's box: tilted elements' boxes overlap far
