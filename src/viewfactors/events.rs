@@ -29,7 +29,7 @@ pub(super) fn event_planes(
     let mut planes: Vec<Event> = normals
         .iter()
         .zip(&polygons)
-        .map(|(&normal, polygon)| Event { normal, point: polygon[0], extent: None })
+        .map(|(&normal, polygon)| Event::across(normal, polygon[0]))
         .collect();
     let twins = EdgeTwins::new(&polygons, &normals);
     // The vertices of one polygon against the edges of another; `None` is the target.
@@ -88,6 +88,11 @@ pub(super) struct Event {
 }
 
 impl Event {
+    /// The plane through `point` with unit normal `normal`, across the whole element.
+    pub(super) fn across(normal: DVec3, point: DVec3) -> Self {
+        Self { normal, point, extent: None }
+    }
+
     /// Whether the event happens inside the convex planar polygon `piece` (unit normal
     /// `normal`), so that the piece must be cut along its plane: a piece its segment misses is
     /// smooth across the plane.
@@ -95,26 +100,41 @@ impl Event {
         let Some([x1, x2]) = self.extent else { return true };
         let m = piece.len();
         let area = (0..m).map(|k| piece[k].cross(piece[(k + 1) % m])).sum::<DVec3>().dot(normal);
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
-        for k in 0..m {
+        // Inside edge k, with the piece's orientation: its value at x1 and at x2.
+        let inside_edges = (0..m).map(|k| {
             let (a, b) = (piece[k], piece[(k + 1) % m]);
-            // Inside edge k: c0 + λ (c1 - c0) >= 0, with the piece's orientation.
             let inside = |x: DVec3| (b - a).cross(x - a).dot(normal) * area.signum();
-            let (c0, c1) = (inside(x1), inside(x2));
-            let slope = c1 - c0;
-            if slope == 0.0 {
-                if c0 <= 0.0 {
-                    return false;
-                }
-            } else if slope > 0.0 {
-                lo = lo.max(-c0 / slope);
-            } else {
-                hi = hi.min(-c0 / slope);
-            }
-        }
+            (inside(x1), inside(x2))
+        });
         // Rounding: a segment that only touches the piece's boundary leaves it whole.
-        (hi - lo) * (x2 - x1).length() > 1e-12 * bounding_box_diameter(piece)
+        parameter_range(inside_edges, false).is_some_and(|(lo, hi)| {
+            (hi - lo) * (x2 - x1).length() > 1e-12 * bounding_box_diameter(piece)
+        })
     }
+}
+
+/// The range [lo, hi] of λ in [0, 1] where each constraint (c0, c1) holds, that is where the
+/// linear function from c0 at 0 to c1 at 1 is not negative, if any: the part of a segment
+/// inside a convex region. A segment that lies on a side's line (a constraint 0 at both ends) is
+/// inside where `side_inside`, else outside.
+fn parameter_range(
+    constraints: impl IntoIterator<Item = (f64, f64)>,
+    side_inside: bool,
+) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for (c0, c1) in constraints {
+        let slope = c1 - c0;
+        if slope == 0.0 {
+            if c0 < 0.0 || (c0 == 0.0 && !side_inside) {
+                return None;
+            }
+        } else if slope > 0.0 {
+            lo = lo.max(-c0 / slope);
+        } else {
+            hi = hi.min(-c0 / slope);
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
 }
 
 fn bounding_box_diameter(polygon: &[DVec3]) -> f64 {
@@ -252,23 +272,8 @@ impl Wedge {
             (r.cross(self.d2).dot(n) / nn, self.d1.cross(r).dot(n) / nn)
         };
         let ((a1, b1), (a2, b2)) = (coords(x1), coords(x2));
-        // Each constraint c0 + λ (c1 - c0) >= 0 on [0, 1] narrows [lo, hi].
-        let admits = |constraints: &[(f64, f64)]| {
-            let (mut lo, mut hi) = (0.0f64, 1.0f64);
-            for &(c0, c1) in constraints {
-                let slope = c1 - c0;
-                if slope == 0.0 {
-                    if c0 < 0.0 {
-                        return None;
-                    }
-                } else if slope > 0.0 {
-                    lo = lo.max(-c0 / slope);
-                } else {
-                    hi = hi.min(-c0 / slope);
-                }
-            }
-            (lo <= hi).then_some((lo, hi))
-        };
+        let admits =
+            |constraints: &[(f64, f64)]| parameter_range(constraints.iter().copied(), true);
         let beyond = || admits(&[(a1, a2), (b1, b2), (a1 + b1 - 1.0, a2 + b2 - 1.0)]);
         let behind = || admits(&[(-a1, -a2), (-b1, -b2)]);
         let (lo, hi) = match side {
@@ -294,12 +299,12 @@ impl Wedge {
 /// point contact). An edge of T_i that lies in T_j's plane touches T_j along the part inside
 /// it, which ends where an edge of T_j crosses it: T_i is cut across that edge there (a
 /// partition standing on a floor element whose diagonal passes under it: F_ij 3.4e-4 off
-/// while its estimate said 1e-6 before). Returns the planes' unit normals and a point of each.
+/// while its estimate said 1e-6 before). Each cut is across the whole element.
 pub(super) fn contact_cuts(
     (ti, frame_i): (&[DVec3; 3], &PlaneFrame),
     (tj, frame_j): (&[DVec3; 3], &PlaneFrame),
     tol: f64,
-) -> Vec<(DVec3, DVec3)> {
+) -> Vec<Event> {
     let on_plane = |v: DVec3| frame_i.height(v).abs() <= tol;
     let local = ti.map(|v| frame_i.to_local(v).truncate());
     let orientation = (local[1] - local[0]).perp_dot(local[2] - local[0]).signum();
@@ -320,11 +325,11 @@ pub(super) fn contact_cuts(
             if on_plane(w) {
                 let d = w - v;
                 let along = d - frame_i.normal * d.dot(frame_i.normal);
-                cuts.push((along.normalize(), v));
+                cuts.push(Event::across(along.normalize(), v));
             }
         }
         if cuts.len() == before {
-            cuts.extend([(frame_i.e1, v), (frame_i.e2, v)]);
+            cuts.extend([Event::across(frame_i.e1, v), Event::across(frame_i.e2, v)]);
         }
     }
     let on_plane_j = |v: DVec3| frame_j.height(v).abs() <= tol;
@@ -347,7 +352,7 @@ pub(super) fn contact_cuts(
             let t = (pc - pa).perp_dot(along) / denominator;
             let (inside_edge, margin) = (tol / length, tol / across.length());
             if s > inside_edge && s < 1.0 - inside_edge && (-margin..=1.0 + margin).contains(&t) {
-                cuts.push(((b - a).normalize(), a + (b - a) * s));
+                cuts.push(Event::across((b - a).normalize(), a + (b - a) * s));
             }
         }
     }

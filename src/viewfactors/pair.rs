@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use super::events::{Event, centroid, clip_polygon_3d, contact_cuts, event_planes, split};
+use super::events::{centroid, clip_polygon_3d, contact_cuts, event_planes, split};
 use super::outer::Outer;
 use super::patch::{GaussRules, Patch};
 use super::poles::poles;
@@ -168,9 +168,7 @@ impl Context<'_> {
         }
         let (ti, tj) = ((&ei.vertices, &fa.frame), (&ej.vertices, &fb.frame));
         let events = event_planes(&ei.vertices, &ej.vertices, occluders, self.planner);
-        let cuts = contact_cuts(ti, tj, tol);
-        let cuts = cuts.into_iter().map(|(normal, point)| Event { normal, point, extent: None });
-        for event in cuts.chain(events) {
+        for event in contact_cuts(ti, tj, tol).into_iter().chain(events) {
             let mut next = Vec::with_capacity(pieces.len() + 1);
             for piece in pieces {
                 if !event.crosses(&piece, fa.frame.normal) {
