@@ -90,7 +90,7 @@ impl CompressedOperator {
             let rows = block.rows.len() as u64;
             let (values, index, rank) = match &block.data {
                 BlockData::Dense(values) => (values.len(), 0, 0),
-                BlockData::Sparse(s) => (s.values.len(), s.starts.len() + s.columns.len(), 0),
+                BlockData::Sparse(s) => (s.values.len(), block.rows.len() + 1 + s.values.len(), 0),
                 BlockData::LowRank(lr) => (lr.u.len() + lr.v.len(), 1, lr.k),
             };
             let own = [
@@ -134,8 +134,9 @@ impl CompressedOperator {
                 BlockData::Sparse(rows) => {
                     d[field::KIND] = SPARSE;
                     d[field::INDEX_AT] = fits(sparse_index.len())?;
-                    sparse_index.extend_from_slice(&rows.starts);
-                    sparse_index.extend_from_slice(&rows.columns);
+                    let (starts, columns) = rows.csr(block.cols.len() * self.per);
+                    sparse_index.extend_from_slice(&starts);
+                    sparse_index.extend_from_slice(&columns);
                     rows.values.extend_f64(&mut p.values);
                 }
                 BlockData::LowRank(lr) => {

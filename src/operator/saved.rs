@@ -324,8 +324,9 @@ impl CompressedOperator {
                 }
                 BlockData::Sparse(rows) => {
                     out.u64(SPARSE)?;
-                    out.u32s(&rows.starts)?;
-                    out.u32s(&rows.columns)?;
+                    let (starts, columns) = rows.csr(b.cols.len() * self.per);
+                    out.u32s(&starts)?;
+                    out.u32s(&columns)?;
                     write_values(out, &rows.values)?;
                 }
                 BlockData::LowRank(lr) => {
@@ -377,11 +378,19 @@ impl CompressedOperator {
             let (m, c) = (rows.len(), cols.len() * per);
             let data = match input.u64("a block's kind")? {
                 DENSE => BlockData::Dense(read_values(input, "a dense block")?),
-                SPARSE => BlockData::Sparse(SparseRows {
-                    starts: input.u32s("a sparse block")?,
-                    columns: input.u32s("a sparse block")?,
-                    values: read_values(input, "a sparse block")?,
-                }),
+                SPARSE => {
+                    let starts = input.u32s("a sparse block")?;
+                    let columns = input.u32s("a sparse block")?;
+                    let values = read_values(input, "a sparse block")?;
+                    match SparseRows::from_csr(&starts, &columns, values, m, c) {
+                        Some(rows) => BlockData::Sparse(rows),
+                        None => {
+                            return Err(input.error(format!(
+                                "damaged: a sparse block of {m} x {c} holds other entries"
+                            )));
+                        }
+                    }
+                }
                 LOW_RANK => {
                     let k = input.u64("a rank")? as usize;
                     let u = read_values(input, "a low-rank block")?;
@@ -414,14 +423,8 @@ impl CompressedOperator {
 fn fits(data: &BlockData, m: usize, c: usize) -> bool {
     match data {
         BlockData::Dense(values) => values.len() == m * c,
-        BlockData::Sparse(rows) => {
-            rows.starts.len() == m + 1
-                && rows.starts.first() == Some(&0)
-                && rows.starts.windows(2).all(|w| w[0] <= w[1])
-                && *rows.starts.last().expect("m + 1 starts") as usize == rows.values.len()
-                && rows.columns.len() == rows.values.len()
-                && rows.columns.iter().all(|&col| (col as usize) < c)
-        }
+        // Checked as it was read.
+        BlockData::Sparse(_) => true,
         BlockData::LowRank(lr) => lr.c == c && lr.u.len() == m * lr.k && lr.v.len() == c * lr.k,
     }
 }

@@ -223,10 +223,7 @@ fn exact_blocks_are_stored_by_what_they_hold() {
     let mut sparse = block(entries.clone());
     sparse.compact(Precision::F64);
     let BlockData::Sparse(rows) = &sparse.data else { panic!("{:?}", sparse.data) };
-    assert_eq!(
-        (rows.starts.as_slice(), rows.columns.as_slice()),
-        (&[0, 1, 1, 3][..], &[1, 0, 3][..])
-    );
+    assert_eq!(rows.csr(4), (vec![0, 1, 1, 3], vec![1, 0, 3]));
     assert!(sparse.bytes() < 8 * entries.len() as u64);
     let mut y = vec![10.0; 3];
     sparse.data.apply_add(&x, &mut y);
