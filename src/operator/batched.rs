@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
-use super::{BlockData, BuiltBlock, Entries, MemoryGuard, NodeViews, by_node_cluster};
+use super::{BlockData, Built, Entries, MemoryGuard, NodeViews, by_node_cluster};
 use crate::assembly::{PairEvaluation, PairTask};
 use crate::error::Result;
 use crate::progress::Progress;
@@ -38,7 +38,7 @@ struct Slot {
 }
 
 /// The blocks of `plan` (near ones exact, far ones compressed to `tolerance` or exact when their
-/// rank would not pay), each with its pair classes and whether it was found incompressible.
+/// rank would not pay), with the pair classes met and the blocks found incompressible.
 pub(super) fn build_blocks(
     entries: &Entries,
     plan: &BlockPlan,
@@ -47,7 +47,7 @@ pub(super) fn build_blocks(
     device: &dyn PairEvaluation,
     guard: &MemoryGuard,
     progress: &dyn Progress,
-) -> Result<Vec<BuiltBlock>> {
+) -> Result<Built> {
     let mut exact: Vec<(usize, usize, bool)> =
         plan.near.iter().map(|&(t, s)| (t, s, false)).collect();
     let mut crossings = Vec::new();
@@ -62,7 +62,7 @@ pub(super) fn build_blocks(
     }
     let mut built =
         cross_approximate(entries, faces, crossings, &mut exact, device, guard, progress)?;
-    built.extend(exact_blocks(entries, exact, device, guard, progress)?);
+    exact_blocks(entries, exact, device, guard, progress, &mut built)?;
     Ok(built)
 }
 
@@ -76,8 +76,8 @@ fn cross_approximate(
     device: &dyn PairEvaluation,
     guard: &MemoryGuard,
     progress: &dyn Progress,
-) -> Result<Vec<BuiltBlock>> {
-    let mut built = Vec::with_capacity(crossings.len());
+) -> Result<Built> {
+    let mut built = Built::default();
     while !crossings.is_empty() {
         let sizes: Vec<usize> = crossings.iter().map(|x| request_len(entries, x)).collect();
         for range in rounds(&sizes) {
@@ -94,7 +94,7 @@ fn cross_approximate(
                 Some(lr) => {
                     let block = entries.block(t, s, BlockData::low_rank(lr, entries.precision));
                     guard.add(block.bytes());
-                    built.push((block, PairStats::default(), false));
+                    built.push(block, PairStats::default(), false);
                     progress.advance(1);
                 }
                 None => exact.push((t, s, true)),
@@ -106,16 +106,16 @@ fn cross_approximate(
     Ok(built)
 }
 
-/// The `exact` blocks (with whether each is incompressible), their pairs planned on the host by
-/// the row walk and evaluated by `device` in rounds.
+/// The `exact` blocks (with whether each is incompressible) into `built`, their pairs planned
+/// on the host by the row walk and evaluated by `device` in rounds.
 fn exact_blocks(
     entries: &Entries,
     mut exact: Vec<(usize, usize, bool)>,
     device: &dyn PairEvaluation,
     guard: &MemoryGuard,
     progress: &dyn Progress,
-) -> Result<Vec<BuiltBlock>> {
-    let mut built = Vec::with_capacity(exact.len());
+    built: &mut Built,
+) -> Result<()> {
     // By node cluster, so that each node's views of the faces are found once per round.
     exact.sort_unstable();
     let sizes: Vec<usize> = exact
@@ -151,7 +151,7 @@ fn exact_blocks(
         let values = device.evaluate(&tasks)?;
         drop(tasks);
         let per = entries.per;
-        let done: Vec<BuiltBlock> = blocks
+        let done: Vec<_> = blocks
             .par_iter()
             .zip(planned.par_iter())
             .zip(offsets.par_iter())
@@ -168,10 +168,11 @@ fn exact_blocks(
             .collect();
         progress.advance(done.len());
         guard.add(done.iter().map(|d| d.0.bytes()).sum());
-        built.extend(done);
+        done.into_iter()
+            .for_each(|(block, stats, incompressible)| built.push(block, stats, incompressible));
         guard.check(0)?;
     }
-    Ok(built)
+    Ok(())
 }
 
 /// One step of every crossing in `crossings`: their requested rows and columns evaluated in one

@@ -516,6 +516,11 @@ impl CompressedOperator {
 }
 
 impl Block {
+    /// A block of no rows holding nothing (a slot before its block is built).
+    fn nothing() -> Self {
+        Block { rows: 0..0, cols: 0..0, data: BlockData::exact(Vec::new()) }
+    }
+
     /// Stores an exact block by what it holds, as soon as it is built, in `precision`:
     /// nothing where every pair is hidden (it is then counted empty and left out), its
     /// non-zero entries alone where they are fewer than half (hidden pairs in a block seen
@@ -648,9 +653,36 @@ fn cluster_trees(
     (ClusterTree::new(&node_items, leaf), ClusterTree::new(&element_items, leaf))
 }
 
-/// A built block, the classes of the pairs it evaluated exactly, and whether it was admissible
-/// but found incompressible.
-type BuiltBlock = (Block, PairStats, bool);
+/// The blocks built and what was met building them: the classes of the pairs evaluated
+/// exactly and the admissible blocks found incompressible. Exact blocks that held nothing are
+/// among the blocks until [`kept_blocks`] counts and drops them.
+#[derive(Default)]
+struct Built {
+    blocks: Vec<Block>,
+    pairs: PairStats,
+    incompressible: u64,
+}
+
+impl Built {
+    /// Adds a block, with the pair classes its exact entries met and whether it was admissible
+    /// but found incompressible.
+    fn push(&mut self, block: Block, pairs: PairStats, incompressible: bool) {
+        self.add(pairs, incompressible);
+        self.blocks.push(block);
+    }
+
+    fn add(&mut self, pairs: PairStats, incompressible: bool) {
+        self.pairs += pairs;
+        self.incompressible += u64::from(incompressible);
+    }
+
+    /// What both met (blocks are not built in parts: each has its slot).
+    fn merged(mut self, other: Built) -> Self {
+        self.pairs += other.pairs;
+        self.incompressible += other.incompressible;
+        self
+    }
+}
 
 /// The blocks of `plan` on the CPU, block by block: near ones exact, far ones compressed to
 /// `tolerance` or exact when their rank would not pay.
@@ -661,7 +693,7 @@ fn build_block_by_block(
     tolerance: f64,
     guard: &MemoryGuard,
     progress: &dyn Progress,
-) -> Result<Vec<BuiltBlock>> {
+) -> Result<Built> {
     // Admissible blocks too small for a low rank to pay are exact from the start.
     let (small, far): (Vec<_>, Vec<_>) =
         plan.far.iter().partition(|&&(t, s)| entries.useful_rank(t, s).is_none());
@@ -671,78 +703,91 @@ fn build_block_by_block(
         .map(|&(t, s)| (t, s, false))
         .chain(small.into_iter().map(|(t, s)| (t, s, true)))
         .collect();
+    let groups = by_node_cluster(&exact);
+    // Each block is written into its own slot of the one list the operator keeps: a million
+    // blocks gathered in parts and then joined were the peak of the furnished room's build.
+    let mut blocks: Vec<Block> = (0..exact.len() + far.len()).map(|_| Block::nothing()).collect();
+    let (near_slots, far_slots) = blocks.split_at_mut(exact.len());
+    let mut slots_of_groups = Vec::with_capacity(groups.len());
+    let mut near_rest = near_slots;
+    for group in &groups {
+        let (slots, after) = std::mem::take(&mut near_rest).split_at_mut(group.len());
+        slots_of_groups.push((group, slots));
+        near_rest = after;
+    }
     // The exact blocks of one node cluster together: each node's views of the faces are found
     // once for all of them.
-    let near = by_node_cluster(&exact).into_par_iter().flat_map_iter(|group| {
+    let near = slots_of_groups.into_par_iter().map(|(group, slots)| {
         let mut views = NodeViews::default();
-        let built: Vec<_> = group
-            .iter()
-            .filter(|_| !guard.is_over())
-            .map(|&(t, s, incompressible)| {
-                let (mut block, stats) = entries.exact_block(t, s, &mut views);
-                block.compact(entries.precision);
-                guard.add(block.bytes());
-                (block, stats, incompressible)
-            })
-            .collect();
-        progress.advance(built.len());
-        built
-    });
-    let far = far.into_par_iter().filter(|_| !guard.is_over()).map(|(t, s)| {
-        let r = match entries.compressed_block(t, s, faces, tolerance) {
-            Some(block) => (block, PairStats::default(), false),
-            None => {
-                let (mut block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
-                block.compact(entries.precision);
-                (block, stats, true)
+        let mut met = Built::default();
+        for (&(t, s, incompressible), slot) in group.iter().zip(slots) {
+            if guard.is_over() {
+                break;
             }
-        };
-        guard.add(r.0.bytes());
-        progress.advance(1);
-        r
+            let (mut block, stats) = entries.exact_block(t, s, &mut views);
+            block.compact(entries.precision);
+            guard.add(block.bytes());
+            met.add(stats, incompressible);
+            *slot = block;
+        }
+        progress.advance(group.len());
+        met
     });
-    let built = near.chain(far).collect();
+    let far = far_slots.par_iter_mut().zip(far).map(|(slot, (t, s))| {
+        let mut met = Built::default();
+        if !guard.is_over() {
+            *slot = match entries.compressed_block(t, s, faces, tolerance) {
+                Some(block) => block,
+                None => {
+                    let (mut block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
+                    block.compact(entries.precision);
+                    met.add(stats, true);
+                    block
+                }
+            };
+            guard.add(slot.bytes());
+        }
+        progress.advance(1);
+        met
+    });
+    let met = near.chain(far).reduce(Built::default, Built::merged);
     guard.check(0)?;
-    Ok(built)
+    Ok(Built { blocks, ..met })
 }
 
-/// The blocks worth keeping (exact blocks of zeros are dropped and counted empty, with the
-/// `empty` blocks the plan left out), their statistics and the pair classes met.
-fn kept_blocks(built: Vec<BuiltBlock>, empty: usize) -> (Vec<Block>, OperatorStats, PairStats) {
-    let mut stats = OperatorStats { empty_blocks: empty as u64, ..Default::default() };
-    let mut pairs = PairStats::default();
+/// The blocks built that hold something, in one list, with their statistics and the pair
+/// classes met (`empty`: the blocks the plan left out).
+fn kept_blocks(built: Built, empty: usize) -> (Vec<Block>, OperatorStats, PairStats) {
+    let Built { mut blocks, pairs, incompressible } = built;
+    let before = blocks.len();
+    // Every exact block was compacted when built: one of zeros holds nothing. Dropped in
+    // place, in the list's own memory.
+    blocks.retain(|b| !matches!(&b.data, BlockData::Dense(d) if d.is_empty()));
+    blocks.shrink_to_fit();
+    let mut stats = OperatorStats {
+        empty_blocks: (empty + before - blocks.len()) as u64,
+        incompressible_blocks: incompressible,
+        ..Default::default()
+    };
     let index_bytes = std::mem::size_of::<Block>() as u64;
-    // Collected in place, in the built blocks' own memory: a second array of a million blocks
-    // was the peak of the furnished room's build.
-    let blocks = built
-        .into_iter()
-        .filter_map(|(block, s, incompressible)| {
-            pairs += s;
-            stats.incompressible_blocks += u64::from(incompressible);
-            match &block.data {
-                // Every exact block was compacted when built: one of zeros holds nothing.
-                BlockData::Dense(d) => {
-                    if d.is_empty() {
-                        stats.empty_blocks += 1;
-                        return None;
-                    }
-                    stats.near_blocks += 1;
-                    stats.near_entries += d.len() as u64;
-                }
-                BlockData::Sparse(rows) => {
-                    stats.near_blocks += 1;
-                    stats.near_entries += rows.values.len() as u64;
-                }
-                BlockData::LowRank(f) => {
-                    stats.far_blocks += 1;
-                    stats.far_entries += (block.rows.len() * f.c) as u64;
-                    stats.max_rank = stats.max_rank.max(f.k);
-                }
+    for block in &blocks {
+        match &block.data {
+            BlockData::Dense(d) => {
+                stats.near_blocks += 1;
+                stats.near_entries += d.len() as u64;
             }
-            stats.operator_bytes += block.bytes() + index_bytes;
-            Some(block)
-        })
-        .collect();
+            BlockData::Sparse(rows) => {
+                stats.near_blocks += 1;
+                stats.near_entries += rows.values.len() as u64;
+            }
+            BlockData::LowRank(f) => {
+                stats.far_blocks += 1;
+                stats.far_entries += (block.rows.len() * f.c) as u64;
+                stats.max_rank = stats.max_rank.max(f.k);
+            }
+        }
+        stats.operator_bytes += block.bytes() + index_bytes;
+    }
     (blocks, stats, pairs)
 }
 
