@@ -523,7 +523,7 @@ impl Block {
 
     /// Stores an exact block by what it holds, as soon as it is built, in `precision`:
     /// nothing where every pair is hidden (it is then counted empty and left out), its
-    /// non-zero entries alone where they are fewer than half (hidden pairs in a block seen
+    /// non-zero entries alone where that takes fewer bytes (hidden pairs in a block seen
     /// through slats or between buildings), so that memory follows the pairs that are seen.
     fn compact(&mut self, precision: Precision) {
         let data = std::mem::replace(&mut self.data, BlockData::exact(Vec::new()));
@@ -676,8 +676,10 @@ impl Built {
         self.incompressible += u64::from(incompressible);
     }
 
-    /// What both met (blocks are not built in parts: each has its slot).
+    /// What both met; only `self` holds blocks (the parts of a build write theirs into their
+    /// slots of one list and tally the rest).
     fn merged(mut self, other: Built) -> Self {
+        debug_assert!(other.blocks.is_empty());
         self.pairs += other.pairs;
         self.incompressible += other.incompressible;
         self
