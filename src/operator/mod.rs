@@ -30,6 +30,7 @@ pub use saved::{BinaryReader, BinaryWriter};
 pub use stored::{F32_FROM_TOLERANCE, Precision};
 
 use std::f64::consts::PI;
+use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
@@ -276,8 +277,10 @@ impl std::ops::AddAssign for OperatorStats {
 /// order (each with its basis functions).
 #[derive(Clone, Debug)]
 struct Block {
-    rows: std::ops::Range<usize>,
-    cols: std::ops::Range<usize>,
+    /// Rows and element columns as u32 (four bytes less each than usize: an operator keeps a
+    /// million blocks and more).
+    rows: Range<u32>,
+    cols: Range<u32>,
     data: BlockData,
 }
 
@@ -470,8 +473,8 @@ impl CompressedOperator {
             .fold(
                 || vec![0.0; dof * m],
                 |mut y, b| {
-                    let xs = &xp[b.cols.start * per * m..b.cols.end * per * m];
-                    add(&b.data, xs, &mut y[b.rows.start * m..b.rows.end * m]);
+                    let xs = &xp[b.col_range().start * per * m..b.col_range().end * per * m];
+                    add(&b.data, xs, &mut y[b.row_range().start * m..b.row_range().end * m]);
                     y
                 },
             )
@@ -516,9 +519,29 @@ impl CompressedOperator {
 }
 
 impl Block {
+    /// Block `rows` × `cols` holding `data`.
+    fn new(rows: Range<usize>, cols: Range<usize>, data: BlockData) -> Self {
+        // An operator of 2^32 unknowns would take far more memory than any machine has.
+        let narrow = |r: Range<usize>| -> Range<u32> {
+            let fit = |v: usize| u32::try_from(v).expect("fewer than 2^32 rows and columns");
+            fit(r.start)..fit(r.end)
+        };
+        Block { rows: narrow(rows), cols: narrow(cols), data }
+    }
+
     /// A block of no rows holding nothing (a slot before its block is built).
     fn nothing() -> Self {
-        Block { rows: 0..0, cols: 0..0, data: BlockData::exact(Vec::new()) }
+        Block::new(0..0, 0..0, BlockData::exact(Vec::new()))
+    }
+
+    /// Its rows, in the node order.
+    fn row_range(&self) -> Range<usize> {
+        self.rows.start as usize..self.rows.end as usize
+    }
+
+    /// Its columns, in the element order (elements, each with its basis functions).
+    fn col_range(&self) -> Range<usize> {
+        self.cols.start as usize..self.cols.end as usize
     }
 
     /// Stores an exact block by what it holds, as soon as it is built, in `precision`:
@@ -527,7 +550,7 @@ impl Block {
     /// through slats or between buildings), so that memory follows the pairs that are seen.
     fn compact(&mut self, precision: Precision) {
         let data = std::mem::replace(&mut self.data, BlockData::exact(Vec::new()));
-        self.data = data.compacted(self.rows.len(), precision);
+        self.data = data.compacted(self.row_range().len(), precision);
     }
 
     /// Bytes of its stored values (and of the column indices of a sparse block).
@@ -784,8 +807,8 @@ fn kept_blocks(built: Built, empty: usize) -> (Vec<Block>, OperatorStats, PairSt
             }
             BlockData::LowRank(f) => {
                 stats.far_blocks += 1;
-                stats.far_entries += (block.rows.len() * f.c) as u64;
-                stats.max_rank = stats.max_rank.max(f.k);
+                stats.far_entries += (block.row_range().len() * f.columns()) as u64;
+                stats.max_rank = stats.max_rank.max(f.rank());
             }
         }
         stats.operator_bytes += block.bytes() + index_bytes;
@@ -927,7 +950,7 @@ impl Entries<'_> {
     /// Block (t, s) holding `data`.
     fn block(&self, t: usize, s: usize, data: BlockData) -> Block {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
-        Block { rows: tc.start..tc.end, cols: sc.start..sc.end, data }
+        Block::new(tc.start..tc.end, sc.start..sc.end, data)
     }
 
     /// Whether node i (original index) gives element j anything, where the block's plan says

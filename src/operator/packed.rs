@@ -87,11 +87,13 @@ impl CompressedOperator {
         let mut parts = Vec::new();
         let (mut start, mut bytes) = (0, fixed);
         for (b, block) in self.blocks.iter().enumerate() {
-            let rows = block.rows.len() as u64;
+            let rows = block.row_range().len() as u64;
             let (values, index, rank) = match &block.data {
                 BlockData::Dense(values) => (values.len(), 0, 0),
-                BlockData::Sparse(s) => (s.values.len(), block.rows.len() + 1 + s.values.len(), 0),
-                BlockData::LowRank(lr) => (lr.u.len() + lr.v.len(), 1, lr.k),
+                BlockData::Sparse(s) => {
+                    (s.values.len(), block.row_range().len() + 1 + s.values.len(), 0)
+                }
+                BlockData::LowRank(lr) => (lr.u.len() + lr.v.len(), 1, lr.rank()),
             };
             let own = [
                 8 * values as u64,
@@ -121,10 +123,10 @@ impl CompressedOperator {
         let fits = |v: usize| u32::try_from(v).ok();
         for (b, block) in blocks.iter().enumerate() {
             let d = &mut descriptors[b * DESCRIPTOR..(b + 1) * DESCRIPTOR];
-            d[field::ROWS_START] = fits(block.rows.start)?;
-            d[field::ROWS] = fits(block.rows.len())?;
-            d[field::COLS_START] = fits(block.cols.start * self.per)?;
-            d[field::COLS] = fits(block.cols.len() * self.per)?;
+            d[field::ROWS_START] = fits(block.row_range().start)?;
+            d[field::ROWS] = fits(block.row_range().len())?;
+            d[field::COLS_START] = fits(block.col_range().start * self.per)?;
+            d[field::COLS] = fits(block.col_range().len() * self.per)?;
             d[field::VALUES_AT] = fits(p.values.len())?;
             match &block.data {
                 BlockData::Dense(values) => {
@@ -134,23 +136,23 @@ impl CompressedOperator {
                 BlockData::Sparse(rows) => {
                     d[field::KIND] = SPARSE;
                     d[field::INDEX_AT] = fits(sparse_index.len())?;
-                    let (starts, columns) = rows.csr(block.cols.len() * self.per);
+                    let (starts, columns) = rows.csr(block.col_range().len() * self.per);
                     sparse_index.extend_from_slice(&starts);
                     sparse_index.extend_from_slice(&columns);
                     rows.values.extend_f64(&mut p.values);
                 }
                 BlockData::LowRank(lr) => {
                     d[field::KIND] = LOW_RANK;
-                    d[field::RANK] = fits(lr.k)?;
+                    d[field::RANK] = fits(lr.rank())?;
                     d[field::T_AT] = fits(scratch)?;
-                    scratch += lr.k;
+                    scratch += lr.rank();
                     lr.u.extend_f64(&mut p.values);
                     lr.v.extend_f64(&mut p.values);
                     low_rank.push(fits(b)?);
                 }
             }
             d[field::PARTIAL_AT] = fits(scratch)?;
-            scratch += block.rows.len();
+            scratch += block.row_range().len();
         }
         // Sparse blocks' index data follows the descriptors.
         let base = fits(descriptors.len())?;
@@ -162,7 +164,7 @@ impl CompressedOperator {
         // Each row's contributions in block order.
         let mut count = vec![0u32; self.dof + 1];
         for block in blocks {
-            block.rows.clone().for_each(|r| count[r + 1] += 1);
+            block.row_range().clone().for_each(|r| count[r + 1] += 1);
         }
         for r in 0..self.dof {
             count[r + 1] += count[r];
@@ -171,7 +173,7 @@ impl CompressedOperator {
         let mut next = count.clone();
         for (b, block) in blocks.iter().enumerate() {
             let at = descriptors[b * DESCRIPTOR + field::PARTIAL_AT] as usize;
-            for (k, r) in block.rows.clone().enumerate() {
+            for (k, r) in block.row_range().clone().enumerate() {
                 contributions[next[r] as usize] = fits(at + k)?;
                 next[r] += 1;
             }

@@ -314,7 +314,9 @@ impl CompressedOperator {
         out.usizes(&self.element_order)?;
         out.u64(self.blocks.len() as u64)?;
         for b in &self.blocks {
-            for v in [b.rows.start, b.rows.end, b.cols.start, b.cols.end] {
+            for v in
+                [b.row_range().start, b.row_range().end, b.col_range().start, b.col_range().end]
+            {
                 out.u64(v as u64)?;
             }
             match &b.data {
@@ -324,14 +326,14 @@ impl CompressedOperator {
                 }
                 BlockData::Sparse(rows) => {
                     out.u64(SPARSE)?;
-                    let (starts, columns) = rows.csr(b.cols.len() * self.per);
+                    let (starts, columns) = rows.csr(b.col_range().len() * self.per);
                     out.u32s(&starts)?;
                     out.u32s(&columns)?;
                     write_values(out, &rows.values)?;
                 }
                 BlockData::LowRank(lr) => {
                     out.u64(LOW_RANK)?;
-                    out.u64(lr.k as u64)?;
+                    out.u64(lr.rank() as u64)?;
                     write_values(out, &lr.u)?;
                     write_values(out, &lr.v)?;
                 }
@@ -345,7 +347,7 @@ impl CompressedOperator {
     pub fn read<R: Read>(input: &mut BinaryReader<R>) -> Result<Self> {
         let dof = input.u64("the number of unknowns")? as usize;
         let per = input.u64("the nodes per element")? as usize;
-        if !(per == 1 || per == 3) || !dof.is_multiple_of(per) {
+        if !(per == 1 || per == 3) || !dof.is_multiple_of(per) || dof > u32::MAX as usize {
             return Err(input.error(format!("damaged: {dof} unknowns with {per} per element")));
         }
         let zero_rows = input.u64("the zero rows")? as usize;
@@ -395,14 +397,17 @@ impl CompressedOperator {
                     let k = input.u64("a rank")? as usize;
                     let u = read_values(input, "a low-rank block")?;
                     let v = read_values(input, "a low-rank block")?;
-                    BlockData::LowRank(Factors { c, k, u, v })
+                    match Factors::new(c, k, u, v) {
+                        Some(factors) => BlockData::LowRank(factors),
+                        None => return Err(input.error(format!("damaged: a rank of {k}"))),
+                    }
                 }
                 other => return Err(input.error(format!("damaged: block kind {other}"))),
             };
             if !fits(&data, m, c) {
                 return Err(input.error(format!("damaged: a block of {m} x {c} holds other sizes")));
             }
-            blocks.push(Block { rows, cols, data });
+            blocks.push(Block::new(rows, cols, data));
         }
         Ok(Self {
             dof,
@@ -425,7 +430,9 @@ fn fits(data: &BlockData, m: usize, c: usize) -> bool {
         BlockData::Dense(values) => values.len() == m * c,
         // Checked as it was read.
         BlockData::Sparse(_) => true,
-        BlockData::LowRank(lr) => lr.c == c && lr.u.len() == m * lr.k && lr.v.len() == c * lr.k,
+        BlockData::LowRank(lr) => {
+            lr.columns() == c && lr.u.len() == m * lr.rank() && lr.v.len() == c * lr.rank()
+        }
     }
 }
 
@@ -446,8 +453,8 @@ fn write_values<W: Write>(out: &mut BinaryWriter<W>, values: &Values) -> Result<
 /// Values [`write_values`] wrote.
 fn read_values<R: Read>(input: &mut BinaryReader<R>, what: &str) -> Result<Values> {
     match input.u64(what)? {
-        64 => Ok(Values::F64(input.f64s(what)?)),
-        32 => Ok(Values::F32(input.f32s(what)?)),
+        64 => Ok(Values::F64(input.f64s(what)?.into())),
+        32 => Ok(Values::F32(input.f32s(what)?.into())),
         bits => Err(input.error(format!("damaged: {what} of {bits}-bit values"))),
     }
 }

@@ -43,11 +43,12 @@ impl Precision {
     }
 }
 
-/// Stored values: f64, or rounded to f32.
+/// Stored values: f64, or rounded to f32 (boxed slices: a block's values do not grow, and
+/// the capacity a vector would keep beside them is 8 bytes more for each of a million blocks).
 #[derive(Clone, Debug, PartialEq)]
 pub(super) enum Values {
-    F64(Vec<f64>),
-    F32(Vec<f32>),
+    F64(Box<[f64]>),
+    F32(Box<[f32]>),
 }
 
 /// `$body` with `$v` bound to the slice of `$values` in its own precision: the products are
@@ -65,7 +66,7 @@ impl Values {
     /// `values` in `precision`.
     pub(super) fn new(values: Vec<f64>, precision: Precision) -> Self {
         match precision {
-            Precision::F64 => Values::F64(values),
+            Precision::F64 => Values::F64(values.into_boxed_slice()),
             Precision::F32 => Values::F32(values.into_iter().map(|v| v as f32).collect()),
         }
     }
@@ -121,17 +122,15 @@ pub(super) enum BlockData {
 impl BlockData {
     /// An exact block as computed, row-major (stored in f64 until [`BlockData::compacted`]).
     pub(super) fn exact(values: Vec<f64>) -> Self {
-        BlockData::Dense(Values::F64(values))
+        BlockData::Dense(Values::F64(values.into_boxed_slice()))
     }
 
     /// A low-rank block's factors in `precision`.
     pub(super) fn low_rank(lr: LowRank, precision: Precision) -> Self {
-        BlockData::LowRank(Factors {
-            c: lr.c,
-            k: lr.k,
-            u: Values::new(lr.u, precision),
-            v: Values::new(lr.v, precision),
-        })
+        let (u, v) = (Values::new(lr.u, precision), Values::new(lr.v, precision));
+        BlockData::LowRank(
+            Factors::new(lr.c, lr.k, u, v).expect("a block's columns and rank fit u32"),
+        )
     }
 
     /// An exact block of `rows` rows as it is worth storing, in `precision`: nothing where
@@ -142,14 +141,14 @@ impl BlockData {
         let BlockData::Dense(Values::F64(d)) = self else { return self };
         let non_zero = d.iter().filter(|&&v| v != 0.0).count();
         if non_zero == 0 {
-            return BlockData::Dense(Values::F64(Vec::new()));
+            return BlockData::Dense(Values::F64(Box::default()));
         }
         let width = d.len() / rows;
         let masked = SparseRows::mask_bytes(rows, width) + precision.bytes() * non_zero as u64;
         if masked < precision.bytes() * d.len() as u64 {
             BlockData::Sparse(SparseRows::from_dense(&d, width, precision))
         } else {
-            BlockData::Dense(Values::new(d, precision))
+            BlockData::Dense(Values::new(d.into_vec(), precision))
         }
     }
 
@@ -172,7 +171,7 @@ impl BlockData {
             }),
             BlockData::Sparse(rows) => rows.apply_add(x, y),
             BlockData::LowRank(f) => {
-                let k = f.k;
+                let k = f.rank();
                 let mut t = vec![0.0; k];
                 on_values!(&f.v, v => {
                     for (row, xj) in v.chunks_exact(k.max(1)).zip(x) {
@@ -213,7 +212,7 @@ impl BlockData {
             }),
             BlockData::LowRank(f) => {
                 // t = V^T x (k x m), then y += U t.
-                let k = f.k;
+                let k = f.rank();
                 let mut t = vec![0.0; k * m];
                 on_values!(&f.v, v => {
                     for (v_row, x) in v.chunks_exact(k.max(1)).zip(x.chunks_exact(m)) {
@@ -240,7 +239,7 @@ impl BlockData {
 /// would, so that storing a block sparse pays once an eighth of its pairs are hidden.
 #[derive(Clone, Debug)]
 pub(super) struct SparseRows {
-    pub(super) masks: Vec<u64>,
+    pub(super) masks: Box<[u64]>,
     pub(super) values: Values,
 }
 
@@ -256,7 +255,7 @@ impl SparseRows {
                 values.push(v);
             }
         }
-        Self { masks, values: Values::new(values, precision) }
+        Self { masks: masks.into_boxed_slice(), values: Values::new(values, precision) }
     }
 
     /// The entries of an m × `width` block given row by row as compressed sparse rows (row r
@@ -288,7 +287,7 @@ impl SparseRows {
             }
             row.iter().for_each(|&c| mask[c as usize / 64] |= 1 << (c % 64));
         }
-        Some(Self { masks, values })
+        Some(Self { masks: masks.into_boxed_slice(), values })
     }
 
     /// Its entries as compressed sparse rows: where each row starts (rows + 1 values), then
@@ -348,12 +347,29 @@ fn each_column(mask: &[u64], mut f: impl FnMut(usize)) {
 /// A low-rank block `U V^T`: U rows × k and V columns × k, both row-major.
 #[derive(Clone, Debug)]
 pub(super) struct Factors {
-    /// Columns.
-    pub(super) c: usize,
+    /// Columns (u32, as a block's are).
+    pub(super) c: u32,
     /// Rank.
-    pub(super) k: usize,
+    pub(super) k: u32,
     pub(super) u: Values,
     pub(super) v: Values,
+}
+
+impl Factors {
+    /// `U V^T` of `c` columns and rank `k`, or `None` where either passes u32.
+    pub(super) fn new(c: usize, k: usize, u: Values, v: Values) -> Option<Self> {
+        Some(Self { c: c.try_into().ok()?, k: k.try_into().ok()?, u, v })
+    }
+
+    /// Columns.
+    pub(super) fn columns(&self) -> usize {
+        self.c as usize
+    }
+
+    /// Rank.
+    pub(super) fn rank(&self) -> usize {
+        self.k as usize
+    }
 }
 
 #[cfg(test)]

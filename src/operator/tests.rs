@@ -161,7 +161,8 @@ fn hidden_and_facing_away_blocks_store_nothing() {
     let face_of_row = |r: usize| c.disc.nodes[op.node_order[r]].face;
     let face_of_col = |q: usize| c.disc.elements[op.element_order[q]].face;
     let floor_to_ceiling = op.blocks.iter().filter(|b| {
-        b.rows.clone().all(|r| face_of_row(r) == 0) && b.cols.clone().all(|q| face_of_col(q) == 1)
+        b.row_range().clone().all(|r| face_of_row(r) == 0)
+            && b.col_range().clone().all(|q| face_of_col(q) == 1)
     });
     assert_eq!(floor_to_ceiling.count(), 0);
 }
@@ -216,7 +217,7 @@ fn stored_sparse(data: &BlockData, width: usize) -> BlockData {
 
 #[test]
 fn exact_blocks_are_stored_by_what_they_hold() {
-    let block = |data: Vec<f64>| Block { rows: 0..3, cols: 0..4, data: BlockData::exact(data) };
+    let block = |data: Vec<f64>| Block::new(0..3, 0..4, BlockData::exact(data));
     let x = [1.0, -2.0, 0.5, 3.0];
     // Mostly hidden: sparse rows, with the dense block's product.
     let entries = vec![0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, -1.0];
@@ -263,7 +264,7 @@ fn a_written_operator_reads_back_block_for_block() {
         if kinds(&op)[1] == 0 {
             // Store one exact block sparse, as a mostly hidden one would be.
             let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
-            b.data = stored_sparse(&b.data, b.cols.len() * op.per);
+            b.data = stored_sparse(&b.data, b.col_range().len() * op.per);
         }
         assert!(kinds(&op).iter().all(|&k| k > 0), "{:?}", kinds(&op));
         let mut out = BinaryWriter::new(Vec::new());
@@ -299,7 +300,7 @@ fn products_of_many_vectors_are_each_vector_s_product() {
         case(five_piece(SurfaceParameters::default()).unwrap(), Method::Linear { alpha: 0.2 }, 2);
     let mut op = compressed(&c, 1e-8, 8);
     let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
-    b.data = stored_sparse(&b.data, b.cols.len() * op.per);
+    b.data = stored_sparse(&b.data, b.col_range().len() * op.per);
     assert!(op.blocks.iter().any(|b| matches!(b.data, BlockData::LowRank(_))));
     let n = op.dof();
     let xs: Vec<Vec<f64>> =
