@@ -219,6 +219,32 @@ impl OccluderIndex {
         })
     }
 
+    /// Whether a convex solid among `units` (not one with a face of `a` or `b`, its box
+    /// reaching into `volume`) hides every point of the convex hull of `from` from every point
+    /// of that of `to` ([`Solid::hides`]). Every solid that [`OccluderIndex::solid_hides`] would
+    /// try on the pieces of `units` found in `volume` is among these.
+    pub(super) fn unit_solid_hides(
+        &self,
+        units: &[OccluderUnit],
+        (a, b): (usize, usize),
+        volume: &ViewVolume,
+        from: &[DVec3],
+        to: &[DVec3],
+        tol: f64,
+    ) -> bool {
+        units.iter().any(|&unit| match unit {
+            OccluderUnit::Piece(_) => false,
+            OccluderUnit::Solid(s) => {
+                let faces = &self.solids[s].faces;
+                let (lo, hi) = self.solid_boxes[s];
+                faces.binary_search(&a).is_err()
+                    && faces.binary_search(&b).is_err()
+                    && volume.may_hold_box(lo, hi)
+                    && self.solids[s].hides(from, to, tol)
+            }
+        })
+    }
+
     /// Occluders that may block a segment between faces `a` and `b` that lies in `volume`
     /// ([`OccluderIndex::may_block`]), found lazily in the tree's order or in index order.
     pub(super) fn inside<'a>(

@@ -28,18 +28,32 @@ impl PairPlanner {
         candidates: Option<&[OccluderUnit]>,
     ) -> Shaft {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let found: Vec<usize> = match candidates {
-            Some(units) => self.occluders.pieces_within(a, b, &volume, units),
-            None => self.occluders.inside(a, b, &volume).collect(),
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        let hidden = match candidates {
+            Some(units) => {
+                // A building among the candidates that hides the boxes settles the block before
+                // any of the pieces is searched (most blocks between a city's streets); else
+                // only single pieces are left to try, every solid having been tried.
+                if self.occluders.unit_solid_hides(units, (a, b), &volume, &from, &to, tol) {
+                    return Shaft::Hidden;
+                }
+                let found = self.occluders.pieces_within(a, b, &volume, units);
+                if found.is_empty() {
+                    return Shaft::Clear;
+                }
+                found
+                    .iter()
+                    .any(|&o| self.occluders.pieces[o].crosses_every_segment(&from, &to, tol, tol))
+            }
+            None => {
+                let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
+                if found.is_empty() {
+                    return Shaft::Clear;
+                }
+                self.hides_shaft(&found, (a, b), &from, &to, tol)
+            }
         };
-        if found.is_empty() {
-            return Shaft::Clear;
-        }
-        if self.hides_shaft(&found, (a, b), &box_corners(nodes), &box_corners(elements), tol) {
-            Shaft::Hidden
-        } else {
-            Shaft::Partial
-        }
+        if hidden { Shaft::Hidden } else { Shaft::Partial }
     }
 
     /// The occluders, as units (convex solids whole, the other pieces alone), of `within` (all
