@@ -246,7 +246,7 @@ pub(super) struct SparseRows {
 impl SparseRows {
     /// The non-zero entries of a row-major block of `width` columns, in `precision`.
     pub(super) fn from_dense(d: &[f64], width: usize, precision: Precision) -> Self {
-        let words = width.div_ceil(64);
+        let words = mask_words(width);
         let mut masks = vec![0u64; d.len() / width.max(1) * words];
         let mut values = Vec::new();
         for (row, mask) in d.chunks_exact(width).zip(masks.chunks_exact_mut(words)) {
@@ -268,7 +268,7 @@ impl SparseRows {
         m: usize,
         width: usize,
     ) -> Option<Self> {
-        let words = width.div_ceil(64);
+        let words = mask_words(width);
         let fits = starts.len() == m + 1
             && starts.first() == Some(&0)
             && starts.windows(2).all(|w| w[0] <= w[1])
@@ -303,10 +303,9 @@ impl SparseRows {
 
     /// `y += B x`.
     fn apply_add(&self, x: &[f64], y: &mut [f64]) {
-        let words = x.len().div_ceil(64).max(1);
         on_values!(&self.values, values => {
             let mut k = 0;
-            for (yi, row) in y.iter_mut().zip(self.masks.chunks_exact(words)) {
+            for (yi, row) in y.iter_mut().zip(self.row_masks(x.len())) {
                 let mut sum = 0.0;
                 each_column(row, |c| {
                     sum += wide(values[k]) * x[c];
@@ -319,17 +318,22 @@ impl SparseRows {
 
     /// Each row's mask words, for a block of `width` columns.
     fn row_masks(&self, width: usize) -> std::slice::ChunksExact<'_, u64> {
-        self.masks.chunks_exact(width.div_ceil(64).max(1))
+        self.masks.chunks_exact(mask_words(width))
     }
 
     /// Bytes of the masks of a block of `rows` × `width`.
     fn mask_bytes(rows: usize, width: usize) -> u64 {
-        8 * (rows * width.div_ceil(64)) as u64
+        8 * (rows * mask_words(width)) as u64
     }
 
     pub(super) fn bytes(&self) -> u64 {
         8 * self.masks.len() as u64 + self.values.bytes()
     }
+}
+
+/// Mask words of a row of `width` columns (one at least, so that rows stay apart).
+fn mask_words(width: usize) -> usize {
+    width.div_ceil(64).max(1)
 }
 
 /// `f(c)` for each column c whose bit is set in a row's mask words, increasing.
@@ -465,6 +469,17 @@ mod tests {
                     let narrower = SparseRows::from_csr(&starts, &cols, rows.values.clone(), m, 1);
                     assert!(narrower.is_none());
                 }
+                // A block of no columns (a damaged file's) holds nothing, and no row of it does.
+                let none = SparseRows::from_csr(&starts, &cols, rows.values.clone(), m, 0);
+                assert!(none.is_none());
+                let empty = SparseRows::from_csr(
+                    &vec![0; m + 1],
+                    &[],
+                    Values::new(vec![], precision),
+                    m,
+                    0,
+                );
+                assert!(empty.is_some_and(|e| e.masks.iter().all(|&w| w == 0)));
             }
         }
         assert_eq!(Precision::for_tolerance(1e-9), Precision::F64);
