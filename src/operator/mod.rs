@@ -749,8 +749,7 @@ fn build_block_by_block(
             if guard.is_over() {
                 break;
             }
-            let (mut block, stats) = entries.exact_block(t, s, &mut views);
-            block.compact(entries.precision);
+            let (block, stats) = entries.exact_block(t, s, &mut views);
             guard.add(block.bytes());
             met.add(stats, incompressible);
             *slot = block;
@@ -764,8 +763,7 @@ fn build_block_by_block(
             *slot = match entries.compressed_block(t, s, faces, tolerance) {
                 Some(block) => block,
                 None => {
-                    let (mut block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
-                    block.compact(entries.precision);
+                    let (block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
                     met.add(stats, true);
                     block
                 }
@@ -906,7 +904,8 @@ impl Entries<'_> {
         stats
     }
 
-    /// Every entry of the block, by the dense path's pair plan and kernels.
+    /// Every entry of the block, by the dense path's pair plan and kernels, stored by what it
+    /// holds ([`Block::compact`]).
     fn exact_block(&self, t: usize, s: usize, views: &mut NodeViews) -> (Block, PairStats) {
         let per = self.per;
         let (m, width) = self.block_size(t, s);
@@ -939,7 +938,9 @@ impl Entries<'_> {
             }
         });
         batch.flush(|(at, scale), v| data[at] += scale * v);
-        (self.block(t, s, BlockData::exact(data)), stats)
+        let mut block = self.block(t, s, BlockData::exact(data));
+        block.compact(self.precision);
+        (block, stats)
     }
 
     /// Rows and columns (elements × basis functions) of block (t, s).

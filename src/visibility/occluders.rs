@@ -192,10 +192,13 @@ impl OccluderIndex {
     /// The solid that piece `o` bounds, unless it has a face of `a` or `b` (seen from or seen on
     /// one of its own faces, a solid is no occluder of its own).
     pub(super) fn solid_for_view(&self, o: usize, a: usize, b: usize) -> Option<usize> {
-        self.solid_of[o].filter(|&s| {
-            let faces = &self.solids[s].faces;
-            faces.binary_search(&a).is_err() && faces.binary_search(&b).is_err()
-        })
+        self.solid_of[o].filter(|&s| self.solid_occludes(s, a, b))
+    }
+
+    /// Whether solid `s` may occlude between faces `a` and `b`: it has neither as a face.
+    fn solid_occludes(&self, s: usize, a: usize, b: usize) -> bool {
+        let faces = &self.solids[s].faces;
+        faces.binary_search(&a).is_err() && faces.binary_search(&b).is_err()
     }
 
     /// Whether a convex solid bounded by some of `pieces` (not one with a face of `a` or `b`)
@@ -235,10 +238,8 @@ impl OccluderIndex {
         units.iter().any(|&unit| match unit {
             OccluderUnit::Piece(_) => false,
             OccluderUnit::Solid(s) => {
-                let faces = &self.solids[s].faces;
                 let (lo, hi) = self.solid_boxes[s];
-                faces.binary_search(&a).is_err()
-                    && faces.binary_search(&b).is_err()
+                self.solid_occludes(s, a, b)
                     && volume.may_hold_box(lo, hi)
                     && self.solids[s].hides(from, to, tol)
             }

@@ -29,29 +29,24 @@ impl PairPlanner {
     ) -> Shaft {
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
         let (from, to) = (box_corners(nodes), box_corners(elements));
-        let hidden = match candidates {
+        let found: Vec<usize> = match candidates {
             Some(units) => {
                 // A building among the candidates that hides the boxes settles the block before
-                // any of the pieces is searched (most blocks between a city's streets); else
-                // only single pieces are left to try, every solid having been tried.
+                // any of the pieces is searched (most blocks between a city's streets).
                 if self.occluders.unit_solid_hides(units, (a, b), &volume, &from, &to, tol) {
                     return Shaft::Hidden;
                 }
-                let found = self.occluders.pieces_within(a, b, &volume, units);
-                if found.is_empty() {
-                    return Shaft::Clear;
-                }
-                found
-                    .iter()
-                    .any(|&o| self.occluders.pieces[o].crosses_every_segment(&from, &to, tol, tol))
+                self.occluders.pieces_within(a, b, &volume, units)
             }
-            None => {
-                let found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
-                if found.is_empty() {
-                    return Shaft::Clear;
-                }
-                self.hides_shaft(&found, (a, b), &from, &to, tol)
-            }
+            None => self.occluders.inside(a, b, &volume).collect(),
+        };
+        if found.is_empty() {
+            return Shaft::Clear;
+        }
+        // With candidates every solid has been tried: only single pieces are left to try.
+        let hidden = match candidates {
+            Some(_) => self.crossed_by_one(&found, &from, &to, tol),
+            None => self.hides_shaft(&found, (a, b), &from, &to, tol),
         };
         if hidden { Shaft::Hidden } else { Shaft::Partial }
     }
@@ -149,8 +144,14 @@ impl PairPlanner {
         to: &[DVec3],
         tol: f64,
     ) -> bool {
-        found.iter().any(|&o| self.occluders.pieces[o].crosses_every_segment(from, to, tol, tol))
+        self.crossed_by_one(found, from, to, tol)
             || self.occluders.solid_hides(found, faces, from, to, tol)
+    }
+
+    /// Whether one of the pieces `found` crosses every segment between the boxes with corners
+    /// `from` and `to`.
+    fn crossed_by_one(&self, found: &[usize], from: &[DVec3], to: &[DVec3], tol: f64) -> bool {
+        found.iter().any(|&o| self.occluders.pieces[o].crosses_every_segment(from, to, tol, tol))
     }
 }
 
