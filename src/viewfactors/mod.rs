@@ -268,7 +268,7 @@ pub fn view_factors(
 ) -> Result<ViewFactors> {
     let disc = Discretization::new(scene, mesh, Method::Centroid)?;
     let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
-    let rules = OuterRules::new(options.max_level);
+    let rules = OuterRules::new(options);
     let context = Context { scene, mesh, disc: &disc, planner, integrator: &integrator, options };
     let n = mesh.len();
     let faces = mesh.face_count();

@@ -12,7 +12,7 @@ use super::outer::Outer;
 use super::patch::{GaussRules, Patch};
 use super::poles::poles;
 use super::sight::{PointView, Sight};
-use super::{Context, MAX_SPLITS, Tally};
+use super::{Context, MAX_SPLITS, Tally, ViewFactorOptions};
 use crate::assembly::{FullPair, LaneObserver, push_fan};
 use crate::geometry::{bounding_box_3d, convex_polygons_distance};
 use crate::kernels::lanes;
@@ -35,8 +35,17 @@ const GAUSS_MAX: usize = 16;
 const CERTIFIED_TARGET: f64 = 1e-13;
 
 impl OuterRules {
-    pub(super) fn new(max_level: u32) -> Self {
-        Self { tanh_sinh: TanhSinh::new(max_level), gauss: GaussRules::new(GAUSS_MAX) }
+    /// The rules for `options`: the tanh-sinh rule truncated where its weights fall below a
+    /// hundredth of the tolerance (the integrand, a point-to-element factor, is at most 1).
+    /// Truncated at 1e-20 instead, city:4x4 and the louvre room at --tolerance 1e-6 took
+    /// 4.54 M and 7.17 M evaluations in touching triangles instead of 2.41 M and 3.79 M, with
+    /// every entry the same to 1e-10 (2-core EPYC, 2.5 s against 1.9 s and 7.5 s against 6.4 s).
+    pub(super) fn new(options: &ViewFactorOptions) -> Self {
+        let tail = 1e-2 * options.tolerance;
+        Self {
+            tanh_sinh: TanhSinh::new(options.max_level, tail),
+            gauss: GaussRules::new(GAUSS_MAX),
+        }
     }
 
     /// The Gauss order for a patch of size `size` at distance `distance` from the nearest

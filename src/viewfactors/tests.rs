@@ -404,9 +404,9 @@ fn estimates_hold_where_occluders_meet_the_element_at_a_point() {
         (Fixture::new(crate::scene::city(4, 4).unwrap()), [(123, 182), (222, 160), (111, 170)]),
     ];
     for (fixture, pairs) in cases {
-        let rules = OuterRules::new(ViewFactorOptions::default().max_level);
         let at = |tolerance: f64, (i, j): (usize, usize)| {
             let options = ViewFactorOptions { tolerance, ..Default::default() };
+            let rules = OuterRules::new(&options);
             let mut tally = Tally::default();
             (fixture.context(&options).pair(i, j, true, &rules, &mut tally), tally.error)
         };
@@ -431,7 +431,7 @@ fn partly_shadowed_pairs_agree_with_monte_carlo() {
         let Fixture { scene, mesh, planner, .. } = &fixture;
         let options = ViewFactorOptions { tolerance: 1e-6, ..Default::default() };
         let context = fixture.context(&options);
-        let rules = OuterRules::new(options.max_level);
+        let rules = OuterRules::new(&options);
         let n = mesh.len();
         // Pairs apart (the kernel's variance stays bounded), some of whose segments are
         // blocked and some not, in a fixed order through the matrix.
