@@ -64,6 +64,78 @@ pub(super) enum PointView {
     Signed { added: Vec<Vec<DVec2>>, taken: Vec<Vec<DVec2>> },
 }
 
+impl PointView {
+    /// The view's shape as a number: its kind, and for signed pieces how many there are of
+    /// each sign and how many corners each has, leaving out pieces without area and corners
+    /// without a side (where two shadows share an edge, a building's walls at its corner, their
+    /// common part is such a sliver or not by rounding). The points of a piece of T_i between
+    /// its visibility events see one shape; a patch whose points see several straddles an
+    /// event that was not cut along (where three mutually skew edges line up), and the
+    /// difference of its rules can miss by far more than it says.
+    pub(super) fn shape(&self) -> u64 {
+        match self {
+            PointView::Nothing => 1,
+            PointView::Whole => 2,
+            PointView::Signed { added, taken } => {
+                let scale = added.first().map_or(0.0, |w| {
+                    let (lo, hi) = geometry::bounding_box(w);
+                    (hi - lo).length()
+                });
+                let area = |pieces: &[Vec<DVec2>]| -> f64 {
+                    pieces.iter().map(|p| geometry::signed_area(p).abs()).sum()
+                };
+                // Shadows that cover the whole window: nothing is seen, as where one occluder
+                // was found to cross every segment.
+                if area(added) - area(taken) <= SLIVER * scale * scale {
+                    return 1;
+                }
+                let corners = |pieces: &[Vec<DVec2>], seed: u64| {
+                    pieces.iter().fold(seed, |h, p| {
+                        if geometry::signed_area(p).abs() <= SLIVER * scale * scale {
+                            return h;
+                        }
+                        let sides = (0..p.len())
+                            .filter(|&k| p[k].distance(p[(k + 1) % p.len()]) > SLIVER * scale)
+                            .count();
+                        h.wrapping_mul(31).wrapping_add(sides as u64)
+                    })
+                };
+                corners(taken, corners(added, 3).wrapping_mul(1_000_003))
+            }
+        }
+    }
+}
+
+/// Relative size (of a side, or of an area against the window's square) below which a
+/// view's piece or corner does not count in its shape.
+const SLIVER: f64 = 1e-9;
+
+/// The shapes of the views from a set of points ([`PointView::shape`]): none yet, one, or
+/// more than one.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) enum Shapes {
+    #[default]
+    None,
+    One(u64),
+    Many,
+}
+
+impl Shapes {
+    /// These shapes and that of `view`.
+    pub(super) fn with(self, view: &PointView) -> Self {
+        self.and(Shapes::One(view.shape()))
+    }
+
+    /// These shapes and `other`'s.
+    pub(super) fn and(self, other: Shapes) -> Self {
+        match (self, other) {
+            (Shapes::None, s) | (s, Shapes::None) => s,
+            (Shapes::One(a), Shapes::One(b)) if a == b => self,
+            _ => Shapes::Many,
+        }
+    }
+}
+
 /// The window less the union of the convex `shadows` as signed convex pieces: the window and
 /// the intersections of an even number of shadows added, those of an odd number taken. The
 /// intersections grow one shadow at a time, in index order: one that is empty, or whose box is
