@@ -426,10 +426,15 @@ mod tests {
     /// go to compressed sparse rows and back.
     #[test]
     fn sparse_rows_give_the_dense_product() {
-        for (m, width) in [(3, 1), (16, 16), (5, 40), (7, 64), (4, 70), (3, 130)] {
-            // About a third hidden, in runs and scattered.
+        let sizes = [(3, 1), (16, 16), (5, 40), (7, 64), (4, 70), (3, 130)];
+        // About a third hidden, scattered; or a band of each row hidden, and the rest in long
+        // runs (whole mask words of 64 among them).
+        let scattered = |k: usize, _: usize| (k * 7 + k / 5).is_multiple_of(3);
+        let band = |k: usize, width: usize| (width / 3..width / 2).contains(&(k % width));
+        let hidden: [&dyn Fn(usize, usize) -> bool; 2] = [&scattered, &band];
+        for ((m, width), hidden) in sizes.into_iter().flat_map(|s| hidden.map(|h| (s, h))) {
             let d: Vec<f64> = (0..m * width)
-                .map(|k| if (k * 7 + k / 5) % 3 == 0 { 0.0 } else { 0.1 + (k as f64).sin().abs() })
+                .map(|k| if hidden(k, width) { 0.0 } else { 0.1 + (k as f64).sin().abs() })
                 .collect();
             let x: Vec<f64> = (0..width).map(|j| (j as f64 * 0.9).cos()).collect();
             for precision in [Precision::F64, Precision::F32] {
