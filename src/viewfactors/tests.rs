@@ -514,66 +514,43 @@ fn brute_force_pair(fixture: &Fixture, context: &Context, (i, j): (usize, usize)
 }
 
 /// Partly shadowed pairs of a generated city and of the louvre room at `--tolerance 1e-6`
-/// against the brute-force outer integral ([`brute_force_pair`]) at m = 96 and 192: within
-/// 2e-6 of the finer, whose error bar (a third of its distance from the coarser, as the error
-/// falls like 1/m²) is at most 1e-6. They agree to 3.9e-7 at most (the error bar there
-/// 3.9e-7), to 1e-8 on most pairs.
+/// against two independent estimates:
+/// - the brute-force outer integral ([`brute_force_pair`]) at m = 96 and 192: within 2e-6 of
+///   the finer, whose error bar (a third of its distance from the coarser, as the error falls
+///   like 1/m²) is at most 1e-6. They agree to 3.9e-7 at most (the error bar there 3.9e-7), to
+///   1e-8 on most pairs;
+/// - Monte Carlo with ray-cast visibility: within 5 standard errors (about 1e-5) plus the
+///   tolerance. View3D 4.0 misses one such city pair by 8.5e-4 (docs/performance.md).
 #[test]
-fn partly_shadowed_pairs_agree_with_a_brute_force_outer_integral() {
+fn partly_shadowed_pairs_agree_with_brute_force_and_monte_carlo() {
     let scenes =
         [Fixture::new(crate::scene::city(4, 4).unwrap()), Fixture::example("louvre-room.toml")];
     for fixture in scenes {
         let options = ViewFactorOptions { tolerance: 1e-6, ..Default::default() };
         let context = fixture.context(&options);
         let rules = OuterRules::new(&options);
+        let n = fixture.mesh.len();
         let pairs = partly_shadowed_pairs(&fixture);
-        let checked: Vec<(usize, usize, f64, f64, f64)> = pairs
+        let checked: Vec<_> = pairs
             .par_iter()
             .map(|&(i, j)| {
                 let mut tally = Tally::default();
                 let f = context.pair(i, j, true, &rules, &mut tally);
                 let coarse = brute_force_pair(&fixture, &context, (i, j), 96);
                 let fine = brute_force_pair(&fixture, &context, (i, j), 192);
-                (i, j, f, coarse, fine)
+                let (mean, error, _) =
+                    monte_carlo(&fixture.mesh, i, j, 400_000, (i * n + j) as u64);
+                ((i, j), f, (coarse, fine), (mean, error))
             })
             .collect();
-        for (i, j, f, coarse, fine) in checked {
-            let name = &fixture.scene.name;
+        let name = &fixture.scene.name;
+        for ((i, j), f, (coarse, fine), (mean, error)) in checked {
             let bar = (fine - coarse).abs() / 3.0;
             assert!(bar <= 1e-6, "{name}: F({i}, {j}) by brute force {coarse}, {fine}");
             assert!((f - fine).abs() <= 2e-6, "{name}: F({i}, {j}) = {f}, by brute force {fine}");
-        }
-    }
-}
-
-/// Partly shadowed pairs of a generated city and of the louvre room against Monte Carlo with
-/// ray-cast visibility: within 5 standard errors (about 1e-5) plus the tolerance asked. View3D
-/// 4.0 misses one such city pair by 8.5e-4 (docs/performance.md).
-#[test]
-fn partly_shadowed_pairs_agree_with_monte_carlo() {
-    let scenes =
-        [Fixture::new(crate::scene::city(4, 4).unwrap()), Fixture::example("louvre-room.toml")];
-    for fixture in scenes {
-        let options = ViewFactorOptions { tolerance: 1e-6, ..Default::default() };
-        let context = fixture.context(&options);
-        let rules = OuterRules::new(&options);
-        let Fixture { scene, mesh, .. } = &fixture;
-        let n = mesh.len();
-        let pairs = partly_shadowed_pairs(&fixture);
-        let checked: Vec<(usize, usize, f64, f64, f64)> = pairs
-            .par_iter()
-            .map(|&(i, j)| {
-                let mut tally = Tally::default();
-                let f = context.pair(i, j, true, &rules, &mut tally);
-                let (mean, error, _) = monte_carlo(mesh, i, j, 400_000, (i * n + j) as u64);
-                (i, j, f, mean, error)
-            })
-            .collect();
-        for (i, j, f, mean, error) in checked {
             assert!(
                 (f - mean).abs() <= 5.0 * error + options.tolerance,
-                "{}: F({i}, {j}) = {f}, Monte Carlo {mean} ± {error}",
-                scene.name
+                "{name}: F({i}, {j}) = {f}, Monte Carlo {mean} ± {error}"
             );
         }
     }
