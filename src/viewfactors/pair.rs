@@ -665,9 +665,9 @@ impl Part<'_> {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Whether a line that may carry poles runs along a side of the triangle `t` (longest side
-    /// `size`), as an occluder's plane does along the piece it bounds: the integrand is not
-    /// analytic up to that side.
+    /// Whether a line that may carry poles (where a shadow's corner runs off to infinity) runs
+    /// along a side of the triangle `t` (longest side `size`): the integrand is not analytic up
+    /// to that side.
     fn pole_along_a_side(&self, t: &[DVec3; 3], size: f64) -> bool {
         self.poles.iter().any(|&(m, point, sin)| {
             let margin = TOUCHING * size * sin;
