@@ -346,13 +346,23 @@ impl Context<'_> {
         let distance = part.distance(patch.corners(), size, to_target);
         let checked = matches!(part.sight, Sight::PerPoint(_)) && distance <= TOUCHING * size;
         let distance = distance.min(part.obstacle_distance(patch.corners()));
+        // Where occluders shadow T_j the order is only a first guess, since the estimate with
+        // one order more decides: it aims at the tolerance itself. On the occluded box at
+        // --tolerance 1e-10 (2-core EPYC, 2026-11-24) aiming at 3e-11 took 11.3 s, 1e-10
+        // 11.7 s and 1e-9 13.7 s (more splits); at --tolerance 1e-9, aiming at 1e-10 took
+        // 8.35 s and at 1e-9 7.6 s, to a reciprocity of 8.4e-9 and 3.0e-9.
+        // The Bernstein bound is relative to the integrand's size, which from a patch at
+        // distance d from T_j is at most A_j / (π d²) (cosines at most 1): the tolerance on
+        // F_ij asks for that much less relative accuracy of a patch far from a small T_j, up
+        // to RELAXED_AT_MOST.
+        let shadowed_target = self.options.tolerance
+            / integrand_bound(to_target, part.target_area).max(RELAXED_AT_MOST);
         if distance <= TOUCHING * size {
             for t in patch.triangles() {
                 let by_gauss = self.at_obstacle_corner(t, part).map(|(t, distance)| {
-                    let target = self.options.tolerance
-                        / integrand_bound(to_target, part.target_area).max(RELAXED_AT_MOST);
                     let t = Patch::Triangle(t);
-                    let q = rules.gauss_order(t.size(), distance, target).unwrap_or(GAUSS_MAX - 1);
+                    let q = rules.gauss_order(t.size(), distance, shadowed_target);
+                    let q = q.unwrap_or(GAUSS_MAX - 1);
                     let q = q.max(corner_order(self.options.tolerance));
                     (self.two_orders(i, j, &t, part, q, rules, tally), t.area())
                 });
@@ -372,31 +382,12 @@ impl Context<'_> {
             return cell;
         }
         let certified = matches!(part.sight, Sight::Whole);
-        // Where occluders shadow T_j the order is only a first guess, since the estimate with
-        // one order more decides: it aims at the tolerance itself. On the occluded box at
-        // --tolerance 1e-10 (2-core EPYC, 2026-11-24) aiming at 3e-11 took 11.3 s, 1e-10
-        // 11.7 s and 1e-9 13.7 s (more splits); at --tolerance 1e-9, aiming at 1e-10 took
-        // 8.35 s and at 1e-9 7.6 s, to a reciprocity of 8.4e-9 and 3.0e-9.
-        // The Bernstein bound is relative to the integrand's size, which from a patch at
-        // distance d from T_j is at most A_j / (π d²) (cosines at most 1): the tolerance on
-        // F_ij asks for that much less relative accuracy of a patch far from a small T_j, up
-        // to RELAXED_AT_MOST.
-        let target = if certified {
-            CERTIFIED_TARGET
-        } else {
-            self.options.tolerance
-                / integrand_bound(to_target, part.target_area).max(RELAXED_AT_MOST)
-        };
+        let target = if certified { CERTIFIED_TARGET } else { shadowed_target };
         let order = rules.gauss_order(size, distance, target);
-        let mut estimate_on = |patch: &Patch, q: usize| {
-            let points = patch.gauss_points(&rules.gauss, q);
-            tally.evaluations += points.len() as u64;
-            self.weighted_sum(i, j, part.sight, &points)
-        };
         if certified {
             match order {
                 Some(q) => {
-                    cell.value = estimate_on(&patch, q).0;
+                    cell.value = self.gauss_sum((i, j), &cell.patch, q, part, rules, tally).0;
                     return cell;
                 }
                 // Too close to T_j for the bound: its quarters, settled together.
@@ -417,6 +408,22 @@ impl Context<'_> {
         cell
     }
 
+    /// `∫ g dA` over `patch` by the Gauss rule of order `q`, and the shapes of the views from
+    /// its points.
+    fn gauss_sum(
+        &self,
+        (i, j): (usize, usize),
+        patch: &Patch,
+        q: usize,
+        part: &Part,
+        rules: &OuterRules,
+        tally: &mut Tally,
+    ) -> (f64, Shapes) {
+        let points = patch.gauss_points(&rules.gauss, q);
+        tally.evaluations += points.len() as u64;
+        self.weighted_sum(i, j, part.sight, &points)
+    }
+
     /// `∫ g dA` over `patch` by the Gauss rule of order q + 1, and its estimated error: the
     /// difference from order q.
     #[allow(clippy::too_many_arguments)]
@@ -430,11 +437,8 @@ impl Context<'_> {
         rules: &OuterRules,
         tally: &mut Tally,
     ) -> (f64, f64) {
-        let mut estimate_on = |patch: &Patch, q: usize| {
-            let points = patch.gauss_points(&rules.gauss, q);
-            tally.evaluations += points.len() as u64;
-            self.weighted_sum(i, j, part.sight, &points)
-        };
+        let mut estimate_on =
+            |patch: &Patch, q: usize| self.gauss_sum((i, j), patch, q, part, rules, tally);
         let ((low, low_shapes), (high, high_shapes)) =
             (estimate_on(patch, q), estimate_on(patch, q + 1));
         let mut error = (high - low).abs();

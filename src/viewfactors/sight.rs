@@ -81,17 +81,19 @@ impl PointView {
                     let (lo, hi) = geometry::bounding_box(w);
                     (hi - lo).length()
                 });
-                let area = |pieces: &[Vec<DVec2>]| -> f64 {
-                    pieces.iter().map(|p| geometry::signed_area(p).abs()).sum()
+                let areas = |pieces: &[Vec<DVec2>]| -> SmallVec<[f64; 8]> {
+                    pieces.iter().map(|p| geometry::signed_area(p).abs()).collect()
                 };
+                let (added_areas, taken_areas) = (areas(added), areas(taken));
                 // Shadows that cover the whole window: nothing is seen, as where one occluder
                 // was found to cross every segment.
-                if area(added) - area(taken) <= SLIVER * scale * scale {
+                let seen = added_areas.iter().sum::<f64>() - taken_areas.iter().sum::<f64>();
+                if seen <= SLIVER * scale * scale {
                     return 1;
                 }
-                let corners = |pieces: &[Vec<DVec2>], seed: u64| {
-                    pieces.iter().fold(seed, |h, p| {
-                        if geometry::signed_area(p).abs() <= SLIVER * scale * scale {
+                let corners = |pieces: &[Vec<DVec2>], areas: &[f64], seed: u64| {
+                    pieces.iter().zip(areas).fold(seed, |h, (p, &area)| {
+                        if area <= SLIVER * scale * scale {
                             return h;
                         }
                         let sides = (0..p.len())
@@ -100,7 +102,8 @@ impl PointView {
                         h.wrapping_mul(31).wrapping_add(sides as u64)
                     })
                 };
-                corners(taken, corners(added, 3).wrapping_mul(1_000_003))
+                let added = corners(added, &added_areas, 3);
+                corners(taken, &taken_areas, added.wrapping_mul(1_000_003))
             }
         }
     }
