@@ -70,6 +70,11 @@ pub fn bounding_box(points: &[DVec2]) -> (DVec2, DVec2) {
         })
 }
 
+/// Whether two axis-aligned boxes (smallest and largest corners) share interior points.
+pub fn boxes_overlap((alo, ahi): (DVec2, DVec2), (blo, bhi): (DVec2, DVec2)) -> bool {
+    alo.x < bhi.x && blo.x < ahi.x && alo.y < bhi.y && blo.y < ahi.y
+}
+
 /// Smallest and largest corner of the axis-aligned box around 3-D points.
 pub fn bounding_box_3d(points: &[DVec3]) -> (DVec3, DVec3) {
     points
@@ -219,9 +224,7 @@ pub fn distance_to_convex(poly: &[DVec2], x: DVec2) -> f64 {
 /// the difference; the part inside goes on to the next edge. What remains at the end is
 /// `piece ∩ hole` and is dropped.
 pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
-    let (plo, phi) = bounding_box(piece);
-    let (hlo, hhi) = bounding_box(hole);
-    if phi.x <= hlo.x || hhi.x <= plo.x || phi.y <= hlo.y || hhi.y <= plo.y {
+    if !boxes_overlap(bounding_box(piece), bounding_box(hole)) {
         return vec![piece.to_vec()];
     }
     // What is left (inside every hole edge so far) and the next such part, by turns.

@@ -44,7 +44,8 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use crate::geometry::{
-    HalfPlane, PlaneFrame, bounding_box, clip_convex, convex_contains, subtract_convex,
+    HalfPlane, PlaneFrame, bounding_box, boxes_overlap, clip_convex, convex_contains,
+    subtract_convex,
 };
 use crate::scene::{COPLANAR_DISTANCE, Scene};
 
@@ -475,50 +476,73 @@ impl PairPlanner {
             FaceView::Skip(reason) => return Visibility::Skip(*reason),
             FaceView::Visible { clip, shadows } => (clip, shadows),
         };
-        let mut changed = false;
-        let mut pieces = vec![poly.to_vec()];
-        if let Some(hp) = clip {
-            let scale = polygon_scale(poly);
-            let values: Vec<f64> = poly.iter().map(|&q| hp.eval(q)).collect();
-            let eps = PLANE_TOLERANCE * scale * hp.normal.length();
-            if values.iter().all(|&v| v <= eps) {
-                return Visibility::Skip(SkipReason::FacingAway);
-            }
-            if values.iter().any(|&v| v < -eps) {
-                match clip_convex(poly, hp) {
-                    Some(c) => pieces = vec![c],
-                    None => return Visibility::Skip(SkipReason::FacingAway),
+        let clipped = match clip {
+            Some(hp) => {
+                let scale = polygon_scale(poly);
+                let eps = PLANE_TOLERANCE * scale * hp.normal.length();
+                if poly.iter().all(|&q| hp.eval(q) <= eps) {
+                    return Visibility::Skip(SkipReason::FacingAway);
                 }
-                changed = true;
+                if poly.iter().any(|&q| hp.eval(q) < -eps) {
+                    match clip_convex(poly, hp) {
+                        Some(c) => Some(c),
+                        None => return Visibility::Skip(SkipReason::FacingAway),
+                    }
+                } else {
+                    None
+                }
+            }
+            None => None,
+        };
+        // Most elements of a face seen in part are seen whole or not at all: while the shadows
+        // leave the one piece as it is, nothing is allocated.
+        let one = clipped.as_deref().unwrap_or(poly);
+        let (lo, hi) = bounding_box(one);
+        let mut shadows = shadows.iter();
+        let mut cut = None;
+        for s in shadows.by_ref() {
+            if !boxes_overlap((lo, hi), bounding_box(s)) {
+                continue;
+            }
+            if convex_contains(s, one) {
+                return Visibility::Skip(SkipReason::Hidden);
+            }
+            let parts = subtract_convex(one, s);
+            if parts.is_empty() {
+                return Visibility::Skip(SkipReason::Hidden);
+            }
+            if parts.len() != 1 || parts[0] != one {
+                cut = Some(parts);
+                break;
             }
         }
+        let Some(mut pieces) = cut else {
+            return match clipped {
+                Some(c) => Visibility::Partial(vec![c]),
+                None => Visibility::Full,
+            };
+        };
+        let mut next = Vec::with_capacity(pieces.len());
         for s in shadows {
-            let (slo, shi) = bounding_box(s);
-            let mut next = Vec::with_capacity(pieces.len());
-            for piece in pieces {
-                let (plo, phi) = bounding_box(&piece);
-                if phi.x <= slo.x || shi.x <= plo.x || phi.y <= slo.y || shi.y <= plo.y {
+            let shadow_box = bounding_box(s);
+            for piece in pieces.drain(..) {
+                if !boxes_overlap(bounding_box(&piece), shadow_box) {
                     next.push(piece);
                     continue;
                 }
                 // A piece inside the shadow (every vertex, boundary included) is gone without
                 // cutting it along each of the shadow's edges.
                 if convex_contains(s, &piece) {
-                    changed = true;
                     continue;
                 }
-                let parts = subtract_convex(&piece, s);
-                if parts.len() != 1 || parts[0] != piece {
-                    changed = true;
-                }
-                next.extend(parts);
+                next.extend(subtract_convex(&piece, s));
             }
-            pieces = next;
+            std::mem::swap(&mut pieces, &mut next);
             if pieces.is_empty() {
                 return Visibility::Skip(SkipReason::Hidden);
             }
         }
-        if changed { Visibility::Partial(pieces) } else { Visibility::Full }
+        Visibility::Partial(pieces)
     }
 
     /// The face `face` as convex pieces (face coordinates, counter-clockwise): itself when it is
