@@ -222,15 +222,14 @@ impl OccluderIndex {
         })
     }
 
-    /// Whether a convex solid among `units` (not one with a face of `a` or `b`, its box
-    /// reaching into `volume`) hides every point of the convex hull of `from` from every point
-    /// of that of `to` ([`Solid::hides`]). Every solid that [`OccluderIndex::solid_hides`] would
-    /// try on the pieces of `units` found in `volume` is among these.
+    /// Whether a convex solid among `units` (not one with a face of `a` or `b`) hides every
+    /// point of the convex hull of `from` from every point of that of `to` ([`Solid::hides`]).
+    /// Every solid that [`OccluderIndex::solid_hides`] would try on the pieces of `units` found
+    /// in a shaft between them is among these.
     pub(super) fn unit_solid_hides(
         &self,
         units: &[OccluderUnit],
         (a, b): (usize, usize),
-        volume: &ViewVolume,
         from: &[DVec3],
         to: &[DVec3],
         tol: f64,
@@ -238,10 +237,7 @@ impl OccluderIndex {
         units.iter().any(|&unit| match unit {
             OccluderUnit::Piece(_) => false,
             OccluderUnit::Solid(s) => {
-                let (lo, hi) = self.solid_boxes[s];
-                self.solid_occludes(s, a, b)
-                    && volume.may_hold_box(lo, hi)
-                    && self.solids[s].hides(from, to, tol)
+                self.solid_occludes(s, a, b) && self.solids[s].hides(from, to, tol)
             }
         })
     }

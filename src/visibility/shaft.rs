@@ -27,17 +27,19 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
         candidates: Option<&[OccluderUnit]>,
     ) -> Shaft {
-        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
         let (from, to) = (box_corners(nodes), box_corners(elements));
-        let found: Vec<usize> = match candidates {
-            Some(units) => {
-                // A building among the candidates that hides the boxes settles the block before
-                // any of the pieces is searched (most blocks between a city's streets).
-                if self.occluders.unit_solid_hides(units, (a, b), &volume, &from, &to, tol) {
-                    return Shaft::Hidden;
-                }
-                self.occluders.pieces_within(a, b, &volume, units)
+        // A building among the candidates that hides the boxes settles the block before the
+        // shaft's planes are set up and any of the pieces is searched (most blocks between a
+        // city's streets).
+        if let Some(units) = candidates {
+            let tol = self.shaft_tolerance(a, b);
+            if self.occluders.unit_solid_hides(units, (a, b), &from, &to, tol) {
+                return Shaft::Hidden;
             }
+        }
+        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
+        let found: Vec<usize> = match candidates {
+            Some(units) => self.occluders.pieces_within(a, b, &volume, units),
             None => self.occluders.inside(a, b, &volume).collect(),
         };
         if found.is_empty() {
@@ -127,10 +129,15 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
     ) -> (ViewVolume, f64) {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        let tol = 1e-12 * fa.size.max(fb.size);
+        let tol = self.shaft_tolerance(a, b);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
         push_shaft(&mut volume, nodes, elements, tol);
         (volume, tol)
+    }
+
+    /// The tolerance of the planes of a shaft between faces `a` and `b`.
+    fn shaft_tolerance(&self, a: usize, b: usize) -> f64 {
+        1e-12 * self.faces[a].size.max(self.faces[b].size)
     }
 
     /// Whether one of the pieces `found` crosses every segment between the boxes with corners

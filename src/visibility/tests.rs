@@ -473,6 +473,17 @@ fn a_shaft_tried_on_its_parent_s_candidates_finds_what_the_whole_scene_gives() {
             let inner_box = |p: DVec3, q: DVec3| (p.min(q), p.max(q));
             let nodes = inner_box(point_on(fa), point_on(fa));
             let elements = inner_box(point_on(fb), point_on(fb));
+            // As in the block tree: each box in front of the other face's plane.
+            let in_front = |(lo, hi): (DVec3, DVec3), f: &Face| {
+                (0..8).all(|k| {
+                    let c =
+                        DVec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo);
+                    f.frame.height(c) > 0.0
+                })
+            };
+            if !in_front(nodes, fb) || !in_front(elements, fa) {
+                continue;
+            }
             let inner = planner.shaft_candidates(nodes, elements, Some(&outer));
             assert!(inner.iter().all(|o| outer.contains(o)));
             let whole = planner.shaft(a, b, nodes, elements, None);
