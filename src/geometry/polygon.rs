@@ -75,6 +75,18 @@ pub fn boxes_overlap((alo, ahi): (DVec2, DVec2), (blo, bhi): (DVec2, DVec2)) -> 
     alo.x < bhi.x && blo.x < ahi.x && alo.y < bhi.y && blo.y < ahi.y
 }
 
+/// The eight corners of the box `[lo, hi]`: bit 0 of the index picks x from `hi`, bit 1 y,
+/// bit 2 z.
+pub fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
+    std::array::from_fn(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
 /// Smallest and largest corner of the axis-aligned box around 3-D points.
 pub fn bounding_box_3d(points: &[DVec3]) -> (DVec3, DVec3) {
     points

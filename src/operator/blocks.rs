@@ -10,6 +10,7 @@ use super::CompressionOptions;
 use super::cluster::{Cluster, ClusterTree};
 use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
+use crate::geometry::box_corners;
 use crate::scene::Scene;
 use crate::visibility::{OccluderUnit, PairPlanner, Shaft};
 
@@ -123,18 +124,11 @@ impl<'a> Between<'a> {
 }
 
 /// Smallest and largest height of a box's corners above a plane.
-fn height_range(frame: &crate::geometry::PlaneFrame, (lo, hi): (DVec3, DVec3)) -> (f64, f64) {
-    let mut range = (f64::INFINITY, f64::NEG_INFINITY);
-    for k in 0..8 {
-        let c = DVec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
+fn height_range(frame: &crate::geometry::PlaneFrame, bounds: (DVec3, DVec3)) -> (f64, f64) {
+    box_corners(bounds).iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &c| {
         let h = frame.height(c);
-        range = (range.0.min(h), range.1.max(h));
-    }
-    range
+        (lo.min(h), hi.max(h))
+    })
 }
 
 /// The blocks of K: pairs (node cluster, element cluster) by index into their trees.

@@ -364,7 +364,7 @@ impl Context<'_> {
                     let q = rules.gauss_order(t.size(), distance, shadowed_target);
                     let q = q.unwrap_or(GAUSS_MAX - 1);
                     let q = q.max(corner_order(self.options.tolerance));
-                    (self.two_orders(i, j, &t, part, q, rules, tally), t.area())
+                    (self.two_orders((i, j), &t, part, q, rules, tally), t.area())
                 });
                 // Where the collapsed Gauss rule does not meet the tolerance on its own share,
                 // the integrand is not analytic about the corner after all (an event plane
@@ -403,7 +403,7 @@ impl Context<'_> {
             }
         }
         let q = order.unwrap_or(GAUSS_MAX - 1);
-        (cell.value, cell.error) = self.two_orders(i, j, &cell.patch, part, q, rules, tally);
+        (cell.value, cell.error) = self.two_orders((i, j), &cell.patch, part, q, rules, tally);
         cell.refinable = depth < MAX_SPLITS;
         cell
     }
@@ -426,11 +426,9 @@ impl Context<'_> {
 
     /// `∫ g dA` over `patch` by the Gauss rule of order q + 1, and its estimated error: the
     /// difference from order q.
-    #[allow(clippy::too_many_arguments)]
     fn two_orders(
         &self,
-        i: usize,
-        j: usize,
+        (i, j): (usize, usize),
         patch: &Patch,
         part: &Part,
         q: usize,

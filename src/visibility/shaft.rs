@@ -4,7 +4,7 @@ use glam::DVec3;
 
 use super::PairPlanner;
 use super::occluders::{OccluderUnit, ViewVolume};
-use crate::geometry::bounding_box_3d;
+use crate::geometry::{bounding_box_3d, box_corners};
 
 impl PairPlanner {
     /// What segments between a point of the box `nodes` on face `a` and a point of the box
@@ -171,17 +171,6 @@ pub enum Shaft {
     Hidden,
     /// Anything else.
     Partial,
-}
-
-/// The eight corners of a box.
-fn box_corners((lo, hi): (DVec3, DVec3)) -> [DVec3; 8] {
-    std::array::from_fn(|k| {
-        DVec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        )
-    })
 }
 
 /// Adds the shaft between two boxes to `volume`, shrunk by `shrink` (a piece that only touches

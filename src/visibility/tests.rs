@@ -474,12 +474,8 @@ fn a_shaft_tried_on_its_parent_s_candidates_finds_what_the_whole_scene_gives() {
             let nodes = inner_box(point_on(fa), point_on(fa));
             let elements = inner_box(point_on(fb), point_on(fb));
             // As in the block tree: each box in front of the other face's plane.
-            let in_front = |(lo, hi): (DVec3, DVec3), f: &Face| {
-                (0..8).all(|k| {
-                    let c =
-                        DVec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo);
-                    f.frame.height(c) > 0.0
-                })
+            let in_front = |bounds: (DVec3, DVec3), f: &Face| {
+                crate::geometry::box_corners(bounds).iter().all(|&c| f.frame.height(c) > 0.0)
             };
             if !in_front(nodes, fb) || !in_front(elements, fa) {
                 continue;
@@ -524,13 +520,7 @@ fn a_building_hides_what_no_single_wall_hides_and_ray_casting_confirms_it() {
             hidden += 1;
             let (found, _) = planner.shaft_occluders(a, b, nodes, elements);
             let tol = 1e-12 * planner.faces[a].size.max(planner.faces[b].size);
-            let corners = |(lo, hi): (DVec3, DVec3)| -> Vec<DVec3> {
-                (0..8)
-                    .map(|k| {
-                        DVec3::select(glam::BVec3::new(k & 1 == 1, k & 2 == 2, k & 4 == 4), hi, lo)
-                    })
-                    .collect()
-            };
+            let corners = crate::geometry::box_corners;
             let (from, to) = (corners(nodes), corners(elements));
             let single = found
                 .iter()
