@@ -248,8 +248,9 @@ pub(crate) struct OperatorArgs {
     #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
     pub(crate) compression_tolerance: f64,
     /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
-    /// matrix or operator that would pass it is refused before it is built [default: 80 % of
-    /// the available memory for each large structure]
+    /// matrix that would pass it is refused before it is built, a compressed operator before
+    /// it is built if what it surely stores would, or else where its build reaches it
+    /// [default: 80 % of the available memory for each large structure]
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
     pub(crate) memory_limit: Option<u64>,
 }

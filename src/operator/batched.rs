@@ -49,7 +49,7 @@ pub(super) fn build_blocks(
     progress: &dyn Progress,
 ) -> Result<Built> {
     let mut exact: Vec<(usize, usize, bool)> =
-        plan.near.iter().map(|&(t, s)| (t, s, false)).collect();
+        plan.near.iter().map(|b| (b.t, b.s, false)).collect();
     let mut crossings = Vec::new();
     for &(t, s) in &plan.far {
         match entries.useful_rank(t, s) {

@@ -131,11 +131,21 @@ fn height_range(frame: &crate::geometry::PlaneFrame, bounds: (DVec3, DVec3)) -> 
     })
 }
 
+/// A block computed exactly: node cluster t, element cluster s.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) struct NearBlock {
+    pub t: usize,
+    pub s: usize,
+    /// Every element in front of every node and seen whole (class smooth): every entry is
+    /// non-zero and stored. Otherwise the block stores what is seen, from nothing to all.
+    pub seen_whole: bool,
+}
+
 /// The blocks of K: pairs (node cluster, element cluster) by index into their trees.
 #[derive(Clone, Debug, Default)]
 pub(super) struct BlockPlan {
     /// Leaves computed exactly.
-    pub near: Vec<(usize, usize)>,
+    pub near: Vec<NearBlock>,
     /// Smooth admissible blocks, to be compressed.
     pub far: Vec<(usize, usize)>,
     /// Blocks holding nothing, left out.
@@ -184,13 +194,22 @@ impl BlockPlan {
                 .collect();
             parts.into_iter().for_each(|part| mine.append(part));
         }
-        // Each rank's blocks as (t << 32 | s), then the empty count.
+        // Each rank's blocks as (t << 32 | s), the near ones with whether they are seen whole
+        // in the top bit (cluster indices stay below 2^31), then the empty count.
         let code = |&(t, s): &(usize, usize)| ((t as u64) << 32) | s as u64;
         let decode = |c: &u64| ((c >> 32) as usize, (c & 0xffff_ffff) as usize);
-        let near: Vec<u64> = mine.near.iter().map(code).collect();
+        const WHOLE: u64 = 1 << 63;
+        let near: Vec<u64> = mine
+            .near
+            .iter()
+            .map(|b| code(&(b.t, b.s)) | if b.seen_whole { WHOLE } else { 0 })
+            .collect();
         let far: Vec<u64> = mine.far.iter().map(code).collect();
         for part in ranks.gather(&near) {
-            plan.near.extend(part.iter().map(decode));
+            plan.near.extend(part.iter().map(|c| {
+                let (t, s) = decode(&(c & !WHOLE));
+                NearBlock { t, s, seen_whole: c & WHOLE != 0 }
+            }));
         }
         for part in ranks.gather(&far) {
             plan.far.extend(part.iter().map(decode));
@@ -207,16 +226,24 @@ impl BlockPlan {
         self.empty += other.empty;
     }
 
-    /// Entries of the near blocks (an upper bound on what they store).
-    pub(super) fn near_entries(
+    /// Entries that the near blocks store for certain: those of the blocks seen whole, in the
+    /// rows of nodes that `reflect` (a row of rho = 0 is zero). The others store from nothing
+    /// to all of theirs, as visibility decides.
+    pub(super) fn certain_near_entries(
         &self,
         nodes: &ClusterTree,
         elements: &ClusterTree,
         per: usize,
+        reflects: impl Fn(usize) -> bool,
     ) -> u64 {
         self.near
             .iter()
-            .map(|&(t, s)| (nodes.clusters[t].len() * elements.clusters[s].len() * per) as u64)
+            .filter(|b| b.seen_whole)
+            .map(|b| {
+                let tc = &nodes.clusters[b.t];
+                let rows = nodes.order[tc.start..tc.end].iter().filter(|&&i| reflects(i)).count();
+                (rows * elements.clusters[b.s].len() * per) as u64
+            })
             .sum()
     }
 }
@@ -263,7 +290,7 @@ impl Walk<'_> {
         let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
         let children = match (split(tc), split(sc)) {
             (None, None) => {
-                plan.near.push((t, s));
+                plan.near.push(NearBlock { t, s, seen_whole: class == PairClass::Smooth });
                 return None;
             }
             (None, Some((s1, s2))) => vec![(t, s1), (t, s2)],

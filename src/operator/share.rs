@@ -2,7 +2,7 @@
 //! ([`crate::distributed`]): every rank holds the whole block plan and takes the blocks dealt to
 //! it, so that the ranks' estimated costs come out about equal.
 
-use super::blocks::BlockPlan;
+use super::blocks::{BlockPlan, NearBlock};
 use super::cluster::ClusterTree;
 
 /// Cross-approximation steps assumed per low-rank block when estimating its cost (each step
@@ -14,7 +14,7 @@ const ESTIMATED_STEPS: usize = 12;
 struct Unit {
     /// Estimated entry evaluations.
     cost: usize,
-    near: Vec<(usize, usize)>,
+    near: Vec<NearBlock>,
     far: Option<(usize, usize)>,
 }
 
@@ -33,9 +33,9 @@ pub(super) fn share_of(
     let mut near = plan.near.clone();
     near.sort_unstable();
     let mut units: Vec<Unit> = near
-        .chunk_by(|a, b| a.0 == b.0)
+        .chunk_by(|a, b| a.t == b.t)
         .map(|group| Unit {
-            cost: group.iter().map(|&(t, s)| size_of(t, s)).map(|(m, c)| m * c).sum(),
+            cost: group.iter().map(|b| size_of(b.t, b.s)).map(|(m, c)| m * c).sum(),
             near: group.to_vec(),
             far: None,
         })
@@ -84,7 +84,9 @@ mod tests {
             let all = list.iter().flat_map(|&t| list.iter().map(move |&s| (t, s)));
             all.step_by(stride).collect()
         };
-        let (near, far) = (pairs(&leaves, 3), pairs(&inner[1..], 5));
+        let near = pairs(&leaves, 3).into_iter();
+        let near = near.map(|(t, s)| NearBlock { t, s, seen_whole: (t + s) % 2 == 0 }).collect();
+        let far = pairs(&inner[1..], 5);
         let plan = BlockPlan { near, far, empty: 5 };
         for size in [1, 2, 3] {
             let shares: Vec<BlockPlan> =
@@ -92,16 +94,17 @@ mod tests {
             let mut near: Vec<_> = shares.iter().flat_map(|p| p.near.clone()).collect();
             let mut far: Vec<_> = shares.iter().flat_map(|p| p.far.clone()).collect();
             let (mut want_near, mut want_far) = (plan.near.clone(), plan.far.clone());
-            for v in [&mut near, &mut far, &mut want_near, &mut want_far] {
-                v.sort_unstable();
-            }
+            near.sort_unstable();
+            want_near.sort_unstable();
+            far.sort_unstable();
+            want_far.sort_unstable();
             assert_eq!((near, far), (want_near, want_far), "{size} ranks");
             assert_eq!(shares.iter().map(|p| p.empty).sum::<usize>(), 5);
             let cost = |p: &BlockPlan| -> usize {
                 let near: usize = p
                     .near
                     .iter()
-                    .map(|&(t, s)| tree.clusters[t].len() * tree.clusters[s].len())
+                    .map(|b| tree.clusters[b.t].len() * tree.clusters[b.s].len())
                     .sum();
                 let far: usize = p
                     .far

@@ -355,3 +355,50 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
         }
     }
 }
+
+#[test]
+fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
+    // The up-front check counts the exact blocks seen whole, in the rows of nodes that reflect
+    // (the sky's rows are zero); each such block stores exactly that many entries, and the
+    // operator as a whole no fewer. A lit city (buildings hide each other, rho = 0 sky) and the
+    // baffled box.
+    let scenes = [(crate::scene::lit_city(3, 2).unwrap(), 1), (baffled_box().unwrap(), 3)];
+    for (scene, refine) in scenes {
+        let c = case(scene, Method::Centroid, refine);
+        let options = CompressionOptions { tolerance: 1e-8, ..Default::default() };
+        let faces = FacePairs::new(&c.scene, &c.planner);
+        let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, &options);
+        let reflects = |i: usize| c.disc.nodes[i].rho != 0.0;
+        let integrator = PairIntegrator::new(c.disc.method, &AssemblyOptions::default());
+        let entries = Entries {
+            mesh: &c.mesh,
+            disc: &c.disc,
+            planner: &c.planner,
+            integrator: &integrator,
+            nodes: &nodes,
+            elements: &elements,
+            per: 1,
+            precision: Precision::F64,
+        };
+        let mut views = NodeViews::default();
+        let (mut whole, mut mixed) = (0, 0);
+        for b in &plan.near {
+            let one = BlockPlan { near: vec![*b], ..Default::default() };
+            let certain = one.certain_near_entries(&nodes, &elements, 1, reflects);
+            let (block, _) = entries.exact_block(b.t, b.s, &mut views);
+            let stored = block.bytes() / 8;
+            if b.seen_whole {
+                whole += 1;
+                assert_eq!(stored, certain, "block ({}, {})", b.t, b.s);
+            } else {
+                mixed += 1;
+                assert_eq!(certain, 0);
+            }
+        }
+        assert!(whole > 0 && mixed > 0, "{}: {whole} seen whole, {mixed} mixed", c.scene.name);
+        let op = compressed(&c, 1e-8, 32);
+        let certain = plan.certain_near_entries(&nodes, &elements, 1, reflects);
+        assert!(certain <= op.stats.near_entries, "{}", c.scene.name);
+    }
+}
