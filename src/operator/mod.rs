@@ -152,12 +152,13 @@ pub struct CompressionOptions {
 impl Default for CompressionOptions {
     fn default() -> Self {
         // eta 2: at n = 163 840 the setup took 17.4 s and 1.69 GB instead of 23.5 s and 2.46 GB
-        // with eta 1 (docs/performance.md); eta 3 made no difference. Mixed leaves of 16, since
-        // each node's views of the faces are kept for its cluster's blocks: five-piece refine 7
-        // 10.9 s and 1.54 GB against 14.0 s and 1.64 GB with 8, the furnished room (refine 4)
-        // 4.5 s against 5.9 s, city:20x20 4.7 s against 10.7 s (EPYC, 2026-11-26); 32 was
-        // faster on the rooms and the city but slower on the paper's surface.
-        Self { tolerance: DEFAULT_TOLERANCE, eta: 2.0, leaf_size: 32, mixed_leaf_size: 16 }
+        // with eta 1 (docs/performance.md); eta 3 made no difference. Mixed leaves of 32, since
+        // exact blocks store only what is seen: against 16, five-piece refine 7 solves in 9.2 s
+        // and 0.74 GB instead of 10.5 s and 0.76 GB, the furnished room (refine 5) in 22.7 s
+        // and 1.40 GB instead of 25.2 s and 1.52 GB, the louvre room (refine 5) in 21.9 s
+        // instead of 29.1 s, the lit city:35x36 (refine 1) in 186 s instead of 207 s (EPYC,
+        // 2026-11-26); 64 was faster on the cities but stored more on the rooms.
+        Self { tolerance: DEFAULT_TOLERANCE, eta: 2.0, leaf_size: 32, mixed_leaf_size: 32 }
     }
 }
 
