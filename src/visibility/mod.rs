@@ -226,6 +226,27 @@ impl PairPlanner {
         &self.occluders.pieces
     }
 
+    /// Why the point `p` on face `own_face` sees nothing of face `face`, where the planes alone
+    /// tell: the two faces share a plane, or `p` is on or behind `face`'s plane. Most faces
+    /// met by a node of a compressed operator's exact blocks are such (41 of 61 million views
+    /// on city:20x20:lit at refine 1); [`PairPlanner::face_view`] gives the same skip.
+    pub fn plane_skip_of(&self, p: DVec3, own_face: usize, face: usize) -> Option<SkipReason> {
+        self.plane_skip(self.height(p, face), own_face, face)
+    }
+
+    /// [`PairPlanner::plane_skip_of`] for a point at height `h` over `face`'s plane.
+    fn plane_skip(&self, h: Height, own_face: usize, face: usize) -> Option<SkipReason> {
+        let coplanar = match &self.pairs {
+            Some(table) => table[own_face * self.faces.len() + face].0,
+            None => self.same_plane_seen_from(h, own_face, face),
+        };
+        if coplanar {
+            Some(SkipReason::SamePlane)
+        } else {
+            (h.z <= 0.0).then_some(SkipReason::FacingAway)
+        }
+    }
+
     /// What the point `p` with unit normal `normal`, on face `own_face`, sees of face `face`.
     pub fn face_view(&self, p: DVec3, normal: DVec3, own_face: usize, face: usize) -> FaceView {
         self.face_view_with(p, normal, own_face, face, &mut RecentHiders::default())
@@ -244,12 +265,8 @@ impl PairPlanner {
     ) -> FaceView {
         let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
         let h = self.height(p, face);
-        let coplanar = match pair {
-            Some((coplanar, _)) => *coplanar,
-            None => self.same_plane_seen_from(h, own_face, face),
-        };
-        if coplanar {
-            return FaceView::Skip(SkipReason::SamePlane);
+        if let Some(reason) = self.plane_skip(h, own_face, face) {
+            return FaceView::Skip(reason);
         }
         let outline = &self.faces[face].hull;
         let Window { z, clip, polygon: window, corners } =

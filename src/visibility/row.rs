@@ -47,6 +47,15 @@ pub struct KeptViews {
 
 impl KeptViews {
     fn view(&mut self, planner: &PairPlanner, viewer: &Viewer, face: usize) -> &FaceView {
+        // Faces in the viewer's plane or behind it are told by the planes: not kept (most of
+        // a node's faces in a city; their insertions took 5 % of its exact blocks' time).
+        const SAME_PLANE: FaceView = FaceView::Skip(SkipReason::SamePlane);
+        const FACING_AWAY: FaceView = FaceView::Skip(SkipReason::FacingAway);
+        match planner.plane_skip_of(viewer.position, viewer.face, face) {
+            Some(SkipReason::SamePlane) => return &SAME_PLANE,
+            Some(_) => return &FACING_AWAY,
+            None => {}
+        }
         self.views.entry(face).or_insert_with(|| {
             let (p, n) = (viewer.position, viewer.normal);
             planner.face_view_with(p, n, viewer.face, face, &mut self.hiders)
