@@ -226,9 +226,11 @@ pub enum Error {
     },
     /// A compressed operator that cannot fit in memory.
     #[error(
-        "the compressed operator of {dof} unknowns needs at least {needed_gib:.2} GiB but only \
-         {available_gib:.2} GiB may be used (--memory-limit, or 80 % of the available memory); raise --compression-tolerance, use a coarser mesh \
-         (each refinement level multiplies the memory by about 5) or a machine with more memory"
+        "the compressed operator of {dof} unknowns needs at least {} but only {} may be used \
+         (--memory-limit, or 80 % of the available memory); raise --compression-tolerance, use a coarser mesh \
+         (each refinement level multiplies the memory by about 5) or a machine with more memory",
+        memory_text(*.needed_gib),
+        memory_text(*.available_gib)
     )]
     OperatorTooLarge {
         /// Unknowns.
@@ -314,3 +316,9 @@ impl std::fmt::Display for IterationFailure {
 
 /// Result alias of the library.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A memory size given in GiB, written in GiB from 1 GiB up and in MiB below (a small
+/// `--memory-limit` would read "0.00 GiB").
+fn memory_text(gib: f64) -> String {
+    if gib >= 1.0 { format!("{gib:.2} GiB") } else { format!("{:.1} MiB", gib * 1024.0) }
+}

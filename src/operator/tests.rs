@@ -188,6 +188,12 @@ fn an_operator_that_outgrows_the_memory_allowance_is_refused_with_the_limit_name
     for needle in ["491520 unknowns", "at least 4.00 GiB", "only 3.00 GiB", "--memory-limit"] {
         assert!(message.contains(needle), "'{needle}' not in: {message}");
     }
+    // Below a GiB, sizes are written in MiB.
+    let small = MemoryGuard::with_allowance(100, Some(40.0 * (1u64 << 20) as f64));
+    let message = small.check(50 << 20).unwrap_err().to_string();
+    for needle in ["at least 50.0 MiB", "only 40.0 MiB"] {
+        assert!(message.contains(needle), "'{needle}' not in: {message}");
+    }
 }
 
 #[test]
