@@ -210,10 +210,16 @@ impl PairPlanner {
         h.z.abs() <= reach && self.same_plane(own_face, face)
     }
 
+    /// The tolerance of the planes and segments between faces `a` and `b` (shafts, view
+    /// volumes, occluders crossing segments): 1e-12 of the larger face's size.
+    fn pair_tolerance(&self, a: usize, b: usize) -> f64 {
+        1e-12 * self.faces[a].size.max(self.faces[b].size)
+    }
+
     /// Occluders in the box of faces `a` and `b` and in front of both, in index order.
     fn occluders_between(&self, a: usize, b: usize) -> Vec<usize> {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        let tol = 1e-12 * fa.size.max(fb.size);
+        let tol = self.pair_tolerance(a, b);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
         volume.push_box(fa.lo.min(fb.lo), fa.hi.max(fb.hi), tol);
         let mut found: Vec<usize> = self.occluders.inside(a, b, &volume).collect();
@@ -287,7 +293,7 @@ impl PairPlanner {
                 .collect();
             return FaceView::Visible { clip, shadows };
         }
-        let tol = 1e-12 * own.size.max(f.size);
+        let tol = self.pair_tolerance(own_face, face);
         let pieces = &self.occluders.pieces;
         let hides = |o: usize| {
             let piece = &pieces[o];
@@ -471,7 +477,7 @@ impl PairPlanner {
             return FaceView::Visible { clip, shadows: Vec::new() };
         }
         let f = &self.faces[face];
-        let tol = 1e-12 * self.faces[own_face].size.max(f.size);
+        let tol = self.pair_tolerance(own_face, face);
         let sides = pyramid_sides(p, &corners);
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };

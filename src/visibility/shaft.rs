@@ -32,7 +32,7 @@ impl PairPlanner {
         // shaft's planes are set up and any of the pieces is searched (most blocks between a
         // city's streets).
         if let Some(units) = candidates {
-            let tol = self.shaft_tolerance(a, b);
+            let tol = self.pair_tolerance(a, b);
             if self.occluders.unit_solid_hides(units, (a, b), &from, &to, tol) {
                 return Shaft::Hidden;
             }
@@ -129,15 +129,10 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
     ) -> (ViewVolume, f64) {
         let (fa, fb) = (&self.faces[a], &self.faces[b]);
-        let tol = self.shaft_tolerance(a, b);
+        let tol = self.pair_tolerance(a, b);
         let mut volume = ViewVolume::between(&fa.face.frame, &fb.face.frame, tol);
         push_shaft(&mut volume, nodes, elements, tol);
         (volume, tol)
-    }
-
-    /// The tolerance of the planes of a shaft between faces `a` and `b`.
-    fn shaft_tolerance(&self, a: usize, b: usize) -> f64 {
-        1e-12 * self.faces[a].size.max(self.faces[b].size)
     }
 
     /// Whether one of the pieces `found` crosses every segment between the boxes with corners

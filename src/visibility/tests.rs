@@ -519,7 +519,7 @@ fn a_building_hides_what_no_single_wall_hides_and_ray_casting_confirms_it() {
             }
             hidden += 1;
             let (found, _) = planner.shaft_occluders(a, b, nodes, elements);
-            let tol = 1e-12 * planner.faces[a].size.max(planner.faces[b].size);
+            let tol = planner.pair_tolerance(a, b);
             let corners = crate::geometry::box_corners;
             let (from, to) = (corners(nodes), corners(elements));
             let single = found
