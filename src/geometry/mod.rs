@@ -13,7 +13,7 @@ pub use distance::convex_polygons_distance;
 pub use frame::PlaneFrame;
 pub use polygon::{
     HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, box_corners, boxes_overlap,
-    clip_convex, clip_convex_into, clip_polygon_3d, clip_to_convex, convex_contains,
+    clip_convex, clip_convex_into, clip_polygon_3d, clip_to_convex, convex_contains, convex_hull,
     convex_partition, distance_to_convex, polygon_contains, signed_area, subtract_convex,
     triangulate, wholly_inside_3d,
 };

@@ -230,6 +230,33 @@ pub fn distance_to_convex(poly: &[DVec2], x: DVec2) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Convex hull (counter-clockwise) of points, by Andrew's monotone chain.
+pub fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+    let mut pts = points.to_vec();
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &DVec2>> =
+            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
+        for &q in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
 /// `piece \ hole` for convex counter-clockwise polygons, as disjoint convex pieces.
 ///
 /// Walks the hole's edges: the part of what is left that lies outside an edge's line is a piece of

@@ -33,7 +33,7 @@ use hiders::Hider;
 pub use hiders::RecentHiders;
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder, OccluderUnit};
-use projection::{Pyramid, ShadowSet, convex_hull, polygon_scale, pyramid_sides, shadow};
+use projection::{Pyramid, ShadowSet, polygon_scale, pyramid_sides, shadow};
 pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
 pub use stats::PairStats;
@@ -44,7 +44,7 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use crate::geometry::{
-    HalfPlane, PlaneFrame, bounding_box, boxes_overlap, clip_convex, convex_contains,
+    HalfPlane, PlaneFrame, bounding_box, boxes_overlap, clip_convex, convex_contains, convex_hull,
     subtract_convex,
 };
 use crate::scene::{COPLANAR_DISTANCE, Scene};

@@ -7,8 +7,8 @@ use super::PlannerFace;
 use super::occluders::Occluder;
 use super::solids::Solid;
 use crate::geometry::{
-    SmallPolygon, bounding_box, clip_polygon_3d, clip_to_convex, convex_contains, signed_area,
-    wholly_inside_3d,
+    SmallPolygon, bounding_box, clip_polygon_3d, clip_to_convex, convex_contains, convex_hull,
+    signed_area, wholly_inside_3d,
 };
 
 /// The segments from a point to the window of a face it sees
@@ -338,31 +338,4 @@ fn covers(shadow: &[DVec2], window: &[DVec2]) -> bool {
         let margin = 1e-12 * scale * edge.length();
         window.iter().all(|&w| edge.perp_dot(w - a) >= -margin)
     })
-}
-
-/// Convex hull (counter-clockwise) of a polygon's vertices, by Andrew's monotone chain.
-pub(super) fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
-    let mut pts = points.to_vec();
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
-    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &DVec2>> =
-            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
-        for &q in iter {
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(q);
-        }
-        hull.pop();
-    }
-    hull
 }
