@@ -54,6 +54,7 @@ use crate::scene::Scene;
 use crate::visibility::PairPlanner;
 
 mod events;
+mod opening;
 mod outer;
 mod pair;
 mod patch;

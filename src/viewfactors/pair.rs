@@ -8,10 +8,11 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use super::events::{centroid, clip_polygon_3d, contact_cuts, event_planes, split};
+use super::opening::Opening;
 use super::outer::Outer;
 use super::patch::{GaussRules, Patch};
 use super::poles::poles;
-use super::sight::{PointView, Shapes, Sight};
+use super::sight::{Among, PointView, Shapes, Sight};
 use super::{Context, MAX_SPLITS, Tally, ViewFactorOptions};
 use crate::assembly::{FullPair, LaneObserver, push_fan};
 use crate::geometry::{bounding_box_3d, convex_polygons_distance};
@@ -98,8 +99,9 @@ impl Context<'_> {
         // Each piece has its own occluders, among the pair's: a piece in the light of all of
         // them sees T_j whole (no per-point visibility), one behind an occluder that crosses
         // every segment to T_j sees nothing, and the others shadow T_j by their own occluders
-        // only, without any search.
-        let shafts: Vec<(Vec<DVec3>, Vec<usize>)> = pieces
+        // only, without any search; where a plate of them leaves one opening, through that
+        // opening and by the others.
+        let shafts: Vec<Shaft> = pieces
             .into_iter()
             .filter_map(|piece| {
                 let (blocking, hidden) = if occluders.is_empty() {
@@ -107,36 +109,48 @@ impl Context<'_> {
                 } else {
                     self.planner.polygon_shaft(ei.face, ej.face, &piece, &ej.vertices, &occluders)
                 };
-                (!hidden).then_some((piece, blocking))
+                if hidden {
+                    return None;
+                }
+                let opening =
+                    Opening::find(&piece, &ej.vertices, &blocking, self.planner).map(|o| {
+                        let others =
+                            blocking.iter().copied().filter(|b| !o.pieces.contains(b)).collect();
+                        (o, others)
+                    });
+                Some(Shaft { piece, blocking, opening })
             })
             .collect();
         let parts: Vec<Part> = shafts
             .iter()
-            .map(|(piece, blocking)| Part {
+            .map(|shaft| Part {
                 target: ej.vertices,
                 target_box: box_j,
                 target_area: ej.area(),
                 poles: poles(
                     fa.frame.normal,
-                    centroid(piece),
+                    centroid(&shaft.piece),
                     &fb.frame,
                     &ej.vertices,
-                    blocking,
+                    &shaft.blocking,
                     self.planner,
                 ),
-                obstacles: self.obstacles(i, blocking),
-                sight: if blocking.is_empty() && in_front(hj) {
+                obstacles: self.obstacles(i, &shaft.blocking),
+                sight: if shaft.blocking.is_empty() && in_front(hj) {
                     Sight::Whole
                 } else {
-                    Sight::PerPoint(blocking)
+                    Sight::PerPoint(Among {
+                        occluders: &shaft.blocking,
+                        opening: shaft.opening.as_ref().map(|(o, others)| (o, others.as_slice())),
+                    })
                 },
             })
             .collect();
         // Globally adaptive over the pair: the cell with the largest estimated error is split
         // until the estimates together are within the tolerance on F_ij.
         let mut cells = Cells::default();
-        for (k, (piece, _)) in shafts.iter().enumerate() {
-            for patch in Patch::cover(piece) {
+        for (k, shaft) in shafts.iter().enumerate() {
+            for patch in Patch::cover(&shaft.piece) {
                 cells.place(self.cell(i, j, patch, &parts[k], k, 0, rules, tally));
             }
         }
@@ -628,6 +642,15 @@ impl Ord for Cell {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
         self.error.total_cmp(&other.error)
     }
+}
+
+/// A piece of a pair's outer element and what can come between it and the other element.
+struct Shaft {
+    piece: Vec<DVec3>,
+    /// The pair's occluder pieces in its shaft.
+    blocking: Vec<usize>,
+    /// The opening that a plate of them leaves, if any, and the other pieces.
+    opening: Option<(Opening, Vec<usize>)>,
 }
 
 /// One piece of a pair's outer element: where its integrand stops being analytic, and how it

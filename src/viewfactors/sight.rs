@@ -6,6 +6,7 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use super::Context;
+use super::opening::Opening;
 use crate::geometry::{self, SmallPolygon};
 use crate::visibility::{FaceView, Visibility};
 
@@ -16,17 +17,68 @@ pub(super) enum Sight<'a> {
     Whole,
     /// Per point: the node's view of the face, clipped and shadowed exactly by these occluder
     /// pieces (those that can come between the piece and the element).
-    PerPoint(&'a [usize]),
+    PerPoint(Among<'a>),
+}
+
+/// What can come between the points of a piece and the element: occluder pieces, and where a
+/// plate of them leaves one opening, that opening and the others.
+#[derive(Clone, Copy)]
+pub(super) struct Among<'a> {
+    pub(super) occluders: &'a [usize],
+    pub(super) opening: Option<(&'a Opening, &'a [usize])>,
+}
+
+#[cfg(test)]
+impl<'a> Among<'a> {
+    /// These occluder pieces, without an opening.
+    pub(super) fn occluders(occluders: &'a [usize]) -> Self {
+        Self { occluders, opening: None }
+    }
 }
 
 impl Context<'_> {
     /// What the point `p` of element `i` sees of element `j`, shadowed exactly by the occluder
-    /// pieces `among` (those that can come between them).
-    pub(super) fn point_view(&self, i: usize, j: usize, p: DVec3, among: &[usize]) -> PointView {
+    /// pieces `among` (those that can come between them): where they hold a plate with an
+    /// opening, what it sees on its side of the plate and through the opening, shadowed by the
+    /// others.
+    pub(super) fn point_view(&self, i: usize, j: usize, p: DVec3, among: Among<'_>) -> PointView {
+        let element = self.disc.elements[j].in_face();
+        let frame = &self.scene.faces[self.disc.elements[j].face].frame;
+        let Some((windows, others)) =
+            among.opening.and_then(|(o, others)| Some((o.windows(p, frame, &element)?, others)))
+        else {
+            return self
+                .window_view(i, j, p, &element, among.occluders)
+                .unwrap_or(PointView::Whole);
+        };
+        let (mut added, mut taken) = (Vec::new(), Vec::new());
+        for window in windows.iter().flatten() {
+            match self.window_view(i, j, p, window, others) {
+                Some(PointView::Signed { added: a, taken: t }) => {
+                    added.extend(a);
+                    taken.extend(t);
+                }
+                Some(_) => {}
+                None => added.push(window.to_vec()),
+            }
+        }
+        if added.is_empty() { PointView::Nothing } else { PointView::Signed { added, taken } }
+    }
+
+    /// What the point `p` of element `i` sees of the convex part `window` of element `j`
+    /// (face coordinates), shadowed by the occluder pieces `among`: `None` where it sees all of
+    /// it.
+    fn window_view(
+        &self,
+        i: usize,
+        j: usize,
+        p: DVec3,
+        window: &[DVec2],
+        among: &[usize],
+    ) -> Option<PointView> {
         let (ei, el) = (&self.mesh.elements()[i], &self.disc.elements[j]);
         let normal = self.scene.faces[ei.face].frame.normal;
-        let part = el.in_face();
-        match self.planner.part_view_among(p, normal, ei.face, el.face, &part, among) {
+        Some(match self.planner.part_view_among(p, normal, ei.face, el.face, window, among) {
             FaceView::Skip(_) => PointView::Nothing,
             FaceView::Visible { clip, shadows } if shadows.len() <= INCLUSION_EXCLUSION => {
                 // The shadows lie in the window, T_j in front of the tangent plane: the
@@ -34,23 +86,23 @@ impl Context<'_> {
                 // exclusion of their (convex) intersections, without cutting the window into
                 // the pieces that the subtraction makes.
                 let window = match clip {
-                    Some(hp) => match geometry::clip_convex(&part, &hp) {
+                    Some(hp) => match geometry::clip_convex(window, &hp) {
                         Some(w) => w,
-                        None => return PointView::Nothing,
+                        None => return Some(PointView::Nothing),
                     },
-                    None => part.to_vec(),
+                    None => window.to_vec(),
                 };
                 let (added, taken) = inclusion_exclusion(window, shadows);
                 PointView::Signed { added, taken }
             }
-            view => match self.planner.visible(&view, &part) {
+            view => match self.planner.visible(&view, window) {
                 Visibility::Skip(_) => PointView::Nothing,
-                Visibility::Full => PointView::Whole,
+                Visibility::Full => return None,
                 Visibility::Partial(pieces) => {
                     PointView::Signed { added: pieces, taken: Vec::new() }
                 }
             },
-        }
+        })
     }
 }
 

@@ -5,10 +5,11 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
+use super::opening::Opening;
 use super::patch::{GaussRules, Patch};
-use super::sight::{INCLUSION_EXCLUSION, PointView, Sight};
+use super::sight::{Among, INCLUSION_EXCLUSION, PointView, Sight};
 use super::*;
-use crate::geometry::bounding_box_3d;
+use crate::geometry::{SmallPolygon, bounding_box_3d, clip_polygon_3d};
 use crate::mesh::MeshKind;
 use crate::scene::Face;
 use crate::visibility::FaceView;
@@ -214,7 +215,8 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
             for (u, v) in grid.map(|(a, b)| (a as f64 / 7.0, b as f64 / 7.0)) {
                 let [a, b, c] = ei.vertices;
                 let p = a + (b - a) * u + (c - a) * v;
-                let got = context.point_to_element(i, j, p, Sight::PerPoint(&among));
+                let got =
+                    context.point_to_element(i, j, p, Sight::PerPoint(Among::occluders(&among)));
                 let view = planner.part_view_among(p, normal, ei.face, ej.face, &part, &among);
                 if let FaceView::Visible { shadows, .. } = &view {
                     if let Some(seen) = shadows_seen.get_mut(shadows.len()) {
@@ -230,6 +232,61 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
         }
     }
     assert!(shadows_seen.iter().all(|&k| k > 20), "{shadows_seen:?}");
+}
+
+/// Through the opening that the louvre room's partition leaves around its louvre, a point's view
+/// of an element equals its view shadowed by the partition's pieces themselves, to rounding,
+/// on the side of the partition where the point is and beyond it (the slats still shadow both).
+#[test]
+fn a_partition_is_seen_through_its_opening() {
+    let fixture = Fixture::example("louvre-room.toml");
+    let options = ViewFactorOptions::default();
+    let context = fixture.context(&options);
+    let Fixture { mesh, planner, .. } = &fixture;
+    let (mut openings, mut seen_through) = (0, 0);
+    for (i, ei) in mesh.elements().iter().enumerate() {
+        // The part of T_i west of the partition's plane x = 2.
+        let mut west = SmallPolygon::new();
+        if !clip_polygon_3d(&ei.vertices, DVec3::NEG_X, 2.0, &mut west) {
+            continue;
+        }
+        for (j, ej) in mesh.elements().iter().enumerate() {
+            let among = planner.candidates(ei.face, ej.face);
+            if among.is_empty() || planner.same_plane(ei.face, ej.face) {
+                continue;
+            }
+            let Some(opening) = Opening::find(&west, &ej.vertices, &among, planner) else {
+                continue;
+            };
+            openings += 1;
+            let on_partition =
+                |o: &usize| planner.occluders()[*o].polygon.iter().all(|v| v.x == 2.0);
+            assert!(opening.pieces.iter().all(on_partition), "{i} -> {j}: the partition's pieces");
+            let others: Vec<usize> =
+                among.iter().copied().filter(|o| !opening.pieces.contains(o)).collect();
+            let through = Among { occluders: &among, opening: Some((&opening, &others)) };
+            // Points inside the western part: irrational barycentric weights in each triangle
+            // of its fan, so that none lies on an occluder's plane.
+            const W: [f64; 3] = [0.659027622374092, 0.231933368553031, 0.109039009072877];
+            for k in 1..west.len() - 1 {
+                let (a, b, c) = (west[0], west[k], west[k + 1]);
+                for [x, y, z] in [[0, 1, 2], [1, 2, 0], [2, 0, 1]] {
+                    let p = a * W[x] + b * W[y] + c * W[z];
+                    let got = context.point_to_element(i, j, p, Sight::PerPoint(through));
+                    let want = context.point_to_element(
+                        i,
+                        j,
+                        p,
+                        Sight::PerPoint(Among::occluders(&among)),
+                    );
+                    assert!((got - want).abs() <= 1e-14, "{i} -> {j} at {p}: {got} vs {want}");
+                    seen_through +=
+                        usize::from(ej.vertices.iter().any(|v| v.x > 2.0) && want > 0.0);
+                }
+            }
+        }
+    }
+    assert!(openings > 100 && seen_through > 500, "{openings} openings, {seen_through} seen");
 }
 
 /// The weighted sums over the points of a patch, whose visible pieces are integrated eight
@@ -249,7 +306,7 @@ fn shadowed_points_in_lanes_equal_the_scalar_closed_forms() {
             if among.is_empty() || planner.same_plane(ei.face, mesh.elements()[j].face) {
                 continue;
             }
-            let sight = Sight::PerPoint(&among);
+            let sight = Sight::PerPoint(Among::occluders(&among));
             let points = Patch::Triangle(ei.vertices).gauss_points(&rules, 6);
             let got = context.weighted_sum(i, j, sight, &points).0;
             let want: f64 =
@@ -258,7 +315,10 @@ fn shadowed_points_in_lanes_equal_the_scalar_closed_forms() {
             assert!((got - want).abs() <= 1e-14 * scale, "{i} -> {j}: {got} vs {want}");
             pairs += 1;
             let sees = |&(p, _): &(DVec3, f64)| {
-                matches!(context.point_view(i, j, p, &among), PointView::Signed { .. })
+                matches!(
+                    context.point_view(i, j, p, Among::occluders(&among)),
+                    PointView::Signed { .. }
+                )
             };
             partial += usize::from(points.iter().any(sees));
         }
@@ -493,7 +553,7 @@ fn brute_force_pair(fixture: &Fixture, context: &Context, (i, j): (usize, usize)
             }
         }
     }
-    let sight = Sight::PerPoint(&occluders);
+    let sight = Sight::PerPoint(Among::occluders(&occluders));
     // Barycentric points of the six-point rule of degree 3 (each weight 1/6): irrational, so
     // that no point lies exactly in an occluder's plane where it stands on T_i (a partition on
     // the floor), whose points see either side (the three-point rule's 1/6 and 2/3 met such
