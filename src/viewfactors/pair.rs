@@ -29,11 +29,15 @@ pub(super) struct OuterRules {
 /// Highest order of the Gauss rules on a patch (GAUSS_MAX² points).
 const GAUSS_MAX: usize = 16;
 
-/// The outer rule's target error, relative to the integrand's size near the element: the Gauss
-/// order is chosen from the separation so that the Bernstein-ellipse bound meets it. Where T_j
-/// is seen whole, the integrand is analytic away from T_j and the bound is trusted (one rule, no
-/// estimate), as it has been since the first exact rule.
-const CERTIFIED_TARGET: f64 = 1e-13;
+/// The outer rule's target error where T_j is seen whole, relative to the integrand's size near
+/// the element: a hundredth of the tolerance, and no less than 1e-13. The Gauss order is chosen
+/// from the separation so that the Bernstein-ellipse bound meets it; the integrand is analytic
+/// away from T_j and the bound is trusted (one rule, no estimate), as it has been since the
+/// first exact rule. Five-piece refine 3 at --tolerance 1e-6 (2-core EPYC): 2.23 M evaluations
+/// with 1e-13 at every tolerance, 0.94 M with this, every entry as far from a run at 1e-12.
+fn certified_target(tolerance: f64) -> f64 {
+    (1e-2 * tolerance).max(1e-13)
+}
 
 impl OuterRules {
     /// The rules for `options`: the tanh-sinh rule truncated where its weights fall below a
@@ -396,7 +400,8 @@ impl Context<'_> {
             return cell;
         }
         let certified = matches!(part.sight, Sight::Whole);
-        let target = if certified { CERTIFIED_TARGET } else { shadowed_target };
+        let target =
+            if certified { certified_target(self.options.tolerance) } else { shadowed_target };
         let order = rules.gauss_order(size, distance, target);
         if certified {
             match order {
