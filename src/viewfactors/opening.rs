@@ -25,8 +25,11 @@ pub(super) struct Opening {
     pub(super) pieces: Vec<usize>,
 }
 
-/// Relative size (of the elements' extent, or of an area against the shaft's cross-section)
-/// under which heights and areas are rounding.
+/// Relative size (of the coordinates) under which a height over a plane is rounding.
+const HEIGHT_ROUNDING: f64 = 1e-12;
+
+/// Relative size (of an area against the shaft's cross-section, or of a side against its
+/// square root) under which what the plate leaves open is rounding.
 const ROUNDING: f64 = 1e-9;
 
 impl Opening {
@@ -45,7 +48,7 @@ impl Opening {
         }
         let pieces = planner.occluders();
         let scale = viewer.iter().chain(target).fold(0.0f64, |m, v| m.max(v.abs().max_element()));
-        let tol = ROUNDING * scale.max(f64::MIN_POSITIVE);
+        let tol = HEIGHT_ROUNDING * scale.max(f64::MIN_POSITIVE);
         // The occluders by plane: (unit normal, offset, members).
         let mut planes: Vec<(DVec3, f64, Vec<usize>)> = Vec::new();
         for &o in occluders {

@@ -323,6 +323,90 @@ fn a_partition_is_seen_through_its_opening() {
     assert!(openings > 100 && seen_through > 500, "{openings} openings, {seen_through} seen");
 }
 
+/// Two squares face each other across a plate of two rectangles that closes the plane between
+/// them: each point of one sees nothing of the other, exactly (no entry is stored), while each
+/// still sees the plate; with a square hole in the plate's middle (four rectangles around it),
+/// each entry equals the one integrated with the plate's pieces as shadows.
+#[test]
+fn a_closed_plate_hides_and_a_holed_one_shows_its_opening() {
+    let square = |z: f64, up: bool| {
+        let mut v: Vec<DVec3> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| DVec3::new(x, y, z))
+            .collect();
+        if !up {
+            v.reverse();
+        }
+        v
+    };
+    let rectangle = |(x0, y0): (f64, f64), (x1, y1): (f64, f64)| {
+        // Facing down, towards the bottom square.
+        vec![
+            DVec3::new(x0, y0, 1.0),
+            DVec3::new(x0, y1, 1.0),
+            DVec3::new(x1, y1, 1.0),
+            DVec3::new(x1, y0, 1.0),
+        ]
+    };
+    let scene_with = |plate: Vec<Vec<DVec3>>| {
+        let mut faces = vec![
+            Face::new("bottom", square(0.0, true), 0.5).unwrap(),
+            Face::new("top", square(2.0, false), 0.5).unwrap(),
+        ];
+        for (k, polygon) in plate.into_iter().enumerate() {
+            faces.push(Face::new(format!("plate-{k}"), polygon, 0.5).unwrap());
+        }
+        Scene::new("plate", faces).unwrap()
+    };
+    let tolerance = 1e-8;
+    let options = ViewFactorOptions { tolerance, ..Default::default() };
+    // Closed: two rectangles meeting at x = 0.4.
+    let closed =
+        scene_with(vec![rectangle((-2.0, -2.0), (0.4, 3.0)), rectangle((0.4, -2.0), (3.0, 3.0))]);
+    let fixture = Fixture::new(closed);
+    let f = view_factors(
+        &fixture.scene,
+        &fixture.mesh,
+        &fixture.planner,
+        &options,
+        &crate::progress::Silent,
+    )
+    .unwrap();
+    for i in 0..2 {
+        for j in 2..4 {
+            assert_eq!(f.get(i, j), 0.0, "bottom {i} -> top {j}");
+            assert_eq!(f.get(j, i), 0.0);
+        }
+        assert!(f.row(i).1.iter().sum::<f64>() > 0.5, "the plate is seen");
+    }
+    // Holed: the opening [0.3, 0.7] x [0.2, 0.9].
+    let holed = scene_with(vec![
+        rectangle((-2.0, -2.0), (0.3, 3.0)),
+        rectangle((0.7, -2.0), (3.0, 3.0)),
+        rectangle((0.3, -2.0), (0.7, 0.2)),
+        rectangle((0.3, 0.9), (0.7, 3.0)),
+    ]);
+    let fixture = Fixture::new(holed);
+    let context = fixture.context(&options);
+    let rules = OuterRules::new(&options);
+    let (mut checked, mut openings) = (0, 0);
+    for i in 0..2 {
+        let ei = &fixture.mesh.elements()[i];
+        for j in 2..4 {
+            let ej = &fixture.mesh.elements()[j];
+            let among = fixture.planner.candidates(ei.face, ej.face);
+            let opening = Opening::find(&ei.vertices, &ej.vertices, &among, &fixture.planner);
+            openings += usize::from(opening.is_some_and(|o| o.pieces.len() == 4));
+            let mut tally = Tally::default();
+            let got = context.pair(i, j, true, &rules, &mut tally);
+            let want = brute_force_pair(&fixture, &context, (i, j), 64);
+            assert!(got > 0.0 && (got - want).abs() <= 1e-5, "{i} -> {j}: {got} against {want}");
+            checked += 1;
+        }
+    }
+    assert_eq!((checked, openings), (4, 4));
+}
+
 /// The weighted sums over the points of a patch, whose visible pieces are integrated eight
 /// at a time in vector lanes, equal the scalar closed forms point by point, on the occluded
 /// box's shadowed pairs.
