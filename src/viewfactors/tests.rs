@@ -212,6 +212,24 @@ fn a_corner_near_a_seat_meets_each_tolerance() {
     }
 }
 
+/// Neighbouring walls of city:4x4 that see each other whole (F near 0.2), whose outer rule is
+/// a single Gauss order trusted a priori: within the default tolerance of a run at 1e-12. With
+/// the order aimed at a hundredth of the tolerance they were 3.5e-10 off.
+#[test]
+fn walls_seen_whole_meet_the_default_tolerance() {
+    let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
+    let at = |tolerance: f64, (i, j): (usize, usize)| {
+        let options = ViewFactorOptions { tolerance, ..Default::default() };
+        let context = fixture.context(&options);
+        context.pair(i, j, true, &OuterRules::new(&options), &mut Tally::default())
+    };
+    for pair in [(198, 188), (188, 198), (164, 174), (176, 186)] {
+        let (default, tight) = (at(1e-10, pair), at(1e-12, pair));
+        assert!(tight > 0.15, "{pair:?}: {tight}");
+        assert!((default - tight).abs() <= 1e-10, "{pair:?}: {default} against {tight}");
+    }
+}
+
 /// The faces of `examples/FILE` up to the one named `name`, left out with those after it.
 fn example_before(file: &str, name: &str) -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
