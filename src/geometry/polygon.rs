@@ -133,12 +133,21 @@ pub fn clip_convex_into(poly: &[DVec2], hp: &HalfPlane, out: &mut SmallPolygon<D
 /// nothing with area is left.
 pub fn clip_to_convex(poly: &[DVec2], window: &[DVec2]) -> Option<SmallPolygon<DVec2>> {
     let m = window.len();
+    clip_to_half_planes(poly, (0..m).map(|k| HalfPlane::left_of(window[k], window[(k + 1) % m])))
+}
+
+/// The part of the convex polygon `poly` inside every one of `half_planes`: clipped
+/// ([`clip_convex_into`]) by each that leaves a vertex outside; `None` when nothing with area
+/// is left.
+pub fn clip_to_half_planes(
+    poly: &[DVec2],
+    half_planes: impl IntoIterator<Item = HalfPlane>,
+) -> Option<SmallPolygon<DVec2>> {
     // Two buffers in turn, the last clip's result in `current` (none yet: `poly` itself);
     // swapping them would copy both inline buffers at every clip.
     let mut buffers: [SmallPolygon<DVec2>; 2] = [SmallVec::new(), SmallVec::new()];
     let mut current: Option<usize> = None;
-    for k in 0..m {
-        let edge = HalfPlane::left_of(window[k], window[(k + 1) % m]);
+    for half_plane in half_planes {
         let next = current.map_or(0, |c| 1 - c);
         let [first, second] = &mut buffers;
         let (part, out) = match current {
@@ -146,8 +155,8 @@ pub fn clip_to_convex(poly: &[DVec2], window: &[DVec2]) -> Option<SmallPolygon<D
             Some(0) => (&first[..], second),
             Some(_) => (&second[..], first),
         };
-        if part.iter().any(|&x| edge.eval(x) < 0.0) {
-            if !clip_convex_into(part, &edge, out) {
+        if part.iter().any(|&x| half_plane.eval(x) < 0.0) {
+            if !clip_convex_into(part, &half_plane, out) {
                 return None;
             }
             current = Some(next);

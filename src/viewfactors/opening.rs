@@ -6,8 +6,8 @@
 use glam::{DVec2, DVec3};
 
 use crate::geometry::{
-    HalfPlane, PlaneFrame, SmallPolygon, clip_convex_into, clip_polygon_3d, convex_hull,
-    signed_area, subtract_convex,
+    HalfPlane, PlaneFrame, SmallPolygon, clip_convex_into, clip_polygon_3d, clip_to_half_planes,
+    convex_hull, signed_area, subtract_convex,
 };
 use crate::visibility::PairPlanner;
 
@@ -175,30 +175,20 @@ impl Opening {
         if self.corners.is_empty() {
             return Some([here, None]);
         }
-        let mut buffers: [SmallPolygon<DVec2>; 2] = [SmallPolygon::new(), SmallPolygon::new()];
-        if !clip_convex_into(window, &near.flipped(), &mut buffers[0]) {
-            return Some([here, None]);
-        }
-        let mut current = 0;
+        // Beyond the plane, and inside each plane through `p` and a side of the opening on the
+        // side of its centroid: side·(X - p) >= 0 on T_j's plane.
         let m = self.corners.len();
-        for k in 0..m {
+        let cone = (0..m).map(|k| {
             let (a, b) = (self.corners[k], self.corners[(k + 1) % m]);
             let side = (a - p).cross(b - p);
             let side = if side.dot(self.centroid - p) < 0.0 { -side } else { side };
-            // side·(X - p) >= 0 on T_j's plane.
-            let inside = HalfPlane {
+            HalfPlane {
                 normal: DVec2::new(side.dot(frame.e1), side.dot(frame.e2)),
                 offset: side.dot(frame.origin - p),
-            };
-            let [first, second] = &mut buffers;
-            let (from, to) = if current == 0 { (first, second) } else { (second, first) };
-            if !clip_convex_into(from, &inside, to) {
-                return Some([here, None]);
             }
-            current = 1 - current;
-        }
-        let [first, second] = buffers;
-        Some([here, Some(if current == 0 { first } else { second })])
+        });
+        let through = clip_to_half_planes(window, std::iter::once(near.flipped()).chain(cone));
+        Some([here, through])
     }
 }
 

@@ -122,9 +122,10 @@ impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
 /// d2 the decimal logs of the differences from the last two levels relative to the value (the
 /// digits double per level once the rule converges), but no less than twice what is left if the
 /// levels' differences go on shrinking at the rate they did (diff² over the difference before),
-/// as they do before the rule converges; kept between a hundredth of `diff` and `diff`. Bailey's alone trusted
-/// levels that agreed early: in the furnished room without its furniture it estimated 1e-10
-/// where F_ij was 1e-9 off; with the floor, reciprocity 6.6e-11 (9.6e-11 with a thousandth).
+/// as they do before the rule converges; kept between a hundredth of `diff` and `diff`.
+/// Bailey's alone trusted levels that agreed early: in the furnished room without its furniture
+/// it estimated 1e-10 where F_ij was 1e-9 off; with the floor, reciprocity 6.6e-11 (9.6e-11
+/// with a thousandth).
 /// On a ground triangle whose corner touches a wall's foot (tessellated city, --tolerance 1e-6)
 /// the levels' differences fell 1.9e-3, 4.5e-5, 1.4e-6: Bailey's estimate after the second was
 /// 3e-8, the hundredth 4.5e-7 and the error 1.4e-6, where the rate says 1.1e-6 (18 such
