@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
-use super::{BlockData, Built, Entries, MemoryGuard, NodeViews, by_node_cluster};
+use super::{Block, BlockData, Built, Entries, MemoryGuard, NodeViews, by_node_cluster, shadowed};
 use crate::assembly::{PairEvaluation, PairTask};
 use crate::error::Result;
 use crate::progress::Progress;
@@ -63,6 +63,15 @@ pub(super) fn build_blocks(
     let mut built =
         cross_approximate(entries, faces, crossings, &mut exact, device, guard, progress)?;
     exact_blocks(entries, exact, device, guard, progress, &mut built)?;
+    // Shadowed blocks walk their leaves' pairs and compress as the CPU's build does: their
+    // entries are mostly partly visible pairs, which the host integrates anyway.
+    let mut slots: Vec<Block> =
+        (0..shadowed::sub_blocks(&plan.shadowed)).map(|_| Block::nothing()).collect();
+    let met =
+        shadowed::build(entries, &plan.shadowed, faces, tolerance, guard, progress, &mut slots);
+    built = built.merged(met);
+    built.blocks.extend(slots);
+    guard.check(0)?;
     Ok(built)
 }
 

@@ -22,6 +22,9 @@ enum PairClass {
     Nothing,
     /// Every element in front of every node's plane and facing it, no occluder in the shaft.
     Smooth,
+    /// As smooth, but occluders may come between (one pair of faces): the unoccluded kernel is
+    /// smooth, visibility cuts it.
+    Shadowed,
     /// Anything else: partly behind, or an occluder may come between.
     Mixed,
 }
@@ -69,7 +72,7 @@ impl<'a> FacePairs<'a> {
         match self.planner.shaft(a, b, nodes.bounds(), elements.bounds(), candidates) {
             Shaft::Clear => PairClass::Smooth,
             Shaft::Hidden => PairClass::Nothing,
-            Shaft::Partial => PairClass::Mixed,
+            Shaft::Partial => PairClass::Shadowed,
         }
     }
 
@@ -141,6 +144,20 @@ pub(super) struct NearBlock {
     pub seen_whole: bool,
 }
 
+/// An admissible block that occluders cut (class shadowed): its unoccluded kernel is
+/// compressed once, and its sub-blocks take their entries from those factors where they are
+/// seen whole and from the exact integrals where visibility varies.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) struct ShadowedBlock {
+    pub t: usize,
+    pub s: usize,
+    /// Sub-blocks seen whole: the factors' product.
+    pub seen: Vec<(usize, usize)>,
+    /// Leaves where visibility varies: the product on the elements a node sees whole, the
+    /// exact integral on those it sees in part.
+    pub leaves: Vec<(usize, usize)>,
+}
+
 /// The blocks of K: pairs (node cluster, element cluster) by index into their trees.
 #[derive(Clone, Debug, Default)]
 pub(super) struct BlockPlan {
@@ -148,6 +165,8 @@ pub(super) struct BlockPlan {
     pub near: Vec<NearBlock>,
     /// Smooth admissible blocks, to be compressed.
     pub far: Vec<(usize, usize)>,
+    /// Admissible blocks that occluders cut, with their sub-blocks.
+    pub shadowed: Vec<ShadowedBlock>,
     /// Blocks holding nothing, left out.
     pub empty: usize,
 }
@@ -214,6 +233,27 @@ impl BlockPlan {
         for part in ranks.gather(&far) {
             plan.far.extend(part.iter().map(decode));
         }
+        // Each shadowed block as its code, the numbers of its seen sub-blocks and leaves, then
+        // their codes.
+        let mut shadowed = Vec::new();
+        for b in &mine.shadowed {
+            shadowed.extend([code(&(b.t, b.s)), b.seen.len() as u64, b.leaves.len() as u64]);
+            shadowed.extend(b.seen.iter().chain(&b.leaves).map(code));
+        }
+        for part in ranks.gather(&shadowed) {
+            let mut rest = part.as_slice();
+            while let [at, seen, leaves, after @ ..] = rest {
+                let (seen, leaves) = (*seen as usize, *leaves as usize);
+                let (t, s) = decode(at);
+                plan.shadowed.push(ShadowedBlock {
+                    t,
+                    s,
+                    seen: after[..seen].iter().map(decode).collect(),
+                    leaves: after[seen..seen + leaves].iter().map(decode).collect(),
+                });
+                rest = &after[seen + leaves..];
+            }
+        }
         plan.empty +=
             ranks.gather(&[mine.empty as u64]).iter().map(|e| e[0] as usize).sum::<usize>();
         plan
@@ -223,6 +263,7 @@ impl BlockPlan {
     fn append(&mut self, other: BlockPlan) {
         self.near.extend(other.near);
         self.far.extend(other.far);
+        self.shadowed.extend(other.shadowed);
         self.empty += other.empty;
     }
 
@@ -278,6 +319,20 @@ impl Walk<'_> {
             plan.far.push((t, s));
             return None;
         }
+        if class == PairClass::Shadowed && admissible {
+            let mut block = ShadowedBlock { t, s, seen: Vec::new(), leaves: Vec::new() };
+            match self.children(t, s, self.options.mixed_leaf_size) {
+                None => block.leaves.push((t, s)),
+                Some(children) => {
+                    let within = between.for_children();
+                    for (a, b) in children {
+                        self.visit_shadowed(&mut block, &mut plan.empty, a, b, within);
+                    }
+                }
+            }
+            plan.shadowed.push(block);
+            return None;
+        }
         // Smooth neighbours gain nothing from small leaves; where visibility varies they do,
         // down to the mixed leaf size, also where a cluster spans several faces (a city's
         // faces hold two elements each: split to single faces, city:35x36 made 36 million
@@ -287,17 +342,53 @@ impl Walk<'_> {
         } else {
             self.options.mixed_leaf_size
         };
-        let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
-        let children = match (split(tc), split(sc)) {
-            (None, None) => {
-                plan.near.push(NearBlock { t, s, seen_whole: class == PairClass::Smooth });
-                return None;
-            }
-            (None, Some((s1, s2))) => vec![(t, s1), (t, s2)],
-            (Some((t1, t2)), None) => vec![(t1, s), (t2, s)],
-            (Some((t1, t2)), Some((s1, s2))) => vec![(t1, s1), (t1, s2), (t2, s1), (t2, s2)],
+        let Some(children) = self.children(t, s, leaf) else {
+            plan.near.push(NearBlock { t, s, seen_whole: class == PairClass::Smooth });
+            return None;
         };
         Some((children, between))
+    }
+
+    /// The sub-blocks of block (t, s), splitting each cluster larger than `leaf`, or `None`
+    /// where neither is.
+    fn children(&self, t: usize, s: usize, leaf: usize) -> Option<Vec<(usize, usize)>> {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let split = |c: &Cluster| c.children.filter(|_| c.len() > leaf);
+        match (split(tc), split(sc)) {
+            (None, None) => None,
+            (None, Some((s1, s2))) => Some(vec![(t, s1), (t, s2)]),
+            (Some((t1, t2)), None) => Some(vec![(t1, s), (t2, s)]),
+            (Some((t1, t2)), Some((s1, s2))) => Some(vec![(t1, s1), (t1, s2), (t2, s1), (t2, s2)]),
+        }
+    }
+
+    /// Plans sub-block (t, s) of a shadowed block, its occluders among `within`: nothing,
+    /// seen whole, or split down to the mixed leaf size where occluders cut it.
+    fn visit_shadowed(
+        &self,
+        block: &mut ShadowedBlock,
+        empty: &mut usize,
+        t: usize,
+        s: usize,
+        within: Option<&[OccluderUnit]>,
+    ) {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let between = Between::new(within);
+        match classify(self.faces, tc, sc, &between) {
+            PairClass::Nothing => *empty += 1,
+            PairClass::Smooth => block.seen.push((t, s)),
+            PairClass::Shadowed | PairClass::Mixed => {
+                match self.children(t, s, self.options.mixed_leaf_size) {
+                    None => block.leaves.push((t, s)),
+                    Some(children) => {
+                        let within = between.for_children();
+                        for (a, b) in children {
+                            self.visit_shadowed(block, empty, a, b, within);
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Plans block (t, s) and everything below it, its occluders among `within`.
@@ -376,9 +467,8 @@ fn classify(
         for &b in &elements.faces {
             match faces.class(a, b, nodes, elements, between) {
                 PairClass::Mixed => return PairClass::Mixed,
-                PairClass::Smooth if !one_pair => return PairClass::Mixed,
-                PairClass::Smooth => class = PairClass::Smooth,
-                PairClass::Nothing => {}
+                PairClass::Smooth | PairClass::Shadowed if !one_pair => return PairClass::Mixed,
+                seen => class = seen,
             }
         }
     }

@@ -23,6 +23,7 @@ mod blocks;
 pub mod cluster;
 pub mod packed;
 mod saved;
+mod shadowed;
 mod share;
 mod stored;
 
@@ -399,7 +400,8 @@ impl CompressedOperator {
             per,
             precision,
         };
-        progress.start("compression", plan.near.len() + plan.far.len());
+        let sub_blocks = shadowed::sub_blocks(&plan.shadowed);
+        progress.start("compression", plan.near.len() + plan.far.len() + sub_blocks);
         let tolerance = options.tolerance;
         let built = match batches {
             Some(evaluator) => batched::build_blocks(
@@ -409,7 +411,7 @@ impl CompressedOperator {
         };
         progress.finish();
 
-        let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty);
+        let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty, per);
         stats.operator_bytes += 8 * (nodes.order.len() + elements.order.len()) as u64;
         let share = ranks.map(|ranks| {
             let operator_bytes = stats.operator_bytes;
@@ -737,8 +739,11 @@ fn build_block_by_block(
     let groups = by_node_cluster(&exact);
     // Each block is written into its own slot of the one list the operator keeps: a million
     // blocks gathered in parts and then joined were the peak of the furnished room's build.
-    let mut blocks: Vec<Block> = (0..exact.len() + far.len()).map(|_| Block::nothing()).collect();
-    let (near_slots, far_slots) = blocks.split_at_mut(exact.len());
+    let shadowed_slots = shadowed::sub_blocks(&plan.shadowed);
+    let mut blocks: Vec<Block> =
+        (0..exact.len() + far.len() + shadowed_slots).map(|_| Block::nothing()).collect();
+    let (near_slots, rest) = blocks.split_at_mut(exact.len());
+    let (far_slots, shadowed_slots) = rest.split_at_mut(far.len());
     let mut slots_of_groups = Vec::with_capacity(groups.len());
     let mut near_rest = near_slots;
     for group in &groups {
@@ -779,14 +784,17 @@ fn build_block_by_block(
         progress.advance(1);
         met
     });
-    let met = near.chain(far).reduce(Built::default, Built::merged);
+    let mut met = near.chain(far).reduce(Built::default, Built::merged);
+    let shadowed =
+        shadowed::build(entries, &plan.shadowed, faces, tolerance, guard, progress, shadowed_slots);
+    met = met.merged(shadowed);
     guard.check(0)?;
     Ok(Built { blocks, ..met })
 }
 
 /// The blocks built that hold something, in one list, with their statistics and the pair
 /// classes met (`empty`: the blocks the plan left out).
-fn kept_blocks(built: Built, empty: usize) -> (Vec<Block>, OperatorStats, PairStats) {
+fn kept_blocks(built: Built, empty: usize, per: usize) -> (Vec<Block>, OperatorStats, PairStats) {
     let Built { mut blocks, pairs, incompressible } = built;
     let before = blocks.len();
     // Every exact block was compacted when built: one of zeros holds nothing. Dropped in
@@ -799,6 +807,15 @@ fn kept_blocks(built: Built, empty: usize) -> (Vec<Block>, OperatorStats, PairSt
         ..Default::default()
     };
     let index_bytes = std::mem::size_of::<Block>() as u64;
+    // A shadowed block's factors, shared by its parts, count once.
+    let mut shared = std::collections::HashSet::new();
+    let mut count_factors =
+        |stats: &mut OperatorStats, factors: &std::sync::Arc<stored::Factors>| {
+            if shared.insert(std::sync::Arc::as_ptr(factors)) {
+                stats.operator_bytes += factors.u.bytes() + factors.v.bytes();
+                stats.max_rank = stats.max_rank.max(factors.rank());
+            }
+        };
     for block in &blocks {
         match &block.data {
             BlockData::Dense(d) => {
@@ -813,6 +830,18 @@ fn kept_blocks(built: Built, empty: usize) -> (Vec<Block>, OperatorStats, PairSt
                 stats.far_blocks += 1;
                 stats.far_entries += (block.row_range().len() * f.columns()) as u64;
                 stats.max_rank = stats.max_rank.max(f.rank());
+            }
+            BlockData::Seen(slice) => {
+                stats.far_blocks += 1;
+                stats.far_entries +=
+                    (block.row_range().len() * block.col_range().len() * per) as u64;
+                count_factors(&mut stats, &slice.factors);
+            }
+            BlockData::Leaf(leaf) => {
+                stats.near_blocks += 1;
+                stats.near_entries += leaf.partial.values.len() as u64;
+                stats.far_entries += leaf.whole_entries();
+                count_factors(&mut stats, &leaf.slice.factors);
             }
         }
         stats.operator_bytes += block.bytes() + index_bytes;
@@ -913,8 +942,26 @@ impl Entries<'_> {
     /// Every entry of the block, by the dense path's pair plan and kernels, stored by what it
     /// holds ([`Block::compact`]).
     fn exact_block(&self, t: usize, s: usize, views: &mut NodeViews) -> (Block, PairStats) {
+        let (data, stats) = self.exact_entries(t, s, views, None);
+        let mut block = self.block(t, s, BlockData::exact(data));
+        block.compact(self.precision);
+        (block, stats)
+    }
+
+    /// The entries of block (t, s), row-major. With `whole` (mask words of the block's columns
+    /// per row, as [`stored::SparseRows`] has them), an element the node sees whole is not
+    /// integrated but marked there, in the rows of nodes that reflect (a shadowed block's
+    /// factors give those entries).
+    fn exact_entries(
+        &self,
+        t: usize,
+        s: usize,
+        views: &mut NodeViews,
+        mut whole: Option<&mut [u64]>,
+    ) -> (Vec<f64>, PairStats) {
         let per = self.per;
         let (m, width) = self.block_size(t, s);
+        let words = stored::mask_words(width);
         // Zeros written, not mapped (`vec!` of zeros would leave a large block's pages to the
         // zero page, which the lanes' additions read before they write).
         let mut data = Vec::with_capacity(m * width);
@@ -924,6 +971,16 @@ impl Entries<'_> {
         let mut batch = lanes::Batch::<(usize, f64)>::default();
         let stats = self.visible_pairs(t, s, views, |r, k, i, j, vis| {
             let node = &self.disc.nodes[i];
+            if let Some(mask) = whole.as_deref_mut() {
+                if matches!(vis, Visibility::Full) {
+                    if node.rho != 0.0 {
+                        for c in k * per..(k + 1) * per {
+                            mask[r * words + c / 64] |= 1 << (c % 64);
+                        }
+                    }
+                    return;
+                }
+            }
             let el = &self.disc.elements[j];
             let at = r * width + k * per;
             let scale = node.rho / PI;
@@ -944,9 +1001,7 @@ impl Entries<'_> {
             }
         });
         batch.flush(|(at, scale), v| data[at] += scale * v);
-        let mut block = self.block(t, s, BlockData::exact(data));
-        block.compact(self.precision);
-        (block, stats)
+        (data, stats)
     }
 
     /// Rows and columns (elements × basis functions) of block (t, s).
@@ -1031,6 +1086,19 @@ impl Entries<'_> {
         faces: &FacePairs,
         tolerance: f64,
     ) -> Option<Block> {
+        let lr = self.low_rank(t, s, faces, tolerance)?;
+        Some(self.block(t, s, BlockData::low_rank(lr, self.precision)))
+    }
+
+    /// The factors of block (t, s) with every element seen whole (the kernel without
+    /// occlusion), to `tolerance`, or `None` when their rank would not save memory.
+    fn low_rank(
+        &self,
+        t: usize,
+        s: usize,
+        faces: &FacePairs,
+        tolerance: f64,
+    ) -> Option<aca::LowRank> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let per = self.per;
         let (m, c) = (tc.len(), sc.len() * per);
@@ -1044,8 +1112,7 @@ impl Entries<'_> {
             let (j, basis) = (element_ids[q / per], q % per);
             self.smooth_values(node_ids.iter().map(|&i| (i, j)), Some(basis), faces)
         };
-        let lr = aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)?;
-        Some(self.block(t, s, BlockData::low_rank(lr, self.precision)))
+        aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)
     }
 }
 

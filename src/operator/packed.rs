@@ -88,12 +88,14 @@ impl CompressedOperator {
         let (mut start, mut bytes) = (0, fixed);
         for (b, block) in self.blocks.iter().enumerate() {
             let rows = block.row_range().len() as u64;
-            let (values, index, rank) = match &block.data {
+            let width = block.col_range().len() * self.per;
+            let (values, index, rank) = match block.data.standalone(rows as usize, width).as_ref() {
                 BlockData::Dense(values) => (values.len(), 0, 0),
                 BlockData::Sparse(s) => {
                     (s.values.len(), block.row_range().len() + 1 + s.values.len(), 0)
                 }
                 BlockData::LowRank(lr) => (lr.u.len() + lr.v.len(), 1, lr.rank()),
+                BlockData::Seen(_) | BlockData::Leaf(_) => unreachable!("packed standalone"),
             };
             let own = [
                 8 * values as u64,
@@ -128,7 +130,8 @@ impl CompressedOperator {
             d[field::COLS_START] = fits(block.col_range().start * self.per)?;
             d[field::COLS] = fits(block.col_range().len() * self.per)?;
             d[field::VALUES_AT] = fits(p.values.len())?;
-            match &block.data {
+            let width = block.col_range().len() * self.per;
+            match block.data.standalone(block.row_range().len(), width).as_ref() {
                 BlockData::Dense(values) => {
                     d[field::KIND] = DENSE;
                     values.extend_f64(&mut p.values);
@@ -136,7 +139,7 @@ impl CompressedOperator {
                 BlockData::Sparse(rows) => {
                     d[field::KIND] = SPARSE;
                     d[field::INDEX_AT] = fits(sparse_index.len())?;
-                    let (starts, columns) = rows.csr(block.col_range().len() * self.per);
+                    let (starts, columns) = rows.csr(width);
                     sparse_index.extend_from_slice(&starts);
                     sparse_index.extend_from_slice(&columns);
                     rows.values.extend_f64(&mut p.values);
@@ -150,6 +153,7 @@ impl CompressedOperator {
                     lr.v.extend_f64(&mut p.values);
                     low_rank.push(fits(b)?);
                 }
+                BlockData::Seen(_) | BlockData::Leaf(_) => unreachable!("packed standalone"),
             }
             d[field::PARTIAL_AT] = fits(scratch)?;
             scratch += block.row_range().len();

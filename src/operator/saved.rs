@@ -319,14 +319,15 @@ impl CompressedOperator {
             {
                 out.u64(v as u64)?;
             }
-            match &b.data {
+            let width = b.col_range().len() * self.per;
+            match b.data.standalone(b.row_range().len(), width).as_ref() {
                 BlockData::Dense(values) => {
                     out.u64(DENSE)?;
                     write_values(out, values)?;
                 }
                 BlockData::Sparse(rows) => {
                     out.u64(SPARSE)?;
-                    let (starts, columns) = rows.csr(b.col_range().len() * self.per);
+                    let (starts, columns) = rows.csr(width);
                     out.u32s(&starts)?;
                     out.u32s(&columns)?;
                     write_values(out, &rows.values)?;
@@ -337,6 +338,7 @@ impl CompressedOperator {
                     write_values(out, &lr.u)?;
                     write_values(out, &lr.v)?;
                 }
+                BlockData::Seen(_) | BlockData::Leaf(_) => unreachable!("written standalone"),
             }
         }
         Ok(())
@@ -433,6 +435,8 @@ fn fits(data: &BlockData, m: usize, c: usize) -> bool {
         BlockData::LowRank(lr) => {
             lr.columns() == c && lr.u.len() == m * lr.rank() && lr.v.len() == c * lr.rank()
         }
+        // Written standalone, never read.
+        BlockData::Seen(_) | BlockData::Leaf(_) => false,
     }
 }
 

@@ -2,7 +2,7 @@
 //! ([`crate::distributed`]): every rank holds the whole block plan and takes the blocks dealt to
 //! it, so that the ranks' estimated costs come out about equal.
 
-use super::blocks::{BlockPlan, NearBlock};
+use super::blocks::{BlockPlan, NearBlock, ShadowedBlock};
 use super::cluster::ClusterTree;
 
 /// Cross-approximation steps assumed per low-rank block when estimating its cost (each step
@@ -10,12 +10,13 @@ use super::cluster::ClusterTree;
 const ESTIMATED_STEPS: usize = 12;
 
 /// Blocks that are built together: the exact blocks of one node cluster (they share the nodes'
-/// views of the faces), or one low-rank block.
+/// views of the faces), one low-rank block, or one shadowed block with its sub-blocks.
 struct Unit {
     /// Estimated entry evaluations.
     cost: usize,
     near: Vec<NearBlock>,
     far: Option<(usize, usize)>,
+    shadowed: Option<ShadowedBlock>,
 }
 
 /// The blocks of `plan` that rank `rank` of `size` builds. Units are sorted by estimated cost
@@ -38,15 +39,34 @@ pub(super) fn share_of(
             cost: group.iter().map(|b| size_of(b.t, b.s)).map(|(m, c)| m * c).sum(),
             near: group.to_vec(),
             far: None,
+            shadowed: None,
         })
         .collect();
-    units.extend(plan.far.iter().map(|&(t, s)| {
-        let (m, c) = size_of(t, s);
-        Unit { cost: (ESTIMATED_STEPS * (m + c)).min(m * c), near: Vec::new(), far: Some((t, s)) }
+    let far_cost = |(m, c): (usize, usize)| (ESTIMATED_STEPS * (m + c)).min(m * c);
+    units.extend(plan.far.iter().map(|&(t, s)| Unit {
+        cost: far_cost(size_of(t, s)),
+        near: Vec::new(),
+        far: Some((t, s)),
+        shadowed: None,
+    }));
+    // A shadowed block: its factors as a far block's, its leaves as exact blocks.
+    units.extend(plan.shadowed.iter().map(|b| {
+        let leaves: usize = b.leaves.iter().map(|&(t, s)| size_of(t, s)).map(|(m, c)| m * c).sum();
+        Unit {
+            cost: far_cost(size_of(b.t, b.s)) + leaves,
+            near: Vec::new(),
+            far: None,
+            shadowed: Some(b.clone()),
+        }
     }));
     // The same order on every rank: by cost, then by the blocks themselves.
     units.sort_unstable_by(|a, b| {
-        b.cost.cmp(&a.cost).then_with(|| a.near.cmp(&b.near)).then_with(|| a.far.cmp(&b.far))
+        let at = |u: &Unit| u.shadowed.as_ref().map(|b| (b.t, b.s));
+        b.cost
+            .cmp(&a.cost)
+            .then_with(|| a.near.cmp(&b.near))
+            .then_with(|| a.far.cmp(&b.far))
+            .then_with(|| at(a).cmp(&at(b)))
     });
     let mut mine =
         BlockPlan { empty: if rank == 0 { plan.empty } else { 0 }, ..Default::default() };
@@ -56,6 +76,7 @@ pub(super) fn share_of(
         if dealt_to == rank {
             mine.near.extend(unit.near);
             mine.far.extend(unit.far);
+            mine.shadowed.extend(unit.shadowed);
         }
     }
     mine
@@ -87,7 +108,7 @@ mod tests {
         let near = pairs(&leaves, 3).into_iter();
         let near = near.map(|(t, s)| NearBlock { t, s, seen_whole: (t + s) % 2 == 0 }).collect();
         let far = pairs(&inner[1..], 5);
-        let plan = BlockPlan { near, far, empty: 5 };
+        let plan = BlockPlan { near, far, shadowed: Vec::new(), empty: 5 };
         for size in [1, 2, 3] {
             let shares: Vec<BlockPlan> =
                 (0..size).map(|r| share_of(&plan, &tree, &tree, 1, (r, size))).collect();

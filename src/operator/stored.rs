@@ -1,8 +1,12 @@
 //! How a block of the compressed operator holds its values, and its products: exact blocks
-//! dense or by their non-zero entries, low-rank blocks by their factors; the values in f64, or
+//! dense or by their non-zero entries, low-rank blocks by their factors, the parts of a
+//! shadowed block (`shadowed.rs`) by the factors they share and, in leaves, a bit for each pair
+//! seen whole and the exact partly visible entries; the values in f64, or
 //! in f32 where the operator's tolerance leaves room for f32's rounding (mixed-precision
 //! storage of hierarchical matrices: the low-rank blocks' error is the tolerance the user set,
 //! and values rounded to f32 add 2^-24 of each entry, 16 times less at the threshold).
+
+use std::sync::Arc;
 
 use super::aca::{LowRank, dot};
 
@@ -88,6 +92,14 @@ impl Values {
         self.len() == 0
     }
 
+    /// A copy of the values at `range`.
+    pub(super) fn range(&self, range: std::ops::Range<usize>) -> Self {
+        match self {
+            Values::F64(v) => Values::F64(v[range].into()),
+            Values::F32(v) => Values::F32(v[range].into()),
+        }
+    }
+
     /// Bytes they take.
     pub(super) fn bytes(&self) -> u64 {
         match self {
@@ -104,7 +116,7 @@ impl Values {
 
 /// A stored value in f64 (the macro's arms take both precisions through it).
 #[inline]
-fn wide<T: Into<f64>>(value: T) -> f64 {
+pub(super) fn wide<T: Into<f64>>(value: T) -> f64 {
     value.into()
 }
 
@@ -117,6 +129,10 @@ pub(super) enum BlockData {
     Sparse(SparseRows),
     /// `U V^T`.
     LowRank(Factors),
+    /// A sub-block of a shadowed block that its nodes see whole: the shared factors' product.
+    Seen(FactorSlice),
+    /// A leaf of a shadowed block that a shadow boundary crosses.
+    Leaf(ShadowedLeaf),
 }
 
 impl BlockData {
@@ -127,10 +143,19 @@ impl BlockData {
 
     /// A low-rank block's factors in `precision`.
     pub(super) fn low_rank(lr: LowRank, precision: Precision) -> Self {
-        let (u, v) = (Values::new(lr.u, precision), Values::new(lr.v, precision));
-        BlockData::LowRank(
-            Factors::new(lr.c, lr.k, u, v).expect("a block's columns and rank fit u32"),
-        )
+        BlockData::LowRank(Factors::from_low_rank(lr, precision))
+    }
+
+    /// The block as the kinds a saved operator and a device keep (dense, sparse, low-rank):
+    /// a shadowed block's parts with their entries of the shared factors written out, for a
+    /// block of `rows` × `width`.
+    pub(super) fn standalone(&self, rows: usize, width: usize) -> std::borrow::Cow<'_, Self> {
+        use std::borrow::Cow;
+        match self {
+            BlockData::Seen(slice) => Cow::Owned(BlockData::LowRank(slice.to_factors(rows, width))),
+            BlockData::Leaf(leaf) => Cow::Owned(BlockData::Sparse(leaf.to_sparse(rows, width))),
+            _ => Cow::Borrowed(self),
+        }
     }
 
     /// An exact block of `rows` rows as it is worth storing, in `precision`: nothing where
@@ -158,6 +183,9 @@ impl BlockData {
             BlockData::Dense(d) => d.bytes(),
             BlockData::Sparse(rows) => rows.bytes(),
             BlockData::LowRank(f) => f.u.bytes() + f.v.bytes(),
+            // The shared factors count once, with the shadowed block.
+            BlockData::Seen(_) => 0,
+            BlockData::Leaf(leaf) => leaf.bytes(),
         }
     }
 
@@ -184,6 +212,8 @@ impl BlockData {
                     }
                 });
             }
+            BlockData::Seen(slice) => slice.apply_add(x, y),
+            BlockData::Leaf(leaf) => leaf.apply_add(x, y),
         }
     }
 
@@ -229,6 +259,8 @@ impl BlockData {
                     }
                 });
             }
+            BlockData::Seen(slice) => each_vector(x, y, m, |x, y| slice.apply_add(x, y)),
+            BlockData::Leaf(leaf) => each_vector(x, y, m, |x, y| leaf.apply_add(x, y)),
         }
     }
 }
@@ -302,7 +334,7 @@ impl SparseRows {
     }
 
     /// `y += B x`.
-    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+    pub(super) fn apply_add(&self, x: &[f64], y: &mut [f64]) {
         on_values!(&self.values, values => {
             let mut k = 0;
             for (yi, row) in y.iter_mut().zip(self.row_masks(x.len())) {
@@ -332,13 +364,13 @@ impl SparseRows {
 }
 
 /// Mask words of a row of `width` columns (one at least, so that rows stay apart).
-fn mask_words(width: usize) -> usize {
+pub(super) fn mask_words(width: usize) -> usize {
     width.div_ceil(64).max(1)
 }
 
 /// `f(c)` for each column c whose bit is set in a row's mask words, increasing.
 #[inline]
-fn each_column(mask: &[u64], mut f: impl FnMut(usize)) {
+pub(super) fn each_column(mask: &[u64], mut f: impl FnMut(usize)) {
     for (w, &word) in mask.iter().enumerate() {
         let mut bits = word;
         while bits != 0 {
@@ -365,6 +397,12 @@ impl Factors {
         Some(Self { c: c.try_into().ok()?, k: k.try_into().ok()?, u, v })
     }
 
+    /// A cross approximation's factors in `precision`.
+    pub(super) fn from_low_rank(lr: LowRank, precision: Precision) -> Self {
+        let (u, v) = (Values::new(lr.u, precision), Values::new(lr.v, precision));
+        Self::new(lr.c, lr.k, u, v).expect("a block's columns and rank fit u32")
+    }
+
     /// Columns.
     pub(super) fn columns(&self) -> usize {
         self.c as usize
@@ -373,6 +411,193 @@ impl Factors {
     /// Rank.
     pub(super) fn rank(&self) -> usize {
         self.k as usize
+    }
+}
+
+/// The part of a shadowed block's shared factors that one of its sub-blocks covers: from row
+/// `row0` and column `col0` of the factors on (the sub-block's extent is its own).
+#[derive(Clone, Debug)]
+pub(super) struct FactorSlice {
+    pub(super) factors: Arc<Factors>,
+    pub(super) row0: u32,
+    pub(super) col0: u32,
+}
+
+impl FactorSlice {
+    /// `t = V^T x` over the slice's columns (`x` holds them).
+    fn project(&self, x: &[f64]) -> Vec<f64> {
+        let k = self.factors.rank();
+        let mut t = vec![0.0; k];
+        let at = self.col0 as usize * k;
+        on_values!(&self.factors.v, v => {
+            for (row, xj) in v[at..at + x.len() * k].chunks_exact(k.max(1)).zip(x) {
+                t.iter_mut().zip(row).for_each(|(t, &v)| *t += wide(v) * xj);
+            }
+        });
+        t
+    }
+
+    /// `y += U t` over the slice's rows (`y` holds them).
+    fn expand_add(&self, t: &[f64], y: &mut [f64]) {
+        let k = self.factors.rank();
+        let (at, rows) = (self.row0 as usize * k, y.len());
+        on_values!(&self.factors.u, u => {
+            for (yi, row) in y.iter_mut().zip(u[at..at + rows * k].chunks_exact(k.max(1))) {
+                *yi += dot(row, t);
+            }
+        });
+    }
+
+    /// `y += U V^T x` on the slice.
+    pub(super) fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        let t = self.project(x);
+        self.expand_add(&t, y);
+    }
+
+    /// The slice of `rows` × `columns` as a low-rank block of its own.
+    pub(super) fn to_factors(&self, rows: usize, columns: usize) -> Factors {
+        let k = self.factors.rank();
+        let (r, c) = (self.row0 as usize * k, self.col0 as usize * k);
+        let u = self.factors.u.range(r..r + rows * k);
+        let v = self.factors.v.range(c..c + columns * k);
+        Factors::new(columns, k, u, v).expect("a block's columns and rank fit u32")
+    }
+}
+
+/// A leaf of a shadowed block that a shadow boundary crosses.
+#[derive(Clone, Debug)]
+pub(super) struct ShadowedLeaf {
+    pub(super) slice: FactorSlice,
+    /// Row by row (mask words of the leaf's columns): the columns of the elements the node
+    /// sees whole, whose entries the factors give.
+    pub(super) whole: Box<[u64]>,
+    /// The exact entries of the elements the node sees in part.
+    pub(super) partial: SparseRows,
+}
+
+impl ShadowedLeaf {
+    /// `y += B x`: per row, the factors' product summed over each run of columns seen whole
+    /// (prefix sums of `V_q x_q`, one difference per run), then the partly visible entries.
+    pub(super) fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+        let factors = &self.slice.factors;
+        let (k, c) = (factors.rank(), x.len());
+        let mut prefix = vec![0.0; (c + 1) * k];
+        let at = self.slice.col0 as usize * k;
+        on_values!(&factors.v, v => {
+            for (q, row) in v[at..at + c * k].chunks_exact(k.max(1)).enumerate() {
+                let (before, after) = prefix.split_at_mut((q + 1) * k);
+                let (before, after) = (&before[q * k..], &mut after[..k]);
+                for l in 0..k {
+                    after[l] = before[l] + wide(row[l]) * x[q];
+                }
+            }
+        });
+        let words = mask_words(c);
+        let mut sum = vec![0.0; k];
+        let row0 = self.slice.row0 as usize;
+        on_values!(&factors.u, u => {
+            for (r, (yi, mask)) in y.iter_mut().zip(self.whole.chunks_exact(words)).enumerate() {
+                let mut any = false;
+                sum.fill(0.0);
+                each_run(mask, |a, b| {
+                    any = true;
+                    for l in 0..k {
+                        sum[l] += prefix[b * k + l] - prefix[a * k + l];
+                    }
+                });
+                if any {
+                    *yi += dot(&u[(row0 + r) * k..(row0 + r + 1) * k], &sum);
+                }
+            }
+        });
+        self.partial.apply_add(x, y);
+    }
+
+    /// The leaf as the non-zero entries of a block of its own, of `rows` × `width`: the
+    /// factors' entries where a node sees an element whole, the exact ones elsewhere. In f64
+    /// whatever the factors' precision, so that its products are the leaf's to rounding.
+    pub(super) fn to_sparse(&self, rows: usize, width: usize) -> SparseRows {
+        let factors = &self.slice.factors;
+        let k = factors.rank();
+        let mut dense = vec![0.0; rows * width];
+        let (starts, columns) = self.partial.csr(width);
+        let mut values = Vec::new();
+        self.partial.values.extend_f64(&mut values);
+        for r in 0..rows {
+            for e in starts[r] as usize..starts[r + 1] as usize {
+                dense[r * width + columns[e] as usize] = values[e];
+            }
+        }
+        let (u, v) = (factors.u.range(0..factors.u.len()), &factors.v);
+        let (row0, col0) = (self.slice.row0 as usize, self.slice.col0 as usize);
+        let words = mask_words(width);
+        let (mut ur, mut vq) = (Vec::with_capacity(k), Vec::with_capacity(k));
+        for (r, mask) in self.whole.chunks_exact(words).enumerate() {
+            ur.clear();
+            u.range((row0 + r) * k..(row0 + r + 1) * k).extend_f64(&mut ur);
+            each_run(mask, |a, b| {
+                for q in a..b {
+                    vq.clear();
+                    v.range((col0 + q) * k..(col0 + q + 1) * k).extend_f64(&mut vq);
+                    dense[r * width + q] = dot(&ur, &vq);
+                }
+            });
+        }
+        SparseRows::from_dense(&dense, width, Precision::F64)
+    }
+
+    /// Bytes of its masks and exact entries (the factors are the shadowed block's).
+    pub(super) fn bytes(&self) -> u64 {
+        8 * self.whole.len() as u64 + self.partial.bytes()
+    }
+
+    /// Entries that the factors give.
+    pub(super) fn whole_entries(&self) -> u64 {
+        self.whole.iter().map(|w| u64::from(w.count_ones())).sum()
+    }
+}
+
+/// `f(a, b)` for each run `a..b` of set bits in a row's mask words, increasing.
+fn each_run(mask: &[u64], mut f: impl FnMut(usize, usize)) {
+    let mut start = None;
+    for (w, &word) in mask.iter().enumerate() {
+        let mut at = 0u32;
+        while at < 64 {
+            let rest = word >> at;
+            match start {
+                None => {
+                    if rest == 0 {
+                        break;
+                    }
+                    at += rest.trailing_zeros();
+                    start = Some(64 * w + at as usize);
+                }
+                Some(a) => {
+                    // The shift brought in zeros, so the ones counted stop at the word's end.
+                    at += (!rest).trailing_zeros().min(64 - at);
+                    if at < 64 {
+                        f(a, 64 * w + at as usize);
+                        start = None;
+                    }
+                }
+            }
+        }
+    }
+    if let Some(a) = start {
+        f(a, 64 * mask.len());
+    }
+}
+
+/// `y += B x` for `m` vectors interleaved (`x[c * m + v]`, `y[r * m + v]`), one vector at a
+/// time through `apply`.
+fn each_vector(x: &[f64], y: &mut [f64], m: usize, apply: impl Fn(&[f64], &mut [f64])) {
+    let (c, rows) = (x.len() / m, y.len() / m);
+    let (mut xv, mut yv) = (vec![0.0; c], vec![0.0; rows]);
+    for v in 0..m {
+        xv.iter_mut().enumerate().for_each(|(q, xq)| *xq = x[q * m + v]);
+        yv.fill(0.0);
+        apply(&xv, &mut yv);
+        yv.iter().enumerate().for_each(|(r, yr)| y[r * m + v] += yr);
     }
 }
 
@@ -488,5 +713,21 @@ mod tests {
             }
         }
         assert_eq!(Precision::for_tolerance(1e-9), Precision::F64);
+    }
+
+    /// The runs of set bits, within and across mask words.
+    #[test]
+    fn runs_of_set_bits_are_found_within_and_across_words() {
+        let runs = |mask: &[u64]| {
+            let mut out = Vec::new();
+            each_run(mask, |a, b| out.push((a, b)));
+            out
+        };
+        assert_eq!(runs(&[0]), vec![]);
+        assert_eq!(runs(&[0b1011_0110]), vec![(1, 3), (4, 6), (7, 8)]);
+        assert_eq!(runs(&[u64::MAX]), vec![(0, 64)]);
+        assert_eq!(runs(&[1 << 63, 1]), vec![(63, 65)]);
+        assert_eq!(runs(&[u64::MAX << 60, u64::MAX, 0b101]), vec![(60, 129), (130, 131)]);
+        assert_eq!(runs(&[0, 1 << 5]), vec![(69, 70)]);
     }
 }
