@@ -65,13 +65,17 @@ impl<'a> FacePairs<'a> {
         // G is analytic up to cos = 0; only a part behind it would need clipping. The margin is
         // the dense plan's (no clip within 1e-12 of the size).
         let margin = -1e-12 * (nodes.diameter() + elements.diameter() + nodes.distance(elements));
-        if elo < margin || nlo < margin {
+        if nlo < margin {
             return PairClass::Mixed;
         }
         let candidates = Some(between.candidates(self.planner, nodes, elements));
         match self.planner.shaft(a, b, nodes.bounds(), elements.bounds(), candidates) {
-            Shaft::Clear => PairClass::Smooth,
             Shaft::Hidden => PairClass::Nothing,
+            // Elements across the nodes' tangent planes: the kernel continues across them
+            // analytically (the nodes are in front of the elements' plane), and the planes cut
+            // it as occluders do.
+            _ if elo < margin => PairClass::Shadowed,
+            Shaft::Clear => PairClass::Smooth,
             Shaft::Partial => PairClass::Shadowed,
         }
     }

@@ -1037,6 +1037,7 @@ impl Entries<'_> {
         pairs: impl Iterator<Item = (usize, usize)>,
         basis: Option<usize>,
         faces: &FacePairs,
+        continued: bool,
     ) -> Vec<f64> {
         let take = if basis.is_some() { 1 } else { self.per };
         let mut out = Vec::new();
@@ -1044,7 +1045,12 @@ impl Entries<'_> {
         for (i, j) in pairs {
             let at = out.len();
             out.resize(at + take, 0.0);
-            if !self.smooth_sees(i, j, faces) {
+            let gives = if continued {
+                self.disc.nodes[i].rho != 0.0
+            } else {
+                self.smooth_sees(i, j, faces)
+            };
+            if !gives {
                 continue;
             }
             let node = &self.disc.nodes[i];
@@ -1086,7 +1092,7 @@ impl Entries<'_> {
         faces: &FacePairs,
         tolerance: f64,
     ) -> Option<Block> {
-        let lr = self.low_rank(t, s, faces, tolerance)?;
+        let lr = self.low_rank(t, s, faces, tolerance, false)?;
         Some(self.block(t, s, BlockData::low_rank(lr, self.precision)))
     }
 
@@ -1098,6 +1104,7 @@ impl Entries<'_> {
         s: usize,
         faces: &FacePairs,
         tolerance: f64,
+        continued: bool,
     ) -> Option<aca::LowRank> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let per = self.per;
@@ -1106,11 +1113,11 @@ impl Entries<'_> {
         let element_ids = &self.elements.order[sc.start..sc.end];
         let row = |r: usize| {
             let i = node_ids[r];
-            self.smooth_values(element_ids.iter().map(|&j| (i, j)), None, faces)
+            self.smooth_values(element_ids.iter().map(|&j| (i, j)), None, faces, continued)
         };
         let col = |q: usize| {
             let (j, basis) = (element_ids[q / per], q % per);
-            self.smooth_values(node_ids.iter().map(|&i| (i, j)), Some(basis), faces)
+            self.smooth_values(node_ids.iter().map(|&i| (i, j)), Some(basis), faces, continued)
         };
         aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)
     }

@@ -105,7 +105,7 @@ pub(super) fn build(
                     .sum::<f64>();
             let share = seen / area(block.t, block.s);
             let factors = (share > 0.0)
-                .then(|| entries.low_rank(block.t, block.s, faces, tolerance * share.sqrt()))
+                .then(|| entries.low_rank(block.t, block.s, faces, tolerance * share.sqrt(), true))
                 .flatten();
             let whole_of = entries.block(block.t, block.s, BlockData::exact(Vec::new()));
             let slice = |factors: &Arc<Factors>, t: usize, s: usize| {
