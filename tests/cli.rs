@@ -593,6 +593,28 @@ fn bench_times_the_compressed_operator_against_the_dense_one() {
 }
 
 #[test]
+fn shadowed_blocks_keep_fewer_exact_entries_and_the_same_row_sums() {
+    // The louvre room at refine 3: with shadowed blocks, the blocks that slats and tangent
+    // planes cut keep only their partly visible pairs exact, and the closed room's rows still
+    // sum to 1 within the tolerance.
+    let run = |extra: &[&str]| {
+        let args = ["inspect", "--scene", "examples/louvre-room.toml", "--refine", "3"];
+        json(&[&args[..], &["--operator", "compressed", "--json", "-"], extra].concat())
+    };
+    let (plain, shadowed) = (run(&[]), run(&["--shadowed-blocks"]));
+    let entries = |v: &serde_json::Value| v["near_entries"].as_f64().unwrap();
+    assert!(entries(&shadowed) < 0.8 * entries(&plain), "{shadowed} against {plain}");
+    // The same pairs partly visible (a handful may fall on the other side of a sliver's
+    // threshold with other leaves).
+    let partial = |v: &serde_json::Value| v["pairs_partial"].as_f64().unwrap();
+    assert!((partial(&shadowed) - partial(&plain)).abs() <= 1e-4 * partial(&plain));
+    for key in ["row_sum_min", "row_sum_max"] {
+        let sum = shadowed[key].as_f64().unwrap();
+        assert!((sum - 1.0).abs() <= 1e-5, "{key} {sum}");
+    }
+}
+
+#[test]
 fn a_memory_limit_refuses_before_it_is_passed_and_lets_through_what_fits() {
     // The louvre room at refine 3 (n = 3 584): its compressed operator takes about 40 MB, its
     // dense matrix 0.1 GB.

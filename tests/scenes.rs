@@ -924,8 +924,9 @@ fn emission_files_that_do_not_fit_the_run_are_refused() {
 #[test]
 fn occluded_scenes_compress_to_within_ten_times_the_tolerance_of_their_dense_matrix() {
     // Rooms with furniture and slats, a lit city and a box around a floating cube: products of
-    // the compressed operator against the dense matrix's at 1e-6 and 1e-9 (three vectors, the
-    // ones among them), and in the closed scenes every row of K/rho summing to 1 (Lemma 2.1).
+    // the compressed operator, with and without shadowed blocks, against the dense matrix's at
+    // 1e-6 and 1e-9 (three vectors, the ones among them), and in the closed scenes every row of
+    // K/rho summing to 1 (Lemma 2.1).
     use radiosity::assembly::{AssemblyOptions, assemble};
     use radiosity::operator::{CompressedOperator, CompressionOptions};
     use radiosity::pipeline::{self, RunConfig, SceneSource};
@@ -945,11 +946,14 @@ fn occluded_scenes_compress_to_within_ten_times_the_tolerance_of_their_dense_mat
         let problem = pipeline::build(&config).unwrap();
         let assembly = AssemblyOptions::default();
         let k = assemble(&problem, &assembly, &Silent).unwrap().matrix;
-        for tolerance in [1e-6, 1e-9] {
-            let options = CompressionOptions { tolerance, ..Default::default() };
+        for (tolerance, shadowed_blocks) in
+            [1e-6, 1e-9].into_iter().flat_map(|t| [(t, false), (t, true)])
+        {
+            let options = CompressionOptions { tolerance, shadowed_blocks, ..Default::default() };
             let op =
                 CompressedOperator::build(&problem, &assembly, &options, None, &Silent).unwrap();
-            let name = format!("{scene} refine {refine} at {tolerance:e}");
+            let name =
+                format!("{scene} refine {refine} at {tolerance:e}, shadowed {shadowed_blocks}");
             assert!(op.stats.far_blocks > 0, "{name}: nothing compressed: {:?}", op.stats);
             let d = op.max_product_difference(&|x| k.apply(x));
             assert!(d <= 10.0 * tolerance, "{name}: products differ by {d:.2e}");

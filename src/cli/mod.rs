@@ -247,6 +247,11 @@ pub(crate) struct OperatorArgs {
     /// approximation's, and half as much again from its recompression
     #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
     pub(crate) compression_tolerance: f64,
+    /// Compress the blocks that occluders or tangent planes cut once, without occlusion, and
+    /// keep only their partly visible pairs exact: less memory and setup on rooms, slower
+    /// products
+    #[arg(long)]
+    pub(crate) shadowed_blocks: bool,
     /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
     /// matrix that would pass it is refused before it is built, a compressed operator before
     /// it is built if what it surely stores would, or else where its build reaches it
@@ -297,6 +302,7 @@ impl OperatorArgs {
             OperatorArg::Compressed => OperatorChoice::Compressed,
         };
         config.compression.tolerance = self.compression_tolerance;
+        config.compression.shadowed_blocks = self.shadowed_blocks;
         radiosity::assembly::set_memory_limit(self.memory_limit);
         config.compression.validate()
     }

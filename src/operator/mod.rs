@@ -148,6 +148,10 @@ pub struct CompressionOptions {
     /// plane) are split down to clusters this small: their partly visible pairs lie near a
     /// surface in pair space, so smaller leaves store fewer entries around them.
     pub mixed_leaf_size: usize,
+    /// Admissible blocks that occluders or tangent planes cut become shadowed blocks
+    /// (`operator/shadowed.rs`): compressed once without occlusion, exact only on their partly
+    /// visible pairs. Less memory and setup on rooms, slower products (docs/performance.md).
+    pub shadowed_blocks: bool,
 }
 
 impl Default for CompressionOptions {
@@ -159,7 +163,13 @@ impl Default for CompressionOptions {
         // and 1.40 GB instead of 25.2 s and 1.52 GB, the louvre room (refine 5) in 21.9 s
         // instead of 29.1 s, the lit city:35x36 (refine 1) in 186 s instead of 207 s (EPYC,
         // 2026-11-26); 64 was faster on the cities but stored more on the rooms.
-        Self { tolerance: DEFAULT_TOLERANCE, eta: 2.0, leaf_size: 32, mixed_leaf_size: 32 }
+        Self {
+            tolerance: DEFAULT_TOLERANCE,
+            eta: 2.0,
+            leaf_size: 32,
+            mixed_leaf_size: 32,
+            shadowed_blocks: false,
+        }
     }
 }
 

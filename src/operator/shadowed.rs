@@ -1,11 +1,13 @@
-//! Admissible blocks that occluders cut (a room seen through slats, walls across a street).
-//! Without occlusion their kernel is smooth, so the whole block's unoccluded kernel is
-//! compressed once, by cross approximation as a far block is, and its sub-blocks share those
-//! factors: a sub-block its nodes see whole is their product, and a leaf that a shadow
-//! boundary crosses keeps one bit for each element a node sees whole (the product's entry) and
-//! the exact integral of each element it sees in part. Exactness of partly visible elements is
-//! kept; what the factors stand for are fully visible pairs, to the compression tolerance, so
-//! memory and time follow the partly visible pairs instead of the leaves around them.
+//! Admissible blocks that occluders cut (a room seen through slats, walls across a street), or
+//! whose elements cross the nodes' tangent planes (a tilted slat's plane through a wall).
+//! Without occlusion, and continued across the tangent planes, their kernel is smooth, so the
+//! whole block's kernel is compressed once, by cross approximation as a far block is, and its
+//! sub-blocks share those factors: a sub-block its nodes see whole is their product, and a leaf
+//! that a shadow boundary or a tangent plane crosses keeps one bit for each element a node sees
+//! whole (the product's entry) and the exact integral of each element it sees in part.
+//! Exactness of partly visible elements is kept; what the factors stand for are fully visible
+//! pairs, to the compression tolerance, so memory and time follow the partly visible pairs
+//! instead of the leaves around them.
 
 use std::sync::Arc;
 
@@ -107,14 +109,12 @@ pub(super) fn build(
             let factors = (share > 0.0)
                 .then(|| entries.low_rank(block.t, block.s, faces, tolerance * share.sqrt(), true))
                 .flatten();
-            let whole_of = entries.block(block.t, block.s, BlockData::exact(Vec::new()));
-            let slice = |factors: &Arc<Factors>, t: usize, s: usize| {
-                let b = entries.block(t, s, BlockData::exact(Vec::new()));
-                FactorSlice {
-                    factors: factors.clone(),
-                    row0: b.rows.start - whole_of.rows.start,
-                    col0: (b.cols.start - whole_of.cols.start) * per as u32,
-                }
+            // Where sub-block (t, s) starts in the factors' rows and columns.
+            let (rows, columns) = (&entries.nodes.clusters, &entries.elements.clusters);
+            let slice = |factors: &Arc<Factors>, t: usize, s: usize| FactorSlice {
+                factors: factors.clone(),
+                row0: (rows[t].start - rows[block.t].start) as u32,
+                col0: ((columns[s].start - columns[block.s].start) * per) as u32,
             };
             match factors {
                 Some(lr) => {

@@ -251,8 +251,8 @@ fn exact_blocks_are_stored_by_what_they_hold() {
 #[test]
 fn a_written_operator_reads_back_block_for_block() {
     // The five-piece surface has low-rank and dense blocks; one is stored sparse below. Values
-    // in f64 (1e-8) and in f32 (1e-6). The parts of shadowed blocks (the pieces hide each
-    // other in part) are written as what they stand for: low-rank and sparse blocks.
+    // in f64 (1e-8) and in f32 (1e-6). (The parts of shadowed blocks would be written as
+    // the low-rank and sparse blocks they stand for.)
     let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 4);
     for tolerance in [1e-8, 1e-6] {
         let mut op = compressed(&c, tolerance, 16);
@@ -333,9 +333,12 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
         (five_piece(SurfaceParameters::default()).unwrap(), linear, 2),
         (baffled_box().unwrap(), Method::Centroid, 3),
     ];
-    for (scene, method, refine) in scenes {
+    // The baffled box also with shadowed blocks, dealt out as units.
+    let scenes = scenes.into_iter().map(|(s, m, r)| (s, m, r, false));
+    let scenes = scenes.chain([(baffled_box().unwrap(), Method::Centroid, 3, true)]);
+    for (scene, method, refine, shadowed_blocks) in scenes {
         let c = case(scene, method, refine);
-        let options = CompressionOptions { tolerance: 1e-8, ..Default::default() };
+        let options = CompressionOptions { tolerance: 1e-8, shadowed_blocks, ..Default::default() };
         let assembly = AssemblyOptions::default();
         let silent = &crate::progress::Silent;
         let one = CompressedOperator::build(&c, &assembly, &options, None, silent).unwrap();
@@ -368,14 +371,17 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
     // The up-front check counts the exact blocks seen whole, in the rows of nodes that reflect
     // (the sky's rows are zero); each such block stores exactly that many entries, and the
     // operator as a whole no fewer. A lit city (buildings hide each other, rho = 0 sky) and the
-    // baffled box (whose blocks that visibility cuts are all admissible: shadowed, not mixed).
+    // baffled box.
     let scenes = [(crate::scene::lit_city(3, 2).unwrap(), 1), (baffled_box().unwrap(), 3)];
-    let mut mixed = 0;
     for (scene, refine) in scenes {
         let c = case(scene, Method::Centroid, refine);
         // Small leaves, so that both kinds of exact block occur.
-        let options =
-            CompressionOptions { tolerance: 1e-8, leaf_size: 8, mixed_leaf_size: 8, eta: 2.0 };
+        let options = CompressionOptions {
+            tolerance: 1e-8,
+            leaf_size: 8,
+            mixed_leaf_size: 8,
+            ..Default::default()
+        };
         let faces = FacePairs::new(&c.scene, &c.planner);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
         let plan = BlockPlan::new(&nodes, &elements, &faces, &options);
@@ -392,7 +398,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
             precision: Precision::F64,
         };
         let mut views = NodeViews::default();
-        let mut whole = 0;
+        let (mut whole, mut mixed) = (0, 0);
         for b in &plan.near {
             let one = BlockPlan { near: vec![*b], ..Default::default() };
             let certain = one.certain_near_entries(&nodes, &elements, 1, reflects);
@@ -406,15 +412,13 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
                 assert_eq!(certain, 0);
             }
         }
-        assert!(whole > 0, "{}: no block seen whole", c.scene.name);
+        assert!(whole > 0 && mixed > 0, "{}: {whole} seen whole, {mixed} mixed", c.scene.name);
         let assembly = AssemblyOptions::default();
         let op = CompressedOperator::build(&c, &assembly, &options, None, &crate::progress::Silent);
         let certain = plan.certain_near_entries(&nodes, &elements, 1, reflects);
         assert!(certain <= op.unwrap().stats.near_entries, "{}", c.scene.name);
     }
-    assert!(mixed > 0);
 }
-
 #[test]
 fn shadowed_blocks_share_their_factors_and_keep_partly_visible_pairs_exact() {
     // The baffled box: its plate cuts admissible blocks between the walls. Their sub-blocks
@@ -422,10 +426,22 @@ fn shadowed_blocks_share_their_factors_and_keep_partly_visible_pairs_exact() {
     // its standalone form's (the entries written out, as saved operators and devices keep
     // them), the leaves' partly visible entries are the dense matrix's, and the operator, its
     // products of many vectors and its saved copy match the dense products to the tolerance.
-    let c = case(baffled_box().unwrap(), Method::Centroid, 4);
+    let linear = Method::linear(1.0 / 6.0).unwrap();
+    for (method, refine) in [(Method::Centroid, 4), (linear, 3)] {
+        shadowed_blocks_of(case(baffled_box().unwrap(), method, refine));
+    }
+}
+
+fn shadowed_blocks_of(c: Case) {
     let k = dense(&c);
     let tolerance = 1e-8;
-    let options = CompressionOptions { tolerance, leaf_size: 8, mixed_leaf_size: 8, eta: 2.0 };
+    let options = CompressionOptions {
+        tolerance,
+        leaf_size: 8,
+        mixed_leaf_size: 8,
+        shadowed_blocks: true,
+        ..Default::default()
+    };
     let assembly = AssemblyOptions::default();
     let op =
         CompressedOperator::build(&c, &assembly, &options, None, &crate::progress::Silent).unwrap();
@@ -442,7 +458,9 @@ fn shadowed_blocks_share_their_factors_and_keep_partly_visible_pairs_exact() {
                 for r in 0..rows {
                     let i = op.node_order[b.row_range().start + r];
                     for e in starts[r] as usize..starts[r + 1] as usize {
-                        let j = op.element_order[b.col_range().start + columns[e] as usize];
+                        let q = columns[e] as usize;
+                        let element = op.element_order[b.col_range().start + q / op.per];
+                        let j = element * op.per + q % op.per;
                         let exact = k.get(i, j);
                         assert!((values[e] - exact).abs() <= 1e-14 * exact.abs(), "({i}, {j})");
                         partial += 1;
@@ -459,10 +477,11 @@ fn shadowed_blocks_share_their_factors_and_keep_partly_visible_pairs_exact() {
         let worst = y.iter().zip(&alone).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         assert!(worst <= 1e-13 * scale, "{:?}: {worst:.1e} of {scale:.1e}", b.data);
     }
-    assert!(seen > 0 && leaves > 0 && partial > 0, "{seen} seen, {leaves} leaves, {partial}");
+    let what = format!("{}: {seen} seen, {leaves} leaves, {partial} partial", c.disc.method);
+    assert!(seen > 0 && leaves > 0 && partial > 0, "{what}");
     assert!(op.pairs.partial > 0 && op.pairs.hidden > 0, "{:?}", op.pairs);
     let d = op.max_product_difference(&|x| k.apply(x));
-    assert!(d <= 10.0 * tolerance, "{d:.2e} ({:?})", op.stats);
+    assert!(d <= 10.0 * tolerance, "{what}: {d:.2e} ({:?})", op.stats);
 
     let n = op.dof();
     let xs: Vec<Vec<f64>> =
