@@ -37,11 +37,18 @@ const MAX_FACE_PAIRS: usize = 16;
 pub(super) struct FacePairs<'a> {
     scene: &'a Scene,
     planner: &'a PairPlanner,
+    /// Whether elements across the nodes' tangent planes make a block shadowed (a shadowed
+    /// block can take them) rather than mixed.
+    planes_shadow: bool,
 }
 
 impl<'a> FacePairs<'a> {
-    pub(super) fn new(scene: &'a Scene, planner: &'a PairPlanner) -> Self {
-        Self { scene, planner }
+    pub(super) fn new(
+        scene: &'a Scene,
+        planner: &'a PairPlanner,
+        options: &CompressionOptions,
+    ) -> Self {
+        Self { scene, planner, planes_shadow: options.shadowed_blocks }
     }
 
     fn class(
@@ -65,7 +72,7 @@ impl<'a> FacePairs<'a> {
         // G is analytic up to cos = 0; only a part behind it would need clipping. The margin is
         // the dense plan's (no clip within 1e-12 of the size).
         let margin = -1e-12 * (nodes.diameter() + elements.diameter() + nodes.distance(elements));
-        if nlo < margin {
+        if nlo < margin || (elo < margin && !self.planes_shadow) {
             return PairClass::Mixed;
         }
         let candidates = Some(between.candidates(self.planner, nodes, elements));

@@ -376,7 +376,7 @@ impl CompressedOperator {
         options.validate()?;
         assembly.quadrature.validate()?;
         let per = disc.method.nodes_per_element();
-        let faces = FacePairs::new(scene, planner);
+        let faces = FacePairs::new(scene, planner, options);
         let (nodes, elements, plan) = in_stage(progress, "blocks", || {
             let (nodes, elements) = cluster_trees(mesh, disc, options);
             let plan = match ranks {

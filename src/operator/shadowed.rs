@@ -134,7 +134,7 @@ pub(super) fn build(
                         *slot = if leaf.whole_entries() == 0 && leaf.partial.values.is_empty() {
                             Block::nothing()
                         } else {
-                            entries.block(t, s, BlockData::Leaf(leaf))
+                            entries.block(t, s, BlockData::Leaf(Box::new(leaf)))
                         };
                     }
                 }

@@ -132,7 +132,7 @@ pub(super) enum BlockData {
     /// A sub-block of a shadowed block that its nodes see whole: the shared factors' product.
     Seen(FactorSlice),
     /// A leaf of a shadowed block that a shadow boundary crosses.
-    Leaf(ShadowedLeaf),
+    Leaf(Box<ShadowedLeaf>),
 }
 
 impl BlockData {

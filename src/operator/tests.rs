@@ -382,7 +382,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
             mixed_leaf_size: 8,
             ..Default::default()
         };
-        let faces = FacePairs::new(&c.scene, &c.planner);
+        let faces = FacePairs::new(&c.scene, &c.planner, &options);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
         let plan = BlockPlan::new(&nodes, &elements, &faces, &options);
         let reflects = |i: usize| c.disc.nodes[i].rho != 0.0;
