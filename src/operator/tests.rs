@@ -248,6 +248,17 @@ fn exact_blocks_are_stored_by_what_they_hold() {
     assert!(matches!(&hidden.data, BlockData::Dense(d) if d.is_empty()) && hidden.bytes() == 0);
 }
 
+/// `op` written to bytes and read back, with the bytes.
+fn written_and_read(op: &CompressedOperator) -> (CompressedOperator, Vec<u8>) {
+    let mut out = BinaryWriter::new(Vec::new());
+    op.write(&mut out).unwrap();
+    let bytes = out.finish().unwrap();
+    let mut input = BinaryReader::new(bytes.as_slice(), bytes.len() as u64, "op.bin");
+    let read = CompressedOperator::read(&mut input).unwrap();
+    input.finish().unwrap();
+    (read, bytes)
+}
+
 #[test]
 fn a_written_operator_reads_back_block_for_block() {
     // The five-piece surface has low-rank and dense blocks; one is stored sparse below. Values
@@ -274,12 +285,7 @@ fn a_written_operator_reads_back_block_for_block() {
             b.data = stored_sparse(&b.data, b.col_range().len() * op.per);
         }
         assert!(kinds(&op).iter().all(|&k| k > 0), "{:?}", kinds(&op));
-        let mut out = BinaryWriter::new(Vec::new());
-        op.write(&mut out).unwrap();
-        let bytes = out.finish().unwrap();
-        let mut input = BinaryReader::new(bytes.as_slice(), bytes.len() as u64, "op.bin");
-        let read = CompressedOperator::read(&mut input).unwrap();
-        input.finish().unwrap();
+        let (read, bytes) = written_and_read(&op);
         assert_eq!((read.stats, read.pairs, read.zero_rows), (op.stats, op.pairs, op.zero_rows));
         assert_eq!(kinds(&read), kinds(&op));
         let x: Vec<f64> = (0..op.dof()).map(|i| (i as f64 * 0.7).sin()).collect();
@@ -487,12 +493,7 @@ fn shadowed_blocks_of(c: Case) {
     let xs: Vec<Vec<f64>> =
         (0..3).map(|v| (0..n).map(|i| ((i * (v + 2)) as f64 * 0.37).cos()).collect()).collect();
     let refs: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
-    let mut out = BinaryWriter::new(Vec::new());
-    op.write(&mut out).unwrap();
-    let bytes = out.finish().unwrap();
-    let mut input = BinaryReader::new(bytes.as_slice(), bytes.len() as u64, "op.bin");
-    let read = CompressedOperator::read(&mut input).unwrap();
-    input.finish().unwrap();
+    let (read, _) = written_and_read(&op);
     for (x, y) in xs.iter().zip(op.apply_many(&refs)) {
         let single = op.apply(x);
         let scale = single.iter().fold(0.0f64, |m, v| m.max(v.abs()));
