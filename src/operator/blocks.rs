@@ -374,7 +374,8 @@ impl Walk<'_> {
     }
 
     /// Plans sub-block (t, s) of a shadowed block, its occluders among `within`: nothing,
-    /// seen whole, or split down to the mixed leaf size where occluders cut it.
+    /// seen whole, or split down to leaves of [`SHADOWED_LEAF`] times the mixed leaf size
+    /// where occluders or tangent planes cut it.
     fn visit_shadowed(
         &self,
         block: &mut ShadowedBlock,

@@ -116,7 +116,7 @@ impl Values {
 
 /// A stored value in f64 (the macro's arms take both precisions through it).
 #[inline]
-pub(super) fn wide<T: Into<f64>>(value: T) -> f64 {
+fn wide<T: Into<f64>>(value: T) -> f64 {
     value.into()
 }
 
@@ -334,7 +334,7 @@ impl SparseRows {
     }
 
     /// `y += B x`.
-    pub(super) fn apply_add(&self, x: &[f64], y: &mut [f64]) {
+    fn apply_add(&self, x: &[f64], y: &mut [f64]) {
         on_values!(&self.values, values => {
             let mut k = 0;
             for (yi, row) in y.iter_mut().zip(self.row_masks(x.len())) {
@@ -370,7 +370,7 @@ pub(super) fn mask_words(width: usize) -> usize {
 
 /// `f(c)` for each column c whose bit is set in a row's mask words, increasing.
 #[inline]
-pub(super) fn each_column(mask: &[u64], mut f: impl FnMut(usize)) {
+fn each_column(mask: &[u64], mut f: impl FnMut(usize)) {
     for (w, &word) in mask.iter().enumerate() {
         let mut bits = word;
         while bits != 0 {
