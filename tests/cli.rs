@@ -569,6 +569,35 @@ fn the_compression_study_runs_on_any_scene() {
 }
 
 #[test]
+fn the_compression_study_takes_shadowed_blocks() {
+    // The furnished room at n = 1 152: the flag reaches the compressed runs (another operator,
+    // as close to the dense solution) and the study says it was used.
+    let dir = std::env::temp_dir().join(format!("radiosity-shadowed-study-{}", std::process::id()));
+    let study = |shadowed: bool| {
+        let mut args = vec!["study", "compression", "--scene", "examples/furnished-room.toml"];
+        args.extend(["--tolerances", "1e-6", "--max-n", "1200", "--json", "-"]);
+        args.extend(["--figures", dir.to_str().unwrap()]);
+        if shadowed {
+            args.push("--shadowed-blocks");
+        }
+        json(&args)
+    };
+    let (plain, shadowed) = (study(false), study(true));
+    assert_eq!(plain["shadowed_blocks"], false, "{plain}");
+    assert_eq!(shadowed["shadowed_blocks"], true, "{shadowed}");
+    let compressed = |v: &serde_json::Value| {
+        let rows = v["rows"].as_array().unwrap();
+        rows.iter().find(|r| r["operator"] == "compressed").unwrap().clone()
+    };
+    let (p, s) = (compressed(&plain), compressed(&shadowed));
+    assert_ne!(p["operator_bytes"], s["operator_bytes"], "{p}\n{s}");
+    assert!(s["difference_from_dense"].as_f64().unwrap() <= 1e-5, "{s}");
+    let _ = std::fs::remove_dir_all(&dir);
+    let (ok, _, stderr) = radiosity(&["study", "table-3.1", "--shadowed-blocks"]);
+    assert!(!ok && stderr.contains("--shadowed-blocks belongs to study compression"), "{stderr}");
+}
+
+#[test]
 fn bench_times_the_compressed_operator_against_the_dense_one() {
     let v = json(&[
         "bench",

@@ -112,6 +112,9 @@ pub(crate) struct StudyArgs {
     /// `study compression`'s tolerances, comma-separated [default: 1e-3,1e-6,1e-9]
     #[arg(long, value_delimiter = ',')]
     pub(crate) tolerances: Option<Vec<f64>>,
+    /// `study compression` with shadowed blocks (as `solve --shadowed-blocks`)
+    #[arg(long)]
+    pub(crate) shadowed_blocks: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]

@@ -17,7 +17,11 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
     let (id, max_n, markdown) = (id.as_str(), *max_n, *markdown);
     let json = args.json.as_deref();
     if id != "compression" {
-        let given = [("scene", args.scene.is_some()), ("tolerances", args.tolerances.is_some())];
+        let given = [
+            ("scene", args.scene.is_some()),
+            ("tolerances", args.tolerances.is_some()),
+            ("shadowed-blocks", args.shadowed_blocks),
+        ];
         if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
             return Err(Error::InvalidParameter {
                 name: flag,
@@ -50,6 +54,7 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
                 scene: args.scene.as_deref().map(SceneSource::parse).transpose()?,
                 max_n,
                 tolerances: args.tolerances.clone().unwrap_or(TOLERANCES.to_vec()),
+                shadowed_blocks: args.shadowed_blocks,
             };
             let mut result = run_compression(&series, backend, &progress, ranks.as_ref())?;
             // Every rank ran the compressed operators; rank 0 holds the rows and prints them.

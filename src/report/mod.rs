@@ -227,7 +227,8 @@ pub fn compression_table(
         "operator MB",
         "max rank",
     ];
-    let title = format!("Compressed operator, {}", study.scene);
+    let shadowed = if study.shadowed_blocks { ", shadowed blocks" } else { "" };
+    let title = format!("Compressed operator, {}{shadowed}", study.scene);
     let mut s = plain_table(&title, &header, &rows, format);
     let fits: Vec<Vec<String>> = study
         .fits

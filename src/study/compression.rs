@@ -91,6 +91,8 @@ pub struct CompressionStudy {
     pub study: &'static str,
     /// The scene (`five-piece` unless another was asked for).
     pub scene: String,
+    /// Whether the compressed runs used shadowed blocks.
+    pub shadowed_blocks: bool,
     /// Every run.
     pub rows: Vec<CompressionRow>,
     /// Growth exponents per method and tolerance.
@@ -110,6 +112,9 @@ pub struct CompressionSeries {
     pub max_n: Option<usize>,
     /// Tolerances of the compressed runs (default [`TOLERANCES`]).
     pub tolerances: Vec<f64>,
+    /// Whether the compressed runs use shadowed blocks
+    /// ([`CompressionOptions::shadowed_blocks`]).
+    pub shadowed_blocks: bool,
 }
 
 /// Runs the study of `series`, every operator built on `backend` (the GPU: the compressed
@@ -155,7 +160,9 @@ pub fn run_compression(
                 c.method = method;
                 c.backend = backend;
                 c.operator = operator;
-                c.compression = CompressionOptions { tolerance, ..Default::default() };
+                let shadowed_blocks = series.shadowed_blocks;
+                c.compression =
+                    CompressionOptions { tolerance, shadowed_blocks, ..Default::default() };
                 c.solver = SolverOptions::with(SolverChoice::Auto);
                 c.progress = progress.clone();
                 c.ranks =
@@ -199,6 +206,7 @@ pub fn run_compression(
     Ok(CompressionStudy {
         study: "compression",
         scene: name,
+        shadowed_blocks: series.shadowed_blocks,
         rows,
         fits,
         left_out,
