@@ -222,6 +222,34 @@ impl OccluderIndex {
         })
     }
 
+    /// Leaves out of `pieces` (those in a shaft from the convex polygon `from` on face `a` to
+    /// face `b`) each that a convex solid bounded by some of them (not one with a face of `a`
+    /// or `b`) hides from every point of `from` ([`Solid::hides`]): a building's far walls
+    /// behind its near ones, the buildings behind a nearer one. Views among the rest see the
+    /// same: along a segment from `from` that meets pieces, the first piece it meets is never
+    /// left out, since the segment to a left-out piece enters the solid that hides it before,
+    /// through one of the solid's pieces, which that segment puts in the shaft (nothing enters
+    /// through the open cap, which no segment of the scene crosses).
+    pub(super) fn drop_hidden_behind_solids(
+        &self,
+        pieces: &mut Vec<usize>,
+        (a, b): (usize, usize),
+        from: &[DVec3],
+        tol: f64,
+    ) {
+        let mut solids: SmallVec<[usize; 8]> =
+            pieces.iter().filter_map(|&o| self.solid_for_view(o, a, b)).collect();
+        solids.sort_unstable();
+        solids.dedup();
+        if solids.is_empty() {
+            return;
+        }
+        pieces.retain(|&o| {
+            let polygon = &self.pieces[o].polygon;
+            !solids.iter().any(|&s| self.solids[s].hides(from, polygon, tol))
+        });
+    }
+
     /// Whether a convex solid among `units` (not one with a face of `a` or `b`) hides every
     /// point of the convex hull of `from` from every point of that of `to` ([`Solid::hides`]).
     /// Every solid that [`OccluderIndex::solid_hides`] would try on the pieces of `units` found

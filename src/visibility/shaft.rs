@@ -117,6 +117,7 @@ impl PairPlanner {
         if self.occluders.solid_hides(&found, (a, b), from, to, tol) {
             return (found, true);
         }
+        self.occluders.drop_hidden_behind_solids(&mut found, (a, b), from, tol);
         (found, false)
     }
 
