@@ -239,21 +239,23 @@ pub fn distance_to_convex(poly: &[DVec2], x: DVec2) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Convex hull (counter-clockwise) of points, by Andrew's monotone chain.
-pub fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
-    let mut pts = points.to_vec();
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+/// Convex hull (counter-clockwise) of points, by Andrew's monotone chain; on the stack for up
+/// to 16 points (a projected box's eight corners, once per point of an outer integral).
+pub fn convex_hull(points: &[DVec2]) -> SmallVec<[DVec2; 16]> {
+    let mut pts: SmallVec<[DVec2; 16]> = SmallVec::from_slice(points);
+    pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     pts.dedup();
     if pts.len() < 3 {
         return pts;
     }
     let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
-    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
+    let mut hull: SmallVec<[DVec2; 16]> = SmallVec::new();
+    // The lower chain left to right, then the upper one right to left.
+    let m = pts.len();
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &DVec2>> =
-            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
-        for &q in iter {
+        for k in 0..m {
+            let q = if pass == 0 { pts[k] } else { pts[m - 1 - k] };
             while hull.len() >= start + 2
                 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
             {

@@ -116,7 +116,7 @@ impl Opening {
             return None;
         }
         // What the plate's pieces leave open of it.
-        let mut open = vec![section];
+        let mut open = vec![section.into_vec()];
         for &o in &members {
             let mut hole: Vec<DVec2> =
                 planner.occluders()[o].polygon.iter().map(|&v| frame.to_plane(v)).collect();

@@ -147,7 +147,7 @@ impl PairPlanner {
                 let (lo, hi) = f.bounding_box();
                 PlannerFace {
                     face: f.clone(),
-                    hull: convex_hull(&polygon),
+                    hull: convex_hull(&polygon).into_vec(),
                     polygon,
                     size: f.size(),
                     lo,

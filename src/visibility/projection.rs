@@ -237,7 +237,7 @@ pub(super) fn polygon_scale(poly: &[DVec2]) -> f64 {
 
 /// The inward normals (not normalised) of the planes through `p` and each edge of a convex window
 /// (its `corners`, in space): the sides of the pyramid with apex `p` over the window.
-pub(super) fn pyramid_sides(p: DVec3, corners: &[DVec3]) -> Vec<DVec3> {
+pub(super) fn pyramid_sides(p: DVec3, corners: &[DVec3]) -> SmallVec<[DVec3; 8]> {
     let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
     let m = corners.len();
     (0..m)
