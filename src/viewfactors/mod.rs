@@ -19,9 +19,10 @@
 //!   an edge of T_j crosses an edge of T_i that lies in T_j's plane (where that contact ends),
 //!   T_i is also cut across there, so that the contact's ends are corners of pieces;
 //! - each piece keeps only the pair's occluders in its own shaft to T_j
-//!   ([`PairPlanner::polygon_shaft`]): none, and it sees T_j whole; one across that shaft, and it
-//!   sees nothing; otherwise each point's view is shadowed by those alone
-//!   ([`PairPlanner::part_view_among`], no search);
+//!   ([`PairPlanner::polygon_shaft`]), less those that a convex solid among them hides from the
+//!   whole piece (a city's buildings behind a nearer one): none, and it sees T_j whole; one
+//!   across that shaft, and it sees nothing; otherwise each point's view is shadowed by those
+//!   alone ([`PairPlanner::part_view_among`], no search);
 //! - each piece is covered by quadrilaterals and triangles (`patch.rs`), integrated by Gauss
 //!   rules (tensor through the bilinear map, collapsed on a triangle) of an order fitted to
 //!   their separation from T_j and from the poles of the shadow corners the piece has (the

@@ -93,7 +93,9 @@ impl PairPlanner {
     /// corner segments span those of all) or a convex solid they bound hides one polygon from
     /// the other. A piece is left out when a plane separates it from
     /// the segments: one of [`PairPlanner::shaft`]'s, or its own plane with both polygons on
-    /// one side of it.
+    /// one side of it; or when a convex solid bounded by some of them hides it from the whole
+    /// of `from`, whose views see the same without it
+    /// (`OccluderIndex::drop_hidden_behind_solids`).
     pub fn polygon_shaft(
         &self,
         a: usize,
