@@ -177,16 +177,36 @@ fn shadow_of_the_square_from_a_corner_of_s4_is_exact() {
 
 #[test]
 fn views_among_a_polygons_shaft_occluders_equal_the_searched_views_there() {
-    // The occluded box: a floating cube and two plates between the walls. For element pairs
-    // with occluders between them, the shaft of a sub-triangle of T_i and T_j keeps some of
-    // the pair's occluders; from points of that sub-triangle, the view among those alone must
-    // leave the same visible part of T_j as the full search (also when the shadows are clipped
-    // to T_j instead of its face), and a shaft found hidden must leave nothing.
+    // The occluded box: a floating cube and two plates between the walls; a city, whose
+    // buildings hide each other's walls (pieces a solid hides from the whole sub-triangle are
+    // left out of its shaft). For element pairs with occluders between them, the shaft of a
+    // sub-triangle of T_i and T_j keeps some of the pair's occluders; from points of that
+    // sub-triangle, the view among those alone must leave the same visible part of T_j as the
+    // full search (also when the shadows are clipped to T_j instead of its face), and a shaft
+    // found hidden must leave nothing.
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/occluded-box.toml");
-    let scene = crate::scene::load(&path).unwrap();
-    let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-    let planner = PairPlanner::new(&scene);
-    let mut rng = StdRng::seed_from_u64(5);
+    let (compared, hidden_shafts, fewer) =
+        compare_views_among_shafts(&crate::scene::load(&path).unwrap(), 5);
+    assert!(
+        compared > 1000 && hidden_shafts > 0 && fewer > 100,
+        "{compared} {hidden_shafts} {fewer}"
+    );
+    let (compared, hidden_shafts, fewer) =
+        compare_views_among_shafts(&crate::scene::city(3, 3).unwrap(), 6);
+    assert!(
+        compared > 10_000 && hidden_shafts > 1000 && fewer > 3000,
+        "{compared} {hidden_shafts} {fewer}"
+    );
+}
+
+/// Compares, for the element pairs of `scene` (refine 0) with occluders between them and a
+/// random sub-triangle of T_i, the views among the sub-triangle's shaft occluders with the
+/// searched views; returns the views compared, the shafts found hidden and those that kept
+/// fewer occluders than the pair.
+fn compare_views_among_shafts(scene: &Scene, seed: u64) -> (usize, usize, usize) {
+    let mesh = Mesh::new(scene, &MeshKind::Uniform, 0).unwrap();
+    let planner = PairPlanner::new(scene);
+    let mut rng = StdRng::seed_from_u64(seed);
     let area = |pieces: &[Vec<DVec2>]| pieces.iter().map(|p| signed_area(p)).sum::<f64>();
     let (mut compared, mut hidden_shafts, mut fewer) = (0, 0, 0);
     for ei in mesh.elements() {
@@ -244,10 +264,7 @@ fn views_among_a_polygons_shaft_occluders_equal_the_searched_views_there() {
             }
         }
     }
-    assert!(
-        compared > 1000 && hidden_shafts > 0 && fewer > 100,
-        "{compared} {hidden_shafts} {fewer}"
-    );
+    (compared, hidden_shafts, fewer)
 }
 
 #[test]
