@@ -781,14 +781,7 @@ fn build_block_by_block(
     let far = far_slots.par_iter_mut().zip(far).map(|(slot, (t, s))| {
         let mut met = Built::default();
         if !guard.is_over() {
-            *slot = match entries.compressed_block(t, s, faces, tolerance) {
-                Some(block) => block,
-                None => {
-                    let (block, stats) = entries.exact_block(t, s, &mut NodeViews::default());
-                    met.add(stats, true);
-                    block
-                }
-            };
+            *slot = entries.compressed_or_exact(t, s, faces, tolerance, &mut met);
             guard.add(slot.bytes());
         }
         progress.advance(1);
@@ -1094,16 +1087,24 @@ impl Entries<'_> {
         (max_rank >= MIN_USEFUL_RANK).then_some(max_rank)
     }
 
-    /// The block as a low-rank product, or `None` when its rank would not save memory.
-    fn compressed_block(
+    /// The admissible block (t, s) as a low-rank product, or exact where its rank would not save
+    /// memory (counted in `met` as incompressible).
+    fn compressed_or_exact(
         &self,
         t: usize,
         s: usize,
         faces: &FacePairs,
         tolerance: f64,
-    ) -> Option<Block> {
-        let lr = self.low_rank(t, s, faces, tolerance, false)?;
-        Some(self.block(t, s, BlockData::low_rank(lr, self.precision)))
+        met: &mut Built,
+    ) -> Block {
+        match self.low_rank(t, s, faces, tolerance, false) {
+            Some(lr) => self.block(t, s, BlockData::low_rank(lr, self.precision)),
+            None => {
+                let (block, stats) = self.exact_block(t, s, &mut NodeViews::default());
+                met.add(stats, true);
+                block
+            }
+        }
     }
 
     /// The factors of block (t, s) with every element seen whole (the kernel without

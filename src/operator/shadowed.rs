@@ -142,15 +142,7 @@ pub(super) fn build(
                     // As the plain plan: the seen sub-blocks compressed on their own (exact
                     // where that does not pay), the leaves exact.
                     for (slot, &(t, s)) in seen_slots.iter_mut().zip(&block.seen) {
-                        *slot = match entries.compressed_block(t, s, faces, tolerance) {
-                            Some(b) => b,
-                            None => {
-                                let (b, stats) =
-                                    entries.exact_block(t, s, &mut NodeViews::default());
-                                met.add(stats, false);
-                                b
-                            }
-                        };
+                        *slot = entries.compressed_or_exact(t, s, faces, tolerance, &mut met);
                         guard.add(slot.bytes());
                     }
                     let mut views = NodeViews::default();
