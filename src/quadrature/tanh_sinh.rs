@@ -9,6 +9,8 @@ pub(crate) struct TanhSinh {
     pub(crate) max_level: u32,
     /// (index on the finest grid, x, 1 - x, weight per unit step) for |t| up to the truncation.
     pub(crate) points: Vec<(i64, f64, f64, f64)>,
+    /// The weight per unit step below which a point is left out.
+    pub(crate) tail: f64,
 }
 
 /// Widest truncation of the t axis: the weights beyond are below 1e-20.
@@ -33,6 +35,6 @@ impl TanhSinh {
         };
         let m = (0..=widest).find(|&k| point(k).3 < tail).unwrap_or(widest);
         let points = (-m..=m).map(point).collect();
-        Self { max_level, points }
+        Self { max_level, points, tail }
     }
 }
