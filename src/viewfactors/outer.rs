@@ -52,7 +52,7 @@ impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
         // change the integral by about the tail), not only those beyond the axes' truncation:
         // a fifth fewer points at levels 2 and 3.
         let weight = |ku: usize, kv: usize| 2.0 * points[ku].1 * points[ku].3 * points[kv].3;
-        let kept = |&(ku, kv): &(usize, usize)| weight(ku, kv) >= self.rule.tail;
+        let in_rule = |&(ku, kv): &(usize, usize)| weight(ku, kv) >= self.rule.tail;
         let mut cache: Vec<Option<f64>> = vec![None; n * n];
         let (mut previous, mut before): (Option<f64>, Option<f64>) = (None, None);
         for level in 0..=self.rule.max_level {
@@ -61,7 +61,7 @@ impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
             let grid: Vec<(usize, usize)> = on_level
                 .iter()
                 .flat_map(|&ku| on_level.iter().map(move |&kv| (ku, kv)))
-                .filter(kept)
+                .filter(in_rule)
                 .collect();
             let new: Vec<usize> = grid
                 .iter()
