@@ -446,9 +446,9 @@ impl Context<'_> {
     }
 
     /// `∫ g dA` over `patch` by the Gauss rule of order q + 1, and its estimated error: the
-    /// difference from order q, and where the points see T_j in more than one shape or no order
-    /// meets the a priori bound (`order` `None`: q is then the highest but one), also the
-    /// difference from the rule over its quarters.
+    /// difference from order q, and where the points see T_j in more than one shape, also the
+    /// difference from order q + 2; where no order meets the a priori bound (`order` `None`: q
+    /// is then the highest but one), the difference from the rule over its quarters.
     fn two_orders(
         &self,
         (i, j): (usize, usize),
@@ -467,13 +467,23 @@ impl Context<'_> {
         // Across an event that was not cut along (where three mutually skew edges line up, or
         // two parallel ones and a third), the points see T_j in more than one shape and the
         // two rules' difference can miss by far more than it says (an entry of city:4x4 was
-        // 1.4e-9 off at the default tolerance). The rule over the patch's quarters, of half
-        // the order, meets the kink elsewhere: its difference from the patch's rule is the
-        // error.
-        // So can two high orders on a patch too near a point where the integrand is not
-        // analytic: a chair's backrest whose corner stands 0.014 from the seat (furnished room,
-        // --tolerance 1e-6) had orders 15 and 16 differ by 7.1e-7 and miss by 1.2e-6.
-        if matches!(low_shapes.and(high_shapes), Shapes::Many) || order.is_none() {
+        // 1.4e-9 off at the default tolerance). Across such a kink the rules' errors scatter
+        // with the order instead of falling: order q + 2 is a third sample of that scatter,
+        // and its difference from order q + 1 counts too. It took the place of the rule over
+        // the patch's quarters of half the order (as many points), which agreed by chance
+        // with the two orders where the third order did not: on a patch of city:4x4 (pair
+        // (244, 61), --tolerance 1e-8) orders 4 and 5 and the quarters agreed to 2.7e-9 of F
+        // and missed it by 1.7e-8, and order 6 differed by 2.3e-8; city:4x4 at 1e-8 had 7
+        // entries off by more than the tolerance (up to 2.0e-8) and now has one (1.4e-8),
+        // for the same evaluations.
+        // Where no order meets the a priori bound (a patch too near a point where the
+        // integrand is not analytic: a chair's backrest whose corner stands 0.014 from the
+        // seat, furnished room at --tolerance 1e-6, had orders 15 and 16 differ by 7.1e-7 and
+        // miss by 1.2e-6), the quarters, which meet the singularity elsewhere, check it.
+        let kinked = matches!(low_shapes.and(high_shapes), Shapes::Many);
+        if kinked && q + 2 <= GAUSS_MAX {
+            error = error.max((high - estimate_on(patch, q + 2).0).abs());
+        } else if kinked || order.is_none() {
             let half = (q + 2) / 2;
             let quarters: f64 = patch.quarters().iter().map(|c| estimate_on(c, half).0).sum();
             error = error.max((high - quarters).abs());
