@@ -199,11 +199,7 @@ fn a_corner_near_a_seat_meets_each_tolerance() {
         name(ei),
         name(ej)
     );
-    let at = |tolerance: f64| {
-        let options = ViewFactorOptions { tolerance, ..Default::default() };
-        let context = fixture.context(&options);
-        context.pair(i, j, true, &OuterRules::new(&options), &mut Tally::default())
-    };
+    let at = |tolerance: f64| fixture.pair_at((i, j), tolerance).0;
     let converged = at(1e-12);
     assert!((converged - 0.0021153103078).abs() < 1e-12, "{converged}");
     for tolerance in [1e-5, 1e-6, 1e-7, 1e-8] {
@@ -218,11 +214,7 @@ fn a_corner_near_a_seat_meets_each_tolerance() {
 #[test]
 fn walls_seen_whole_meet_the_default_tolerance() {
     let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
-    let at = |tolerance: f64, (i, j): (usize, usize)| {
-        let options = ViewFactorOptions { tolerance, ..Default::default() };
-        let context = fixture.context(&options);
-        context.pair(i, j, true, &OuterRules::new(&options), &mut Tally::default())
-    };
+    let at = |tolerance: f64, pair: (usize, usize)| fixture.pair_at(pair, tolerance).0;
     for pair in [(198, 188), (188, 198), (164, 174), (176, 186)] {
         let (default, tight) = (at(1e-10, pair), at(1e-12, pair));
         assert!(tight > 0.15, "{pair:?}: {tight}");
@@ -237,23 +229,9 @@ fn walls_seen_whole_meet_the_default_tolerance() {
 #[test]
 fn a_ground_triangle_along_a_walls_foot_meets_each_tolerance() {
     let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
-    let at = |tolerance: f64| {
-        let options = ViewFactorOptions { tolerance, ..Default::default() };
-        let context = fixture.context(&options);
-        let mut tally = Tally::default();
-        let value = context.pair(145, 176, true, &OuterRules::new(&options), &mut tally);
-        (value, tally.error)
-    };
-    let (converged, _) = at(1e-12);
+    let (converged, _) = fixture.pair_at((145, 176), 1e-12);
     assert!((converged - 0.0293688177).abs() < 1e-10, "{converged}");
-    for tolerance in [1e-3, 1e-4, 1e-5, 1e-6, 1e-8] {
-        let (value, estimate) = at(tolerance);
-        let off = (value - converged).abs();
-        assert!(
-            off <= tolerance && off <= estimate.max(1e-13),
-            "{tolerance}: {off} off, estimate {estimate}"
-        );
-    }
+    fixture.assert_meets_each_tolerance((145, 176), converged, &[1e-3, 1e-4, 1e-5, 1e-6, 1e-8]);
 }
 
 /// A pair of city:4x4 (a ground triangle and a wall across a street) with a patch that an
@@ -263,19 +241,8 @@ fn a_ground_triangle_along_a_walls_foot_meets_each_tolerance() {
 #[test]
 fn a_patch_across_a_curved_event_meets_a_tight_tolerance() {
     let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
-    let at = |tolerance: f64| {
-        let options = ViewFactorOptions { tolerance, ..Default::default() };
-        let context = fixture.context(&options);
-        let mut tally = Tally::default();
-        let value = context.pair(244, 61, true, &OuterRules::new(&options), &mut tally);
-        (value, tally.error)
-    };
-    let (converged, _) = at(1e-12);
-    for tolerance in [1e-6, 1e-8] {
-        let (value, estimate) = at(tolerance);
-        let off = (value - converged).abs();
-        assert!(off <= tolerance && off <= estimate, "{tolerance}: {off} off, estimate {estimate}");
-    }
+    let (converged, _) = fixture.pair_at((244, 61), 1e-12);
+    fixture.assert_meets_each_tolerance((244, 61), converged, &[1e-6, 1e-8]);
 }
 
 /// The faces of `examples/FILE` up to the one named `name`, left out with those after it.
@@ -308,6 +275,32 @@ impl Fixture {
     fn example(file: &str) -> Self {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
         Self::new(crate::scene::load(&path).unwrap())
+    }
+
+    /// F_ij of the pair `(i, j)` at `tolerance`, among the occluders, and its estimated error.
+    fn pair_at(&self, (i, j): (usize, usize), tolerance: f64) -> (f64, f64) {
+        let options = ViewFactorOptions { tolerance, ..Default::default() };
+        let mut tally = Tally::default();
+        let value = self.context(&options).pair(i, j, true, &OuterRules::new(&options), &mut tally);
+        (value, tally.error)
+    }
+
+    /// Asserts that at each of `tolerances` F_ij of `pair` is within it of `converged`, and
+    /// within its own estimate.
+    fn assert_meets_each_tolerance(
+        &self,
+        pair: (usize, usize),
+        converged: f64,
+        tolerances: &[f64],
+    ) {
+        for &tolerance in tolerances {
+            let (value, estimate) = self.pair_at(pair, tolerance);
+            let off = (value - converged).abs();
+            assert!(
+                off <= tolerance && off <= estimate.max(1e-13),
+                "{pair:?} at {tolerance}: {off} off, estimate {estimate}"
+            );
+        }
     }
 
     fn context<'a>(&'a self, options: &'a ViewFactorOptions) -> Context<'a> {
@@ -679,12 +672,7 @@ fn estimates_hold_where_occluders_meet_the_element_at_a_point() {
         (Fixture::new(crate::scene::city(4, 4).unwrap()), [(123, 182), (222, 160), (111, 170)]),
     ];
     for (fixture, pairs) in cases {
-        let at = |tolerance: f64, (i, j): (usize, usize)| {
-            let options = ViewFactorOptions { tolerance, ..Default::default() };
-            let rules = OuterRules::new(&options);
-            let mut tally = Tally::default();
-            (fixture.context(&options).pair(i, j, true, &rules, &mut tally), tally.error)
-        };
+        let at = |tolerance: f64, pair: (usize, usize)| fixture.pair_at(pair, tolerance);
         let name = &fixture.scene.name;
         for (i, j) in pairs {
             let ((loose, estimate), (tight, _)) = (at(1e-6, (i, j)), at(1e-10, (i, j)));
