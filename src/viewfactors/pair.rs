@@ -470,7 +470,7 @@ impl Context<'_> {
         // 1.4e-9 off at the default tolerance). Across such a kink the rules' errors scatter
         // with the order instead of falling: order q + 2 is a third sample of that scatter,
         // and its difference from order q + 1 counts too. It took the place of the rule over
-        // the patch's quarters of half the order (as many points), which agreed by chance
+        // the patch's quarters of half the order (about as many points), which agreed by chance
         // with the two orders where the third order did not: on a patch of city:4x4 (pair
         // (244, 61), --tolerance 1e-8) orders 4 and 5 and the quarters agreed to 2.7e-9 of F
         // and missed it by 1.7e-8, and order 6 differed by 2.3e-8; city:4x4 at 1e-8 had 7
