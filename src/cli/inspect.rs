@@ -153,12 +153,13 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
     );
     if let Some(b) = &out.blocks {
         println!(
-            "compressed operator (tolerance {:.0e}, values in {}): {:.1} MB; {} exact blocks ({} entries), {} \
-             low-rank blocks (standing for {} entries, rank <= {}), {} empty blocks, {} admissible \
-             blocks kept exact",
+            "compressed operator (tolerance {:.0e}, values in {}): {:.1} MB ({:.1} MB of low-rank \
+             factors); {} exact blocks ({} entries), {} low-rank blocks (standing for {} entries, \
+             rank <= {}), {} empty blocks, {} admissible blocks kept exact",
             tolerance,
             radiosity::operator::Precision::for_tolerance(tolerance).name(),
             out.operator_bytes as f64 / 1e6,
+            b.low_rank_bytes as f64 / 1e6,
             b.near_blocks,
             b.near_entries,
             b.far_blocks,

@@ -222,6 +222,10 @@ pub struct OperatorStats {
     pub empty_blocks: u64,
     /// Admissible blocks kept exact because their rank would not have saved memory.
     pub incompressible_blocks: u64,
+    /// Of `operator_bytes`, the low-rank blocks' factors (a shadowed block's once, however
+    /// many of its parts read them); the rest is the exact entries and the blocks' index. Not
+    /// among [`OperatorStats::counts`]: a saved operator's is recounted from its blocks.
+    pub low_rank_bytes: u64,
 }
 
 impl OperatorStats {
@@ -266,6 +270,7 @@ impl OperatorStats {
             max_rank: max_rank as usize,
             empty_blocks,
             incompressible_blocks,
+            low_rank_bytes: 0,
         }
     }
 }
@@ -282,6 +287,7 @@ impl std::ops::AddAssign for OperatorStats {
         self.max_rank = self.max_rank.max(o.max_rank);
         self.empty_blocks += o.empty_blocks;
         self.incompressible_blocks += o.incompressible_blocks;
+        self.low_rank_bytes += o.low_rank_bytes;
     }
 }
 
@@ -815,7 +821,9 @@ fn kept_blocks(built: Built, empty: usize, per: usize) -> (Vec<Block>, OperatorS
     let mut count_factors =
         |stats: &mut OperatorStats, factors: &std::sync::Arc<stored::Factors>| {
             if shared.insert(std::sync::Arc::as_ptr(factors)) {
-                stats.operator_bytes += factors.u.bytes() + factors.v.bytes();
+                let bytes = factors.u.bytes() + factors.v.bytes();
+                stats.operator_bytes += bytes;
+                stats.low_rank_bytes += bytes;
                 stats.max_rank = stats.max_rank.max(factors.rank());
             }
         };
@@ -833,6 +841,7 @@ fn kept_blocks(built: Built, empty: usize, per: usize) -> (Vec<Block>, OperatorS
                 stats.far_blocks += 1;
                 stats.far_entries += (block.row_range().len() * f.columns()) as u64;
                 stats.max_rank = stats.max_rank.max(f.rank());
+                stats.low_rank_bytes += block.bytes();
             }
             BlockData::Seen(slice) => {
                 stats.far_blocks += 1;
@@ -858,11 +867,16 @@ fn summed_over(
     stats: OperatorStats,
     pairs: PairStats,
 ) -> (OperatorStats, PairStats) {
-    let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).collect();
+    let mine: Vec<u64> =
+        stats.counts().into_iter().chain(pairs.counts()).chain([stats.low_rank_bytes]).collect();
     let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
     for counts in ranks.gather(&mine) {
-        let (s, p) = counts.split_at(OperatorStats::COUNTS);
-        stats += OperatorStats::from_counts(s.try_into().expect("a rank's statistics"));
+        let (s, rest) = counts.split_at(OperatorStats::COUNTS);
+        let (p, low_rank_bytes) = rest.split_at(rest.len() - 1);
+        stats += OperatorStats {
+            low_rank_bytes: low_rank_bytes[0],
+            ..OperatorStats::from_counts(s.try_into().expect("a rank's statistics"))
+        };
         pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));
     }
     (stats, pairs)

@@ -361,7 +361,7 @@ impl CompressedOperator {
         for v in &mut pairs {
             *v = input.u64("pair classes")?;
         }
-        let (stats, pairs) = (OperatorStats::from_counts(stats), PairStats::from_counts(pairs));
+        let (mut stats, pairs) = (OperatorStats::from_counts(stats), PairStats::from_counts(pairs));
         let node_order = input.usizes("the node order", dof)?;
         let element_order = input.usizes("the element order", dof / per)?;
         if node_order.len() != dof || element_order.len() != dof / per {
@@ -411,6 +411,11 @@ impl CompressedOperator {
             }
             blocks.push(Block::new(rows, cols, data));
         }
+        stats.low_rank_bytes = blocks
+            .iter()
+            .filter(|b| matches!(b.data, BlockData::LowRank(_)))
+            .map(Block::bytes)
+            .sum();
         Ok(Self {
             dof,
             per,

@@ -285,6 +285,16 @@ fn a_written_operator_reads_back_block_for_block() {
             b.data = stored_sparse(&b.data, b.col_range().len() * op.per);
         }
         assert!(kinds(&op).iter().all(|&k| k > 0), "{:?}", kinds(&op));
+        // The factors' bytes, from the ranks and sizes, values in the tolerance's precision.
+        let value_bytes = if tolerance < 1e-7 { 8 } else { 4 };
+        let factor_bytes: usize = (op.blocks.iter())
+            .filter_map(|b| match &b.data {
+                BlockData::LowRank(f) => Some(f.rank() * (b.row_range().len() + f.columns())),
+                _ => None,
+            })
+            .sum();
+        assert_eq!(op.stats.low_rank_bytes, (factor_bytes * value_bytes) as u64);
+        assert!(op.stats.low_rank_bytes < op.stats.operator_bytes);
         let (read, bytes) = written_and_read(&op);
         assert_eq!((read.stats, read.pairs, read.zero_rows), (op.stats, op.pairs, op.zero_rows));
         assert_eq!(kinds(&read), kinds(&op));
@@ -365,6 +375,8 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
                     (s.near_entries, s.near_blocks, s.far_blocks, s.empty_blocks),
                     "{what}"
                 );
+                // A shadowed block is dealt out whole: its factors are on one rank.
+                assert_eq!(stats.low_rank_bytes, s.low_rank_bytes, "{what}");
                 assert!(*d <= 1e-13, "{what}: products differ by {d:.2e}");
                 assert!(*bytes < s.operator_bytes / 2 + s.operator_bytes / 4, "{what}: {bytes}");
             }
