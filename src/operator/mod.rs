@@ -224,7 +224,8 @@ pub struct OperatorStats {
     pub incompressible_blocks: u64,
     /// Of `operator_bytes`, the low-rank blocks' factors (a shadowed block's once, however
     /// many of its parts read them); the rest is the exact entries and the blocks' index. Not
-    /// among [`OperatorStats::counts`]: a saved operator's is recounted from its blocks.
+    /// among [`OperatorStats::counts`]: a saved operator's bytes are counted anew from the
+    /// blocks read (a shadowed block's parts are written as blocks of their own).
     pub low_rank_bytes: u64,
 }
 
@@ -428,7 +429,7 @@ impl CompressedOperator {
         progress.finish();
 
         let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty, per);
-        stats.operator_bytes += 8 * (nodes.order.len() + elements.order.len()) as u64;
+        stats.operator_bytes += order_bytes(disc.dof(), per);
         let share = ranks.map(|ranks| {
             let operator_bytes = stats.operator_bytes;
             (stats, pairs) = summed_over(&**ranks, stats, pairs);
@@ -810,13 +811,19 @@ fn kept_blocks(built: Built, empty: usize, per: usize) -> (Vec<Block>, OperatorS
     // place, in the list's own memory.
     blocks.retain(|b| !matches!(&b.data, BlockData::Dense(d) if d.is_empty()));
     blocks.shrink_to_fit();
-    let mut stats = OperatorStats {
+    let stats = OperatorStats {
         empty_blocks: (empty + before - blocks.len()) as u64,
         incompressible_blocks: incompressible,
-        ..Default::default()
+        ..block_stats(&blocks, per)
     };
+    (blocks, stats, pairs)
+}
+
+/// What `blocks` themselves tell of an operator: blocks and entries by kind, the largest rank,
+/// and the bytes they take with their index (a shadowed block's shared factors once).
+fn block_stats(blocks: &[Block], per: usize) -> OperatorStats {
+    let mut stats = OperatorStats::default();
     let index_bytes = std::mem::size_of::<Block>() as u64;
-    // A shadowed block's factors, shared by its parts, count once.
     let mut shared = std::collections::HashSet::new();
     let mut count_factors =
         |stats: &mut OperatorStats, factors: &std::sync::Arc<stored::Factors>| {
@@ -827,7 +834,7 @@ fn kept_blocks(built: Built, empty: usize, per: usize) -> (Vec<Block>, OperatorS
                 stats.max_rank = stats.max_rank.max(factors.rank());
             }
         };
-    for block in &blocks {
+    for block in blocks {
         match &block.data {
             BlockData::Dense(d) => {
                 stats.near_blocks += 1;
@@ -858,7 +865,12 @@ fn kept_blocks(built: Built, empty: usize, per: usize) -> (Vec<Block>, OperatorS
         }
         stats.operator_bytes += block.bytes() + index_bytes;
     }
-    (blocks, stats, pairs)
+    stats
+}
+
+/// Bytes of the node and element orders of an operator of `dof` unknowns, `per` a element.
+fn order_bytes(dof: usize, per: usize) -> u64 {
+    8 * (dof + dof / per) as u64
 }
 
 /// The whole operator's statistics from every rank's (a collective: every rank calls it).

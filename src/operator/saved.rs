@@ -411,11 +411,10 @@ impl CompressedOperator {
             }
             blocks.push(Block::new(rows, cols, data));
         }
-        stats.low_rank_bytes = blocks
-            .iter()
-            .filter(|b| matches!(b.data, BlockData::LowRank(_)))
-            .map(Block::bytes)
-            .sum();
+        // The bytes of the blocks as read; the counts of entries and blocks stay the build's.
+        let counted = super::block_stats(&blocks, per);
+        stats.operator_bytes = counted.operator_bytes + super::order_bytes(dof, per);
+        stats.low_rank_bytes = counted.low_rank_bytes;
         Ok(Self {
             dof,
             per,

@@ -283,6 +283,8 @@ fn a_written_operator_reads_back_block_for_block() {
             // Store one exact block sparse, as a mostly hidden one would be.
             let b = op.blocks.iter_mut().find(|b| matches!(b.data, BlockData::Dense(_))).unwrap();
             b.data = stored_sparse(&b.data, b.col_range().len() * op.per);
+            op.stats.operator_bytes =
+                block_stats(&op.blocks, op.per).operator_bytes + order_bytes(op.dof, op.per);
         }
         assert!(kinds(&op).iter().all(|&k| k > 0), "{:?}", kinds(&op));
         // The factors' bytes, from the ranks and sizes, values in the tolerance's precision.
@@ -506,6 +508,10 @@ fn shadowed_blocks_of(c: Case) {
         (0..3).map(|v| (0..n).map(|i| ((i * (v + 2)) as f64 * 0.37).cos()).collect()).collect();
     let refs: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
     let (read, _) = written_and_read(&op);
+    // Read back, the parts are blocks of their own, and their bytes are counted as such.
+    for s in [&op.stats, &read.stats] {
+        assert!(0 < s.low_rank_bytes && s.low_rank_bytes < s.operator_bytes, "{s:?}");
+    }
     for (x, y) in xs.iter().zip(op.apply_many(&refs)) {
         let single = op.apply(x);
         let scale = single.iter().fold(0.0f64, |m, v| m.max(v.abs()));
