@@ -155,7 +155,7 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
         println!(
             "compressed operator (tolerance {:.0e}, values in {}): {:.1} MB ({:.1} MB of low-rank \
              factors); {} exact blocks ({} entries), {} low-rank blocks (standing for {} entries, \
-             rank <= {}), {} empty blocks, {} admissible blocks kept exact",
+             rank <= {}), {} empty blocks, {} admissible blocks kept exact{}",
             tolerance,
             radiosity::operator::Precision::for_tolerance(tolerance).name(),
             out.operator_bytes as f64 / 1e6,
@@ -166,7 +166,11 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
             b.far_entries,
             b.max_rank,
             b.empty_blocks,
-            b.incompressible_blocks
+            b.incompressible_blocks,
+            match b.shadowed_blocks {
+                0 => String::new(),
+                k => format!(", {k} shadowed blocks"),
+            }
         );
     }
     println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);

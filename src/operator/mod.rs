@@ -227,6 +227,10 @@ pub struct OperatorStats {
     /// among [`OperatorStats::counts`]: a saved operator's bytes are counted anew from the
     /// blocks read (a shadowed block's parts are written as blocks of their own).
     pub low_rank_bytes: u64,
+    /// Shadowed blocks (`--shadowed-blocks`), each one factorisation that its parts read: seen
+    /// whole among `far_blocks`, leaves among `near_blocks`. None in a loaded operator, whose
+    /// file holds the parts as blocks of their own.
+    pub shadowed_blocks: u64,
 }
 
 impl OperatorStats {
@@ -272,6 +276,7 @@ impl OperatorStats {
             empty_blocks,
             incompressible_blocks,
             low_rank_bytes: 0,
+            shadowed_blocks: 0,
         }
     }
 }
@@ -289,6 +294,7 @@ impl std::ops::AddAssign for OperatorStats {
         self.empty_blocks += o.empty_blocks;
         self.incompressible_blocks += o.incompressible_blocks;
         self.low_rank_bytes += o.low_rank_bytes;
+        self.shadowed_blocks += o.shadowed_blocks;
     }
 }
 
@@ -865,6 +871,7 @@ fn block_stats(blocks: &[Block], per: usize) -> OperatorStats {
         }
         stats.operator_bytes += block.bytes() + index_bytes;
     }
+    stats.shadowed_blocks = shared.len() as u64;
     stats
 }
 
@@ -879,14 +886,15 @@ fn summed_over(
     stats: OperatorStats,
     pairs: PairStats,
 ) -> (OperatorStats, PairStats) {
-    let mine: Vec<u64> =
-        stats.counts().into_iter().chain(pairs.counts()).chain([stats.low_rank_bytes]).collect();
+    let more = [stats.low_rank_bytes, stats.shadowed_blocks];
+    let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).chain(more).collect();
     let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
     for counts in ranks.gather(&mine) {
         let (s, rest) = counts.split_at(OperatorStats::COUNTS);
-        let (p, low_rank_bytes) = rest.split_at(rest.len() - 1);
+        let (p, more) = rest.split_at(rest.len() - 2);
         stats += OperatorStats {
-            low_rank_bytes: low_rank_bytes[0],
+            low_rank_bytes: more[0],
+            shadowed_blocks: more[1],
             ..OperatorStats::from_counts(s.try_into().expect("a rank's statistics"))
         };
         pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));

@@ -351,12 +351,20 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
         (five_piece(SurfaceParameters::default()).unwrap(), linear, 2),
         (baffled_box().unwrap(), Method::Centroid, 3),
     ];
-    // The baffled box also with shadowed blocks, dealt out as units.
+    // The baffled box also with shadowed blocks, dealt out as units (leaves of 8, so that
+    // the plate's blocks are large enough for shared factors to pay).
     let scenes = scenes.into_iter().map(|(s, m, r)| (s, m, r, false));
-    let scenes = scenes.chain([(baffled_box().unwrap(), Method::Centroid, 3, true)]);
+    let scenes = scenes.chain([(baffled_box().unwrap(), Method::Centroid, 4, true)]);
     for (scene, method, refine, shadowed_blocks) in scenes {
         let c = case(scene, method, refine);
-        let options = CompressionOptions { tolerance: 1e-8, shadowed_blocks, ..Default::default() };
+        let leaves = if shadowed_blocks { 8 } else { CompressionOptions::default().leaf_size };
+        let options = CompressionOptions {
+            tolerance: 1e-8,
+            shadowed_blocks,
+            leaf_size: leaves,
+            mixed_leaf_size: leaves,
+            ..Default::default()
+        };
         let assembly = AssemblyOptions::default();
         let silent = &crate::progress::Silent;
         let one = CompressedOperator::build(&c, &assembly, &options, None, silent).unwrap();
@@ -379,6 +387,8 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
                 );
                 // A shadowed block is dealt out whole: its factors are on one rank.
                 assert_eq!(stats.low_rank_bytes, s.low_rank_bytes, "{what}");
+                assert_eq!(stats.shadowed_blocks, s.shadowed_blocks, "{what}");
+                assert_eq!(s.shadowed_blocks > 0, shadowed_blocks, "{what}");
                 assert!(*d <= 1e-13, "{what}: products differ by {d:.2e}");
                 assert!(*bytes < s.operator_bytes / 2 + s.operator_bytes / 4, "{what}: {bytes}");
             }
@@ -512,6 +522,7 @@ fn shadowed_blocks_of(c: Case) {
     for s in [&op.stats, &read.stats] {
         assert!(0 < s.low_rank_bytes && s.low_rank_bytes < s.operator_bytes, "{s:?}");
     }
+    assert!(op.stats.shadowed_blocks > 0 && read.stats.shadowed_blocks == 0, "{:?}", op.stats);
     for (x, y) in xs.iter().zip(op.apply_many(&refs)) {
         let single = op.apply(x);
         let scale = single.iter().fold(0.0f64, |m, v| m.max(v.abs()));
