@@ -875,7 +875,7 @@ fn block_stats(blocks: &[Block], per: usize) -> OperatorStats {
     stats
 }
 
-/// Bytes of the node and element orders of an operator of `dof` unknowns, `per` a element.
+/// Bytes of the node and element orders of an operator of `dof` unknowns, `per` to an element.
 fn order_bytes(dof: usize, per: usize) -> u64 {
     8 * (dof + dof / per) as u64
 }
