@@ -240,32 +240,58 @@ pub fn distance_to_convex(poly: &[DVec2], x: DVec2) -> f64 {
 }
 
 /// Convex hull (counter-clockwise) of points, by Andrew's monotone chain; on the stack for up
-/// to 16 points (a projected box's eight corners, once per point of an outer integral).
+/// to [`HULL_ON_STACK`] points (a projected box's eight corners, or the corners of its part in
+/// a pyramid, once per point of an outer integral).
 pub fn convex_hull(points: &[DVec2]) -> SmallVec<[DVec2; 16]> {
-    let mut pts: SmallVec<[DVec2; 16]> = SmallVec::from_slice(points);
+    if points.len() > HULL_ON_STACK {
+        let mut pts = points.to_vec();
+        let mut hull = vec![DVec2::ZERO; 2 * points.len()];
+        let corners = monotone_chain(&mut pts, &mut hull);
+        return SmallVec::from_slice(&hull[..corners]);
+    }
+    let mut pts = [DVec2::ZERO; HULL_ON_STACK];
+    let pts = &mut pts[..points.len()];
+    pts.copy_from_slice(points);
+    let mut hull = [DVec2::ZERO; 2 * HULL_ON_STACK];
+    let corners = monotone_chain(pts, &mut hull);
+    SmallVec::from_slice(&hull[..corners])
+}
+
+/// Most points whose hull [`convex_hull`] finds without a heap allocation.
+const HULL_ON_STACK: usize = 32;
+
+/// Andrew's monotone chain: sorts `pts` and drops repeated points in place, and writes the
+/// hull's corners counter-clockwise into `hull` (room for twice as many as `pts`); returns how
+/// many there are (fewer than three distinct points are returned as they are).
+fn monotone_chain(pts: &mut [DVec2], hull: &mut [DVec2]) -> usize {
     pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
+    let mut m = 0;
+    for k in 0..pts.len() {
+        if m == 0 || pts[k] != pts[m - 1] {
+            pts[m] = pts[k];
+            m += 1;
+        }
+    }
+    if m < 3 {
+        hull[..m].copy_from_slice(&pts[..m]);
+        return m;
     }
     let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
-    let mut hull: SmallVec<[DVec2; 16]> = SmallVec::new();
+    let mut corners = 0;
     // The lower chain left to right, then the upper one right to left.
-    let m = pts.len();
     for pass in 0..2 {
-        let start = hull.len();
+        let start = corners;
         for k in 0..m {
             let q = if pass == 0 { pts[k] } else { pts[m - 1 - k] };
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
+            while corners >= start + 2 && cross(hull[corners - 2], hull[corners - 1], q) <= 0.0 {
+                corners -= 1;
             }
-            hull.push(q);
+            hull[corners] = q;
+            corners += 1;
         }
-        hull.pop();
+        corners -= 1;
     }
-    hull
+    corners
 }
 
 /// `piece \ hole` for convex counter-clockwise polygons, as disjoint convex pieces.
