@@ -133,7 +133,9 @@ fn the_row_walk_keeps_every_matrix_bit_for_bit() {
     // Fingerprints of K as `radiosity assemble` wrote it before the pair plan's row walk was made
     // one (x86-64, glibc's libm): a change in how any pair is classified, or in the order of the
     // arithmetic, shows here. A change that is meant to alter the matrices updates them (the
-    // centroid cases last when partly visible elements' pieces went into the lanes).
+    // centroid cases when partly visible elements' pieces went into the lanes; the furnished
+    // room, the occluded box and the city last when a solid that cannot be projected whole cast
+    // the shadow of its part in the pyramid, entries within 7e-16 of before).
     let example = |name: &str| {
         crate::scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap()
     };
@@ -147,16 +149,16 @@ fn the_row_walk_keeps_every_matrix_bit_for_bit() {
             example("examples/furnished-room.toml"),
             Method::Centroid,
             1,
-            0xffc3_1daa_6180_fd0b,
+            0x0a37_4d83_e7af_e0d4,
         ),
         (
             "occluded box",
             example("examples/occluded-box.toml"),
             Method::Centroid,
             1,
-            0x084b_6db5_d7e5_7b54,
+            0x2b92_6f48_138c_9075,
         ),
-        ("city 4x4", crate::scene::city(4, 4).unwrap(), Method::Centroid, 0, 0xccf0_0b92_d64f_51c5),
+        ("city 4x4", crate::scene::city(4, 4).unwrap(), Method::Centroid, 0, 0x3581_da69_14fb_0a7d),
         ("baffled box linear", baffled_box().unwrap(), linear, 2, 0x11b8_8288_ee40_8135),
     ];
     for (name, scene, method, refine, expected) in cases {

@@ -2,7 +2,10 @@
 //! standing open on the ground.
 //!
 //! Seen from a point outside it, a convex solid lying wholly between the point and a plane casts
-//! one convex shadow on that plane, the convex hull of its vertices' central projections. Its
+//! one convex shadow on that plane, the convex hull of its vertices' central projections; one
+//! that reaches nearly as high over the plane as the point, or higher (a building taller than a
+//! point on a wall across the street that sees the ground), casts the projection of its part in
+//! the pyramid over the window. Its
 //! faces cast up to six overlapping shadows, and subtracting those cuts the visible part of an
 //! element into many more pieces than subtracting the one hull (the floating cube of the
 //! occluded box, seen by a wall). The hull is the same set as the union of the faces' shadows,
@@ -24,9 +27,14 @@ pub(super) struct Solid {
     pub(super) faces: Vec<usize>,
     /// Its vertices, each once.
     pub(super) vertices: Vec<DVec3>,
+    /// Its pieces' sides, each once, as pairs of indices into `vertices` (with the sides that
+    /// split a face into pieces: segments on its surface, as good as edges for a hull).
+    pub(super) edges: Vec<(usize, usize)>,
     /// Its pieces' planes, as an outward unit normal n and c with n·x <= c inside (no cap:
     /// no segment of the scene crosses it).
-    planes: Vec<(DVec3, f64)>,
+    pub(super) planes: Vec<(DVec3, f64)>,
+    /// The diagonal of its vertices' box.
+    pub(super) size: f64,
 }
 
 impl Solid {
@@ -178,10 +186,27 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
                 (n, n.dot(pieces[g].polygon[0]))
             })
             .collect();
+        let index = |v: DVec3| vertices.iter().position(|&w| key(w) == key(v));
+        let mut solid_edges: Vec<(usize, usize)> = group
+            .iter()
+            .flat_map(|&k| {
+                let polygon = &pieces[k].polygon;
+                let m = polygon.len();
+                (0..m).map(move |l| (polygon[l], polygon[(l + 1) % m]))
+            })
+            .filter_map(|(u, v)| {
+                let (a, b) = (index(u)?, index(v)?);
+                (a != b).then_some((a.min(b), a.max(b)))
+            })
+            .collect();
+        solid_edges.sort_unstable();
+        solid_edges.dedup();
         for &k in &group {
             solid_of[k] = Some(solids.len());
         }
-        solids.push(Solid { faces, vertices, planes });
+        let (lo, hi) = crate::geometry::bounding_box_3d(&vertices);
+        let size = (hi - lo).length();
+        solids.push(Solid { faces, vertices, edges: solid_edges, planes, size });
     }
     (solids, solid_of)
 }

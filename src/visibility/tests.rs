@@ -398,6 +398,67 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
     assert!(checked > 5_000 && fewer > 20, "{checked} points, {fewer} views with fewer shadows");
 }
 
+/// A convex solid that reaches above the viewing point (a building taller than the point on a
+/// wall that sees the ground past it) cannot be projected whole; the part of it in the pyramid
+/// over the window casts its one shadow: the visible parts agree with ray casting and with the
+/// core plan (face by face) to rounding, and every view holds at most one shadow.
+#[test]
+fn a_solid_taller_than_the_viewing_point_casts_one_shadow_that_ray_casting_confirms() {
+    let mut rng = StdRng::seed_from_u64(12);
+    let (mut checked, mut fewer) = (0, 0);
+    for case in 0..8 {
+        let x = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.0);
+        let x = x.normalize();
+        let half = DVec3::new(rng.random_range(0.05..0.15), rng.random_range(0.05..0.15), 0.0);
+        let centre = DVec3::new(rng.random_range(0.5..0.65), rng.random_range(0.5..0.65), 0.0);
+        // The viewing points lie at height 1.5 over the receiver's corner at the origin; a
+        // standing box (no bottom face, on the receiver) or a floating one reaches above
+        // 0.9 of that height, from below it or from the receiver.
+        let standing = case % 2 == 1;
+        let (bottom, top) = if standing { (0.0, rng.random_range(1.4..2.5)) } else { (0.3, 2.0) };
+        let half = DVec3::new(half.x, half.y, 0.5 * (top - bottom));
+        let centre = DVec3::new(centre.x, centre.y, 0.5 * (top + bottom));
+        let mut faces = receiver_and_source(0.0, 0.25);
+        faces.extend(box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half));
+        if standing {
+            faces.remove(2);
+        }
+        let scene = Scene::new(format!("tall box {case}"), faces).unwrap();
+        let (solid, core) = (
+            PairPlanner::new(&scene),
+            PairPlanner::with_acceleration(&scene, Acceleration::BoxScan),
+        );
+        assert_eq!(solid.occluders.solids.len(), 1, "case {case}");
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        let frame = scene.faces[0].frame;
+        for _ in 0..8 {
+            let p = DVec3::new(rng.random_range(0.0..0.25), rng.random_range(0.0..0.25), 1.5);
+            let view = solid.face_view(p, -DVec3::Z, 1, 0);
+            let core_view = core.face_view(p, -DVec3::Z, 1, 0);
+            let count = |view: &FaceView| match view {
+                FaceView::Visible { shadows, .. } => shadows.len(),
+                FaceView::Skip(_) => 0,
+            };
+            assert!(count(&view) <= 1, "case {case}, p {p}: {} shadows", count(&view));
+            fewer += usize::from(count(&view) < count(&core_view));
+            for e in &mesh.elements()[mesh.face_range(0)] {
+                let tri: Vec<DVec2> = e.vertices.iter().map(|&v| frame.to_plane(v)).collect();
+                let (vis, core_vis) = (solid.visible(&view, &tri), core.visible(&core_view, &tri));
+                let area = |vis: &Visibility| match vis {
+                    Visibility::Skip(_) => 0.0,
+                    Visibility::Full => signed_area(&tri),
+                    Visibility::Partial(pieces) => pieces.iter().map(|p| signed_area(p)).sum(),
+                };
+                let (got, want) = (area(&vis), area(&core_vis));
+                assert!((got - want).abs() <= 1e-13, "case {case}, p {p}: {got} vs {want}");
+                assert_agrees_with_ray_casting(&mut rng, &scene, (p, -DVec3::Z), &tri, &vis, 30);
+                checked += 30;
+            }
+        }
+    }
+    assert!(checked > 5_000 && fewer > 30, "{checked} points, {fewer} views with fewer shadows");
+}
+
 /// Only convex groups of pieces closed, or capped by a plane that the whole scene lies on one
 /// side of, are solids: the occluded box's cube and its walls, not its plates; a city's
 /// buildings (capped by the ground), not its ground; a box without its lid alone, but not with
