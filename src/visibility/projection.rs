@@ -111,17 +111,7 @@ impl Pyramid<'_> {
         if outline.len() < 3 || is_sliver(signed_area(&outline), polygon_scale(&outline)) {
             return None;
         }
-        if shadows.holds(&outline) {
-            return Some(false);
-        }
-        Some(match in_window(&outline, self.window) {
-            Some(s) if covers(&s, self.window) => true,
-            Some(s) => {
-                shadows.add(Some(outline), s);
-                false
-            }
-            None => false,
-        })
+        Some(self.cast_outline(outline, shadows))
     }
 
     /// [`Pyramid::cast_solid`] for a solid that reaches past [`PROJECTION_REACH`] of the apex's
@@ -134,17 +124,23 @@ impl Pyramid<'_> {
         if outline.len() < 3 || is_sliver(signed_area(&outline), scale) {
             return Some(false);
         }
+        Some(self.cast_outline(outline, shadows))
+    }
+
+    /// Adds the part in the window of a solid's convex `outline` to `shadows`, unless a shadow
+    /// there already holds it; returns whether it covers the whole window.
+    fn cast_outline(&self, outline: SmallPolygon<DVec2>, shadows: &mut ShadowSet) -> bool {
         if shadows.holds(&outline) {
-            return Some(false);
+            return false;
         }
-        Some(match in_window(&outline, self.window) {
+        match in_window(&outline, self.window) {
             Some(s) if covers(&s, self.window) => true,
             Some(s) => {
                 shadows.add(Some(outline), s);
                 false
             }
             None => false,
-        })
+        }
     }
 
     /// The central projection onto the face's plane (face coordinates, counter-clockwise) of
