@@ -523,7 +523,7 @@ impl Context<'_> {
     /// direction. A slat touching the jamb at its patch's corner took Gauss orders 5 and 6 that
     /// agreed to 1.7e-8 and missed the integral by 1.3e-6; a ground patch at a building's
     /// corner, 2e-6.
-    fn obstacles(&self, i: usize, blocking: &[usize]) -> Vec<Obstacle<'_>> {
+    fn obstacles(&self, i: usize, blocking: &[usize]) -> Vec<(Obstacle<'_>, (DVec3, DVec3))> {
         let frame = &self.scene.faces[self.mesh.elements()[i].face].frame;
         let tol = 1e-12 * self.mesh.elements()[i].diameter();
         let occluders = self.planner.occluders();
@@ -545,7 +545,7 @@ impl Context<'_> {
                 }
             }
         }
-        obstacles
+        obstacles.into_iter().map(|o| (o, bounding_box_3d(o.corners()))).collect()
     }
 
     /// `∫_t g dA` and its estimated error over a triangle `t` that touches an obstacle, by the
@@ -687,30 +687,50 @@ struct Part<'a> {
     /// Planes (unit normal, a point, the sine of their angle with T_i's plane) whose lines in
     /// T_i's plane may carry poles of the integrand.
     poles: Vec<(DVec3, DVec3, f64)>,
-    /// Where its occluders make the integrand not analytic ([`Context::obstacles`]).
-    obstacles: Vec<Obstacle<'a>>,
+    /// Where its occluders make the integrand not analytic ([`Context::obstacles`]), with
+    /// their boxes.
+    obstacles: Vec<(Obstacle<'a>, (DVec3, DVec3))>,
     /// How its points see the other element.
     sight: Sight<'a>,
 }
 
 /// Where an occluder makes a piece's integrand not analytic: the whole occluder polygon, or a
 /// point where an occluder's edge meets T_i's plane.
+#[derive(Clone, Copy)]
 enum Obstacle<'a> {
     Polygon(&'a [DVec3]),
     Point(DVec3),
+}
+
+impl Obstacle<'_> {
+    fn corners(&self) -> &[DVec3] {
+        match self {
+            Obstacle::Polygon(polygon) => polygon,
+            Obstacle::Point(point) => std::slice::from_ref(point),
+        }
+    }
 }
 
 impl Part<'_> {
     /// The distance from the convex polygon (or point) `corners` to the nearest of the
     /// piece's [`Obstacle`]s.
     fn obstacle_distance(&self, corners: &[DVec3]) -> f64 {
-        self.obstacles
-            .iter()
-            .map(|o| match *o {
-                Obstacle::Polygon(polygon) => convex_polygons_distance(corners, polygon),
-                Obstacle::Point(point) => convex_polygons_distance(corners, &[point]),
-            })
-            .fold(f64::INFINITY, f64::min)
+        self.nearest_obstacle(corners, |_| true)
+    }
+
+    /// The distance from the convex polygon `corners` to the nearest of the piece's obstacles
+    /// that `counts`. An obstacle whose box is no nearer than the nearest found so far is passed
+    /// over (the boxes' distance bounds that of what they hold from below): on city:4x4 at
+    /// --tolerance 1e-3 the polygon distances took 0.65 G instructions instead of 1.77 G.
+    fn nearest_obstacle(&self, corners: &[DVec3], counts: impl Fn(&Obstacle) -> bool) -> f64 {
+        let own_box = bounding_box_3d(corners);
+        let mut nearest = f64::INFINITY;
+        for (obstacle, obstacle_box) in &self.obstacles {
+            if box_distance(own_box, *obstacle_box) < nearest && counts(obstacle) {
+                nearest = nearest.min(convex_polygons_distance(corners, obstacle.corners()));
+            }
+        }
+        nearest
     }
 
     /// Whether a line that may carry poles (where a shadow's corner runs off to infinity) runs
@@ -726,17 +746,7 @@ impl Part<'_> {
     /// The distance from the convex polygon `corners` to the nearest of the piece's
     /// [`Obstacle`]s that are further than `near` from the point `point`.
     fn obstacle_distance_past(&self, corners: &[DVec3], point: DVec3, near: f64) -> f64 {
-        self.obstacles
-            .iter()
-            .filter_map(|o| {
-                let polygon: &[DVec3] = match o {
-                    Obstacle::Polygon(polygon) => polygon,
-                    Obstacle::Point(point) => std::slice::from_ref(point),
-                };
-                (convex_polygons_distance(&[point], polygon) > near)
-                    .then(|| convex_polygons_distance(corners, polygon))
-            })
-            .fold(f64::INFINITY, f64::min)
+        self.nearest_obstacle(corners, |o| convex_polygons_distance(&[point], o.corners()) > near)
     }
 
     /// A lower bound of the distance from the outer patch with corners `t` (longest side
