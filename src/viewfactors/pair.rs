@@ -581,8 +581,8 @@ impl Context<'_> {
         // cut along crosses it, and the levels of the rule can agree while missing (3.3e-9
         // against an estimate of 7e-11, a ground triangle at a building's corner on city:4x4):
         // its quarters check it. The rule's own points, crowded at the sides, would see
-        // shapes that differ only by rounding there.
-        let checked = checked || {
+        // shapes that differ only by rounding there. Where T_j is seen whole there is one shape.
+        let checked = checked || matches!(part.sight, Sight::PerPoint(_)) && {
             let probe = Patch::Triangle(t).gauss_points(&rules.gauss, PROBE_ORDER);
             tally.evaluations += probe.len() as u64;
             matches!(self.shapes_at(i, j, part.sight, &probe), Shapes::Many)
