@@ -30,10 +30,11 @@
 //!   estimate; the nested tensor tanh-sinh rule takes the triangles that touch T_j (d log d
 //!   behaviour beside a common edge) or a point where an occluder's edge meets T_i (where the
 //!   shadow's limit depends on the direction), collapsed at the corner nearest either, with
-//!   Bailey's estimate from its last three levels (`kept_error`); where points see T_j
-//!   clipped or shadowed, the triangle's four quarters are integrated too, their sum kept and
-//!   its difference from the whole's counted in the estimate (the levels of one rule can agree
-//!   while missing the integral). The pair is globally
+//!   Bailey's estimate from its last three levels (`kept_error`); where T_j reaches behind
+//!   T_i's plane, or the views from nine probe points differ in shape, the triangle's four
+//!   quarters are integrated too, their sum kept and its difference from the whole's counted
+//!   in the estimate (the levels of one rule can agree while missing the integral). The pair
+//!   is globally
 //!   adaptive: the patch with the largest estimate is split in four until the estimates
 //!   together are within `--tolerance` on F_ij. The estimates also find what the a priori order
 //!   does not see: the curved events of three mutually skew edges, which are not cut along.
