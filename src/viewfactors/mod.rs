@@ -34,10 +34,10 @@
 //!   T_i's plane, or the views from nine probe points differ in shape, the triangle's four
 //!   quarters are integrated too, their sum kept and its difference from the whole's counted
 //!   in the estimate (the levels of one rule can agree while missing the integral). The pair
-//!   is globally
-//!   adaptive: the patch with the largest estimate is split in four until the estimates
-//!   together are within `--tolerance` on F_ij. The estimates also find what the a priori order
-//!   does not see: the curved events of three mutually skew edges, which are not cut along.
+//!   is globally adaptive: the patch with the largest estimate is split in four until the
+//!   estimates together are within `--tolerance` on F_ij. The estimates also find what the a
+//!   priori order does not see: the curved events of three mutually skew edges, which are not
+//!   cut along.
 //!
 //! Each pair is integrated once, over the element of smaller area: F_ji = A_i F_ij / A_j then
 //! has the error of F_ij times A_i / A_j <= 1 (as View3D computes A_i F_ij once per pair). With

@@ -374,7 +374,7 @@ impl Context<'_> {
         // T_j, the probe of views decides ([`Context::touching_triangle`]): checking all those
         // too took 7.13 M evaluations instead of 6.19 M on the louvre room at --tolerance 1e-6,
         // 16.6 M instead of 12.6 M at 1e-8, 11.3 M instead of 8.7 M on the furnished room at
-        // 1e-8, every entry as far from a run at 1e-10.
+        // 1e-8, with the same largest difference from a run at 1e-10.
         let checked = part.clipped && distance <= TOUCHING * size;
         let distance = distance.min(part.obstacle_distance(patch.corners()));
         // Where occluders shadow T_j the order is only a first guess, since the estimate with
@@ -532,7 +532,7 @@ impl Context<'_> {
     /// Along the rest of the contact (a wall's foot) it hides a half-space, whatever the
     /// direction. A slat touching the jamb at its patch's corner took Gauss orders 5 and 6 that
     /// agreed to 1.7e-8 and missed the integral by 1.3e-6; a ground patch at a building's
-    /// corner, 2e-6.
+    /// corner, 2e-6. Each with its box.
     fn obstacles(&self, i: usize, blocking: &[usize]) -> Vec<(Obstacle<'_>, (DVec3, DVec3))> {
         let frame = &self.scene.faces[self.mesh.elements()[i].face].frame;
         let tol = 1e-12 * self.mesh.elements()[i].diameter();
