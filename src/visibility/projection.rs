@@ -170,10 +170,15 @@ impl Pyramid<'_> {
         for (m, s) in margins.iter_mut().zip(self.sides) {
             *m = grow * s.length();
         }
-        let mut apex = Outside::default();
-        for (k, &(n, c)) in solid.planes.iter().enumerate() {
-            apex.set(k, n.dot(self.apex) - c - grow);
-        }
+        // A point against the solid's planes (outward normals, n·x <= c inside).
+        let against_solid = |x: DVec3| {
+            let mut o = Outside::default();
+            for (k, &(n, c)) in solid.planes.iter().enumerate() {
+                o.set(k, n.dot(x) - c - grow);
+            }
+            o
+        };
+        let apex = against_solid(self.apex);
         if apex.values[..planes].iter().all(|&v| v <= tol) {
             return None;
         }
@@ -209,19 +214,12 @@ impl Pyramid<'_> {
                 points.push(project(x, depth_of(x)?));
             }
         }
-        // The pyramid's edges against the solid's planes (outward normals, n·x <= c inside).
-        let corner = |x: DVec3| {
-            let mut o = Outside::default();
-            for (k, &(n, c)) in solid.planes.iter().enumerate() {
-                o.set(k, n.dot(x) - c - grow);
-            }
-            o
-        };
+        // The pyramid's edges (from the apex, and the window's sides) against the solid.
         let m = self.window.len();
-        let first = corner(self.corners[0]);
+        let first = against_solid(self.corners[0]);
         let mut this = first;
         for k in 0..m {
-            let next = if k + 1 < m { corner(self.corners[k + 1]) } else { first };
+            let next = if k + 1 < m { against_solid(self.corners[k + 1]) } else { first };
             if apex.part_inside(&this).is_some() {
                 points.push(self.window[k]);
             }

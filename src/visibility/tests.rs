@@ -333,8 +333,9 @@ fn box_faces(name: &str, centre: DVec3, axes: [DVec3; 3], half: DVec3) -> Vec<Fa
 }
 
 /// A closed convex solid, or one standing open on the receiver, casts one shadow, the hull of
-/// its vertices' projections, in place of its faces' shadows: the visible parts agree with ray casting, with the core plan (which
-/// shadows face by face) to rounding, and the views hold fewer shadows.
+/// its vertices' projections, in place of its faces' shadows: the visible parts agree with ray
+/// casting, with the core plan (which shadows face by face) to rounding, and the views hold
+/// fewer shadows.
 #[test]
 fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
     let mut rng = StdRng::seed_from_u64(11);
