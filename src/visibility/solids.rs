@@ -30,6 +30,11 @@ pub(super) struct Solid {
     /// Its pieces' sides, each once, as pairs of indices into `vertices` (with the sides that
     /// split a face into pieces: segments on its surface, as good as edges for a hull).
     pub(super) edges: Vec<(usize, usize)>,
+    /// Per edge, the planes (indices into `planes`) of the pieces on either side of it; `None`
+    /// on the cap's side.
+    pub(super) edge_planes: Vec<(usize, Option<usize>)>,
+    /// The mean of its vertices, a point inside it.
+    pub(super) centre: DVec3,
     /// Its pieces' planes, as an outward unit normal n and c with n·x <= c inside (no cap:
     /// no segment of the scene crosses it).
     pub(super) planes: Vec<(DVec3, f64)>,
@@ -187,26 +192,48 @@ pub(super) fn convex_solids(pieces: &[Occluder]) -> (Vec<Solid>, Vec<Option<usiz
             })
             .collect();
         let index = |v: DVec3| vertices.iter().position(|&w| key(w) == key(v));
-        let mut solid_edges: Vec<(usize, usize)> = group
+        // Each piece's sides with the piece's plane (its place in the group); an edge is the
+        // side of one piece (on the cap) or of two.
+        let mut sides_with_planes: Vec<((usize, usize), usize)> = group
             .iter()
-            .flat_map(|&k| {
+            .enumerate()
+            .flat_map(|(plane, &k)| {
                 let polygon = &pieces[k].polygon;
                 let m = polygon.len();
-                (0..m).map(move |l| (polygon[l], polygon[(l + 1) % m]))
+                (0..m).map(move |l| (polygon[l], polygon[(l + 1) % m], plane))
             })
-            .filter_map(|(u, v)| {
+            .filter_map(|(u, v, plane)| {
                 let (a, b) = (index(u)?, index(v)?);
-                (a != b).then_some((a.min(b), a.max(b)))
+                (a != b).then_some(((a.min(b), a.max(b)), plane))
             })
             .collect();
-        solid_edges.sort_unstable();
-        solid_edges.dedup();
+        sides_with_planes.sort_unstable();
+        let (mut solid_edges, mut edge_planes) = (Vec::new(), Vec::new());
+        for (edge, plane) in sides_with_planes {
+            if solid_edges.last() == Some(&edge) {
+                if let Some((_, other @ None)) = edge_planes.last_mut() {
+                    *other = Some(plane);
+                }
+            } else {
+                solid_edges.push(edge);
+                edge_planes.push((plane, None));
+            }
+        }
         for &k in &group {
             solid_of[k] = Some(solids.len());
         }
         let (lo, hi) = crate::geometry::bounding_box_3d(&vertices);
         let size = (hi - lo).length();
-        solids.push(Solid { faces, vertices, edges: solid_edges, planes, size });
+        let centre = vertices.iter().sum::<DVec3>() / vertices.len() as f64;
+        solids.push(Solid {
+            faces,
+            vertices,
+            edges: solid_edges,
+            edge_planes,
+            planes,
+            size,
+            centre,
+        });
     }
     (solids, solid_of)
 }
