@@ -151,9 +151,10 @@ impl Pyramid<'_> {
             let (xa, xb) = (solid.vertices[a] - self.apex, solid.vertices[b] - self.apex);
             let normal = xa.cross(xb);
             let inward = normal.dot(solid.centre - self.apex);
-            let length = normal.length();
-            if length <= 1e-9 * xa.length() * xb.length()
-                || inward.abs() <= 1e-9 * length * solid.size
+            let length2 = normal.length_squared();
+            // Squared: |normal| <= 1e-9 |xa| |xb|, or the centre within 1e-9 of the size.
+            if length2 <= 1e-18 * xa.length_squared() * xb.length_squared()
+                || inward * inward <= 1e-18 * length2 * solid.size * solid.size
             {
                 return None;
             }
@@ -166,6 +167,10 @@ impl Pyramid<'_> {
         }
         if half_planes.len() < 3 {
             return None;
+        }
+        // A fifth of the solids cast over a city's element hide it whole: no clip for those.
+        if half_planes.iter().all(|h| self.window.iter().all(|&w| h.eval(w) >= 0.0)) {
+            return Some(true);
         }
         let Some(part) = clip_to_half_planes(self.window, half_planes) else { return Some(false) };
         let area = signed_area(&part);
