@@ -81,9 +81,6 @@ impl Pyramid<'_> {
             Some(&(_, false)) => return self.cast(piece, crosses_all, shadows),
             None => {}
         }
-        if !piece.may_shadow(self.apex, self.corners) {
-            return false;
-        }
         match self.cast_solid(&solids[s], shadows) {
             Some(hidden) => {
                 shadows.solids.push((s, true));
@@ -171,6 +168,9 @@ impl Pyramid<'_> {
         // A fifth of the solids cast over a city's element hide it whole: no clip for those.
         if half_planes.iter().all(|h| self.window.iter().all(|&w| h.eval(w) >= 0.0)) {
             return Some(true);
+        }
+        if half_planes.iter().any(|h| self.window.iter().all(|&w| h.eval(w) < 0.0)) {
+            return Some(false);
         }
         let Some(part) = clip_to_half_planes(self.window, half_planes) else { return Some(false) };
         let area = signed_area(&part);
