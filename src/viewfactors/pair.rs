@@ -18,7 +18,7 @@ use crate::assembly::{FullPair, LaneObserver, push_fan};
 use crate::geometry::{bounding_box_3d, convex_polygons_distance};
 use crate::kernels::lanes;
 use crate::quadrature::TanhSinh;
-use crate::visibility::Visibility;
+use crate::visibility::{Caster, Visibility};
 
 /// The outer rules: tanh-sinh for elements that touch, Gauss of a chosen order otherwise.
 pub(super) struct OuterRules {
@@ -119,13 +119,15 @@ impl Context<'_> {
                 if hidden {
                     return None;
                 }
+                let casters = |pieces: &[usize]| self.planner.casters(ei.face, ej.face, pieces);
                 let opening =
                     Opening::find(&piece, &ej.vertices, &blocking, self.planner).map(|o| {
-                        let others =
+                        let others: Vec<usize> =
                             blocking.iter().copied().filter(|b| !o.pieces.contains(b)).collect();
-                        (o, others)
+                        (o, casters(&others))
                     });
-                Some(Shaft { piece, blocking, opening })
+                let casting = casters(&blocking);
+                Some(Shaft { piece, blocking, casting, opening })
             })
             .collect();
         let parts: Vec<Part> = shafts
@@ -148,7 +150,7 @@ impl Context<'_> {
                     Sight::Whole
                 } else {
                     Sight::PerPoint(Among {
-                        occluders: &shaft.blocking,
+                        occluders: &shaft.casting,
                         opening: shaft.opening.as_ref().map(|(o, others)| (o, others.as_slice())),
                     })
                 },
@@ -684,8 +686,10 @@ struct Shaft {
     piece: Vec<DVec3>,
     /// The pair's occluder pieces in its shaft.
     blocking: Vec<usize>,
-    /// The opening that a plate of them leaves, if any, and the other pieces.
-    opening: Option<(Opening, Vec<usize>)>,
+    /// The same as they cast shadows.
+    casting: Vec<Caster>,
+    /// The opening that a plate of them leaves, if any, and the other pieces as they cast.
+    opening: Option<(Opening, Vec<Caster>)>,
 }
 
 /// One piece of a pair's outer element: where its integrand stops being analytic, and how it

@@ -8,7 +8,7 @@ use smallvec::SmallVec;
 use super::Context;
 use super::opening::Opening;
 use crate::geometry::{self, SmallPolygon};
-use crate::visibility::{FaceView, Visibility};
+use crate::visibility::{Caster, FaceView, Visibility};
 
 /// How the point-to-element integral of a pair is found at each outer point of a piece.
 #[derive(Clone, Copy)]
@@ -24,14 +24,14 @@ pub(super) enum Sight<'a> {
 /// plate of them leaves one opening, that opening and the others.
 #[derive(Clone, Copy)]
 pub(super) struct Among<'a> {
-    pub(super) occluders: &'a [usize],
-    pub(super) opening: Option<(&'a Opening, &'a [usize])>,
+    pub(super) occluders: &'a [Caster],
+    pub(super) opening: Option<(&'a Opening, &'a [Caster])>,
 }
 
 #[cfg(test)]
 impl<'a> Among<'a> {
     /// These occluder pieces, without an opening.
-    pub(super) fn occluders(occluders: &'a [usize]) -> Self {
+    pub(super) fn occluders(occluders: &'a [Caster]) -> Self {
         Self { occluders, opening: None }
     }
 }
@@ -74,7 +74,7 @@ impl Context<'_> {
         j: usize,
         p: DVec3,
         window: &[DVec2],
-        among: &[usize],
+        among: &[Caster],
     ) -> Option<PointView> {
         let (ei, el) = (&self.mesh.elements()[i], &self.disc.elements[j]);
         let normal = self.scene.faces[ei.face].frame.normal;

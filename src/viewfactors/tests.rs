@@ -333,6 +333,7 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
             }
             let normal = scene.faces[ei.face].frame.normal;
             let part = disc.elements[j].in_face();
+            let among = planner.casters(ei.face, ej.face, &among);
             // Points on a grid over T_i, inside it.
             let grid = (1..7).flat_map(|a| (1..7 - a).map(move |b| (a, b)));
             for (u, v) in grid.map(|(a, b)| (a as f64 / 7.0, b as f64 / 7.0)) {
@@ -387,6 +388,10 @@ fn a_partition_is_seen_through_its_opening() {
             assert!(opening.pieces.iter().all(on_partition), "{i} -> {j}: the partition's pieces");
             let others: Vec<usize> =
                 among.iter().copied().filter(|o| !opening.pieces.contains(o)).collect();
+            let (among, others) = (
+                planner.casters(ei.face, ej.face, &among),
+                planner.casters(ei.face, ej.face, &others),
+            );
             let through = Among { occluders: &among, opening: Some((&opening, &others)) };
             // Points inside the western part: irrational barycentric weights in each triangle
             // of its fan, so that none lies on an occluder's plane.
@@ -513,6 +518,7 @@ fn shadowed_points_in_lanes_equal_the_scalar_closed_forms() {
             if among.is_empty() || planner.same_plane(ei.face, mesh.elements()[j].face) {
                 continue;
             }
+            let among = planner.casters(ei.face, mesh.elements()[j].face, &among);
             let sight = Sight::PerPoint(Among::occluders(&among));
             let points = Patch::Triangle(ei.vertices).gauss_points(&rules, 6);
             let got = context.weighted_sum(i, j, sight, &points).0;
@@ -755,6 +761,7 @@ fn brute_force_pair(fixture: &Fixture, context: &Context, (i, j): (usize, usize)
             }
         }
     }
+    let occluders = fixture.planner.casters(ei.face, ej.face, &occluders);
     let sight = Sight::PerPoint(Among::occluders(&occluders));
     // Barycentric points of the six-point rule of degree 3 (each weight 1/6): irrational, so
     // that no point lies exactly in an occluder's plane where it stands on T_i (a partition on

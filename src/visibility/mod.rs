@@ -448,13 +448,26 @@ impl PairPlanner {
         Ok(Window { z, clip, polygon, corners })
     }
 
+    /// The occluder pieces `candidates` as they cast shadows between faces `own_face` and
+    /// `face`, each with the convex solid it bounds where that solid may occlude between them:
+    /// found once for the many points of a piece that [`PairPlanner::part_view_among`] takes.
+    pub fn casters(&self, own_face: usize, face: usize, candidates: &[usize]) -> Vec<Caster> {
+        candidates
+            .iter()
+            .map(|&piece| Caster {
+                piece,
+                solid: self.occluders.solid_for_view(piece, own_face, face),
+            })
+            .collect()
+    }
+
     /// What the point `p` (normal `normal`, on face `own_face`) sees of `part`, a convex
     /// counter-clockwise part of face `face` (face coordinates: an element, or the face's hull),
     /// when the occluders that can come between `p` and it are known: only `candidates` cast
     /// shadows (pieces of neither face, a superset of those meeting a segment from `p` to
-    /// `part`, e.g. [`PairPlanner::polygon_shaft`]'s), clipped to `part`, and one that covers
-    /// it hides it. [`PairPlanner::visible`] then gives the same visible part of `part` as with
-    /// [`PairPlanner::face_view`], without any search.
+    /// `part`, e.g. [`PairPlanner::polygon_shaft`]'s, as [`PairPlanner::casters`] gives them),
+    /// clipped to `part`, and one that covers it hides it. [`PairPlanner::visible`] then gives
+    /// the same visible part of `part` as with [`PairPlanner::face_view`], without any search.
     pub fn part_view_among(
         &self,
         p: DVec3,
@@ -462,7 +475,7 @@ impl PairPlanner {
         own_face: usize,
         face: usize,
         part: &[DVec2],
-        candidates: &[usize],
+        candidates: &[Caster],
     ) -> FaceView {
         let h = self.height(p, face);
         if self.same_plane_seen_from(h, own_face, face) {
@@ -482,10 +495,9 @@ impl PairPlanner {
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         let mut shadows = ShadowSet::default();
-        for &o in candidates {
+        for &Caster { piece: o, solid } in candidates {
             let piece = &self.occluders.pieces[o];
             let crosses_all = || piece.crosses_every_segment(&[p], &corners, tol, -tol);
-            let solid = self.occluders.solid_for_view(o, own_face, face);
             if pyramid.cast_part(piece, solid, &self.occluders.solids, crosses_all, &mut shadows) {
                 return FaceView::Skip(SkipReason::Hidden);
             }
@@ -668,6 +680,14 @@ fn view_volume(
         }
     }
     volume
+}
+
+/// An occluder piece as it casts between two faces ([`PairPlanner::casters`]): with the convex
+/// solid it bounds, if that solid may occlude between them (it casts its shadow whole).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Caster {
+    piece: usize,
+    solid: Option<usize>,
 }
 
 #[cfg(test)]

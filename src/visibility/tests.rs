@@ -231,6 +231,7 @@ fn compare_views_among_shafts(scene: &Scene, seed: u64) -> (usize, usize, usize)
             let (among, hidden) = planner.polygon_shaft(a, b, &sub, &ej.vertices, &all);
             fewer += usize::from(among.len() < all.len());
             hidden_shafts += usize::from(hidden);
+            let among = planner.casters(a, b, &among);
             let normal = scene.faces[a].frame.normal;
             let target: Vec<DVec2> =
                 ej.vertices.iter().map(|&v| scene.faces[b].frame.to_plane(v)).collect();
