@@ -8,7 +8,7 @@
 //! no clip and no shadow means every element is fully visible, without per-element work.
 //!
 //! Shadows are convex (occluders are split into convex pieces; a convex solid among them casts
-//! one shadow, the hull of its projected vertices), and the visible part of an element
+//! one shadow, the window's part in its cone from the node), and the visible part of an element
 //! is the element clipped by the half-plane minus each shadow, kept as disjoint convex pieces: exact
 //! up to rounding (paper sec. 2.7: any O(h) error here destroys the convergence rates). A view keeps
 //! no shadow that another of its shadows holds (a building's far side behind its near side), which

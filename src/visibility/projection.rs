@@ -94,12 +94,13 @@ impl Pyramid<'_> {
     }
 
     /// Adds the shadow of a whole convex solid to `shadows`, as [`Pyramid::cast`] adds a
-    /// piece's, and returns whether it hides the whole window: the solid's central projection,
-    /// the convex hull of its vertices' projections; where a vertex is not between the face's
-    /// plane and the apex (as [`Pyramid::projection`] asks: a building taller than the point
-    /// that sees the ground past it), the projection of its part in the pyramid
-    /// ([`Pyramid::solid_in_pyramid`]). `None` where neither can be projected, or the hull has
-    /// no area.
+    /// piece's, and returns whether it hides the whole window: the window's part in the
+    /// solid's cone from the apex ([`Pyramid::cast_solid_cone`]); where the solid reaches
+    /// behind the face's plane, its central projection, the convex hull of its vertices'
+    /// projections, or where a vertex is not between the face's plane and the apex (as
+    /// [`Pyramid::projection`] asks), the projection of its part in the pyramid
+    /// ([`Pyramid::solid_in_pyramid`]). `None` where none of these can be found, or the hull
+    /// has no area.
     fn cast_solid(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
         if let Some(hidden) = self.cast_solid_cone(solid, shadows) {
             return Some(hidden);

@@ -1,15 +1,17 @@
 //! Convex solids among the occluder pieces: a cube of six faces, a box of furniture, a building
 //! standing open on the ground.
 //!
-//! Seen from a point outside it, a convex solid lying wholly between the point and a plane casts
-//! one convex shadow on that plane, the convex hull of its vertices' central projections; one
-//! that reaches nearly as high over the plane as the point, or higher (a building taller than a
-//! point on a wall across the street that sees the ground), casts the projection of its part in
-//! the pyramid over the window. Its
-//! faces cast up to six overlapping shadows, and subtracting those cuts the visible part of an
-//! element into many more pieces than subtracting the one hull (the floating cube of the
-//! occluded box, seen by a wall). The hull is the same set as the union of the faces' shadows,
-//! so the visible parts are the same up to rounding. A solid may lack one face (its cap) where
+//! Seen from a point outside it, a convex solid with no point behind a plane casts one convex
+//! shadow on that plane: the plane's part in the solid's cone from the point, bounded by the
+//! planes through the point and the silhouette edges (between a face that faces the point and
+//! one that does not), whether the solid lies below the point or reaches above it (a building
+//! taller than a point on a wall across the street that sees the ground). One that reaches
+//! behind the plane casts the convex hull of its vertices' central projections, or of its part
+//! in the pyramid over the window. Its faces cast up to six overlapping shadows, and
+//! subtracting those cuts the visible part of an element into many more pieces than
+//! subtracting the one shadow (the floating cube of the occluded box, seen by a wall). The one
+//! shadow is the same set as the union of the faces' shadows, so the visible parts are the
+//! same up to rounding. A solid may lack one face (its cap) where
 //! no segment between two points of the scene can cross the cap's plane: the whole scene lies
 //! on one side of it.
 

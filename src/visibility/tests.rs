@@ -333,10 +333,10 @@ fn box_faces(name: &str, centre: DVec3, axes: [DVec3; 3], half: DVec3) -> Vec<Fa
         .collect()
 }
 
-/// A closed convex solid, or one standing open on the receiver, casts one shadow, the hull of
-/// its vertices' projections, in place of its faces' shadows: the visible parts agree with ray
-/// casting, with the core plan (which shadows face by face) to rounding, and the views hold
-/// fewer shadows.
+/// A closed convex solid, or one standing open on the receiver, casts one shadow, the
+/// receiver's part in the cone from the point over it, in place of its faces' shadows: the
+/// visible parts agree with ray casting, with the core plan (which shadows face by face) to
+/// rounding, and the views hold fewer shadows.
 #[test]
 fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
     let mut rng = StdRng::seed_from_u64(11);
@@ -384,9 +384,9 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
 }
 
 /// A convex solid that reaches above the viewing point (a building taller than the point on a
-/// wall that sees the ground past it) cannot be projected whole; the part of it in the pyramid
-/// over the window casts its one shadow: the visible parts agree with ray casting and with the
-/// core plan (face by face) to rounding, and every view holds at most one shadow.
+/// wall that sees the ground past it) cannot be projected whole, but its cone from the point
+/// casts its one shadow: the visible parts agree with ray casting and with the core plan (face
+/// by face) to rounding, and every view holds at most one shadow.
 #[test]
 fn a_solid_taller_than_the_viewing_point_casts_one_shadow_that_ray_casting_confirms() {
     let mut rng = StdRng::seed_from_u64(12);
@@ -425,6 +425,42 @@ fn a_solid_taller_than_the_viewing_point_casts_one_shadow_that_ray_casting_confi
         }
     }
     assert!(checked > 5_000 && fewer > 30, "{checked} points, {fewer} views with fewer shadows");
+}
+
+/// A convex solid that reaches behind the receiver's plane (beside it, a box sunk into the
+/// ground past the receiver's edge) has no cone from the point whose part in front of the
+/// receiver is its shadow: the part of it in the pyramid over the window casts the one
+/// shadow, and the visible parts agree with ray casting and with the core plan to rounding.
+#[test]
+fn a_solid_reaching_behind_the_receiver_s_plane_casts_one_shadow_that_ray_casting_confirms() {
+    let mut rng = StdRng::seed_from_u64(13);
+    let (mut checked, mut fewer) = (0, 0);
+    for case in 0..6 {
+        let x = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.0);
+        let x = x.normalize();
+        let (bottom, top) = (rng.random_range(-0.4..-0.1), rng.random_range(0.6..1.2));
+        let half = DVec3::new(0.1, 0.1, 0.5 * (top - bottom));
+        let centre = DVec3::new(1.25, 1.25, 0.5 * (top + bottom));
+        // The source lies over the far side of the box from the receiver.
+        let mut faces = receiver_and_source(1.8, 2.2);
+        faces.extend(box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half));
+        let scene = Scene::new(format!("sunk box {case}"), faces).unwrap();
+        let (solid, core) = (
+            PairPlanner::new(&scene),
+            PairPlanner::with_acceleration(&scene, Acceleration::BoxScan),
+        );
+        assert_eq!(solid.occluders.solids.len(), 1, "case {case}");
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        for _ in 0..8 {
+            let p = DVec3::new(rng.random_range(1.8..2.2), rng.random_range(1.8..2.2), 1.5);
+            let (with_solids, face_by_face) =
+                compare_views_with_solids(&mut rng, &scene, (&solid, &core), &mesh, p);
+            assert!(with_solids <= 1, "case {case}, p {p}: {with_solids} shadows");
+            fewer += usize::from(with_solids < face_by_face);
+            checked += 30 * mesh.face_range(0).len();
+        }
+    }
+    assert!(checked > 5_000 && fewer > 20, "{checked} points, {fewer} views with fewer shadows");
 }
 
 /// The receiver (face 0) seen from `p` on the source (face 1) with solids cast whole
