@@ -409,20 +409,11 @@ fn a_solid_taller_than_the_viewing_point_casts_one_shadow_that_ray_casting_confi
             faces.remove(2);
         }
         let scene = Scene::new(format!("tall box {case}"), faces).unwrap();
-        let (solid, core) = (
-            PairPlanner::new(&scene),
-            PairPlanner::with_acceleration(&scene, Acceleration::BoxScan),
-        );
-        assert_eq!(solid.occluders.solids.len(), 1, "case {case}");
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
-        for _ in 0..8 {
-            let p = DVec3::new(rng.random_range(0.0..0.25), rng.random_range(0.0..0.25), 1.5);
-            let (with_solids, face_by_face) =
-                compare_views_with_solids(&mut rng, &scene, (&solid, &core), &mesh, p);
-            assert!(with_solids <= 1, "case {case}, p {p}: {with_solids} shadows");
-            fewer += usize::from(with_solids < face_by_face);
-            checked += 30 * mesh.face_range(0).len();
-        }
+        let (c, f) = views_of_one_solid(&mut rng, &scene, |rng| {
+            DVec3::new(rng.random_range(0.0..0.25), rng.random_range(0.0..0.25), 1.5)
+        });
+        checked += c;
+        fewer += f;
     }
     assert!(checked > 5_000 && fewer > 30, "{checked} points, {fewer} views with fewer shadows");
 }
@@ -445,22 +436,38 @@ fn a_solid_reaching_behind_the_receiver_s_plane_casts_one_shadow_that_ray_castin
         let mut faces = receiver_and_source(1.8, 2.2);
         faces.extend(box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half));
         let scene = Scene::new(format!("sunk box {case}"), faces).unwrap();
-        let (solid, core) = (
-            PairPlanner::new(&scene),
-            PairPlanner::with_acceleration(&scene, Acceleration::BoxScan),
-        );
-        assert_eq!(solid.occluders.solids.len(), 1, "case {case}");
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
-        for _ in 0..8 {
-            let p = DVec3::new(rng.random_range(1.8..2.2), rng.random_range(1.8..2.2), 1.5);
-            let (with_solids, face_by_face) =
-                compare_views_with_solids(&mut rng, &scene, (&solid, &core), &mesh, p);
-            assert!(with_solids <= 1, "case {case}, p {p}: {with_solids} shadows");
-            fewer += usize::from(with_solids < face_by_face);
-            checked += 30 * mesh.face_range(0).len();
-        }
+        let (c, f) = views_of_one_solid(&mut rng, &scene, |rng| {
+            DVec3::new(rng.random_range(1.8..2.2), rng.random_range(1.8..2.2), 1.5)
+        });
+        checked += c;
+        fewer += f;
     }
     assert!(checked > 5_000 && fewer > 20, "{checked} points, {fewer} views with fewer shadows");
+}
+
+/// The receiver's views from 8 points of the source drawn by `point`, in `scene`, whose faces
+/// past the first two make one solid, compared with solids cast whole and face by face
+/// ([`compare_views_with_solids`]), each holding at most one shadow: the element points
+/// checked, and the views with fewer shadows than face by face.
+fn views_of_one_solid(
+    rng: &mut StdRng,
+    scene: &Scene,
+    point: impl Fn(&mut StdRng) -> DVec3,
+) -> (usize, usize) {
+    let (solid, core) =
+        (PairPlanner::new(scene), PairPlanner::with_acceleration(scene, Acceleration::BoxScan));
+    assert_eq!(solid.occluders.solids.len(), 1, "{}", scene.name);
+    let mesh = Mesh::new(scene, &MeshKind::Uniform, 1).unwrap();
+    let (mut checked, mut fewer) = (0, 0);
+    for _ in 0..8 {
+        let p = point(rng);
+        let (with_solids, face_by_face) =
+            compare_views_with_solids(rng, scene, (&solid, &core), &mesh, p);
+        assert!(with_solids <= 1, "{}, p {p}: {with_solids} shadows", scene.name);
+        fewer += usize::from(with_solids < face_by_face);
+        checked += 30 * mesh.face_range(0).len();
+    }
+    (checked, fewer)
 }
 
 /// The receiver (face 0) seen from `p` on the source (face 1) with solids cast whole
