@@ -53,6 +53,17 @@ impl Pyramid<'_> {
             Some(outline) => in_window(outline, self.window),
             None => shadow(self.apex, self.z, self.face, self.window, self.sides, piece),
         };
+        self.settle(outline, shadow, shadows)
+    }
+
+    /// Whether `shadow` (a part of the window, if any) covers the whole window; otherwise adds
+    /// it to `shadows` (with its occluder's whole projection `outline`, if known).
+    fn settle(
+        &self,
+        outline: Option<SmallPolygon<DVec2>>,
+        shadow: Option<Vec<DVec2>>,
+        shadows: &mut ShadowSet,
+    ) -> bool {
         match shadow {
             Some(s) if covers(&s, self.window) => true,
             Some(s) => {
@@ -173,16 +184,8 @@ impl Pyramid<'_> {
         if half_planes.iter().any(|h| self.window.iter().all(|&w| h.eval(w) < 0.0)) {
             return Some(false);
         }
-        let Some(part) = clip_to_half_planes(self.window, half_planes) else { return Some(false) };
-        let area = signed_area(&part);
-        if area <= 0.0 || is_sliver(area, polygon_scale(self.window)) {
-            return Some(false);
-        }
-        if covers(&part, self.window) {
-            return Some(true);
-        }
-        shadows.add(None, part.into_vec());
-        Some(false)
+        let part = with_area(clip_to_half_planes(self.window, half_planes), self.window);
+        Some(self.settle(None, part, shadows))
     }
 
     /// [`Pyramid::cast_solid`] for a solid that reaches past [`PROJECTION_REACH`] of the apex's
@@ -204,14 +207,8 @@ impl Pyramid<'_> {
         if shadows.holds(&outline) {
             return false;
         }
-        match in_window(&outline, self.window) {
-            Some(s) if covers(&s, self.window) => true,
-            Some(s) => {
-                shadows.add(Some(outline), s);
-                false
-            }
-            None => false,
-        }
+        let shadow = in_window(&outline, self.window);
+        self.settle(Some(outline), shadow, shadows)
     }
 
     /// The central projection onto the face's plane (face coordinates, counter-clockwise) of
@@ -554,10 +551,14 @@ pub(super) fn shadow(
 /// The part of the convex counter-clockwise `polygon` in the convex `window` (face
 /// coordinates), if it has area as [`shadow`] decides it.
 fn in_window(polygon: &[DVec2], window: &[DVec2]) -> Option<Vec<DVec2>> {
-    let part = clip_to_convex(polygon, window)?;
+    with_area(clip_to_convex(polygon, window), window)
+}
+
+/// A `part` of the convex `window`, if it has area as [`shadow`] decides it.
+fn with_area(part: Option<SmallPolygon<DVec2>>, window: &[DVec2]) -> Option<Vec<DVec2>> {
+    let part = part?;
     let area = signed_area(&part);
-    let scale = polygon_scale(window);
-    (area > 0.0 && !is_sliver(area, scale)).then(|| part.into_vec())
+    (area > 0.0 && !is_sliver(area, polygon_scale(window))).then(|| part.into_vec())
 }
 
 /// Whether a projected polygon's (signed) `area`, measured against a size `scale` (its window's,
