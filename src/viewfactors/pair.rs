@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use super::events::{centroid, clip_polygon_3d, contact_cuts, event_planes, split};
+use super::events::{clip_polygon_3d, contact_cuts, event_planes, split};
 use super::opening::Opening;
 use super::outer::Outer;
 use super::patch::{GaussRules, Patch};
@@ -139,7 +139,7 @@ impl Context<'_> {
                 clipped: !in_front(hj),
                 poles: poles(
                     fa.frame.normal,
-                    centroid(&shaft.piece),
+                    &shaft.piece,
                     &fb.frame,
                     &ej.vertices,
                     &shaft.blocking,
