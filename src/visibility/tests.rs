@@ -333,6 +333,17 @@ fn box_faces(name: &str, centre: DVec3, axes: [DVec3; 3], half: DVec3) -> Vec<Fa
         .collect()
 }
 
+/// The faces of a box named "box" standing upright (its third axis vertical) about `centre`,
+/// its first axis the horizontal unit vector `x`, with half-sides `half` along its axes.
+fn upright_box(centre: DVec3, x: DVec3, half: DVec3) -> Vec<Face> {
+    box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half)
+}
+
+/// A random horizontal unit vector.
+fn horizontal_direction(rng: &mut StdRng) -> DVec3 {
+    DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.0).normalize()
+}
+
 /// A closed convex solid, or one standing open on the receiver, casts one shadow, the
 /// receiver's part in the cone from the point over it, in place of its faces' shadows: the
 /// visible parts agree with ray casting, with the core plan (which shadows face by face) to
@@ -358,7 +369,7 @@ fn a_closed_box_casts_one_shadow_that_ray_casting_confirms() {
         if standing {
             let x = DVec3::new(x.x, x.y, 0.0).normalize();
             let centre = DVec3::new(centre.x, centre.y, half.z);
-            faces.extend(box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half));
+            faces.extend(upright_box(centre, x, half));
             faces.remove(2);
         } else {
             faces.extend(box_faces("box", centre, [x, y, x.cross(y)], half));
@@ -392,8 +403,7 @@ fn a_solid_taller_than_the_viewing_point_casts_one_shadow_that_ray_casting_confi
     let mut rng = StdRng::seed_from_u64(12);
     let (mut checked, mut fewer) = (0, 0);
     for case in 0..8 {
-        let x = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.0);
-        let x = x.normalize();
+        let x = horizontal_direction(&mut rng);
         let half = DVec3::new(rng.random_range(0.05..0.15), rng.random_range(0.05..0.15), 0.0);
         let centre = DVec3::new(rng.random_range(0.5..0.65), rng.random_range(0.5..0.65), 0.0);
         // The viewing points lie at height 1.5 over the receiver's corner at the origin; a
@@ -404,7 +414,7 @@ fn a_solid_taller_than_the_viewing_point_casts_one_shadow_that_ray_casting_confi
         let half = DVec3::new(half.x, half.y, 0.5 * (top - bottom));
         let centre = DVec3::new(centre.x, centre.y, 0.5 * (top + bottom));
         let mut faces = receiver_and_source(0.0, 0.25);
-        faces.extend(box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half));
+        faces.extend(upright_box(centre, x, half));
         if standing {
             faces.remove(2);
         }
@@ -427,14 +437,13 @@ fn a_solid_reaching_behind_the_receiver_s_plane_casts_one_shadow_that_ray_castin
     let mut rng = StdRng::seed_from_u64(13);
     let (mut checked, mut fewer) = (0, 0);
     for case in 0..6 {
-        let x = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.0);
-        let x = x.normalize();
+        let x = horizontal_direction(&mut rng);
         let (bottom, top) = (rng.random_range(-0.4..-0.1), rng.random_range(0.6..1.2));
         let half = DVec3::new(0.1, 0.1, 0.5 * (top - bottom));
         let centre = DVec3::new(1.25, 1.25, 0.5 * (top + bottom));
         // The source lies over the far side of the box from the receiver.
         let mut faces = receiver_and_source(1.8, 2.2);
-        faces.extend(box_faces("box", centre, [x, DVec3::Z.cross(x), DVec3::Z], half));
+        faces.extend(upright_box(centre, x, half));
         let scene = Scene::new(format!("sunk box {case}"), faces).unwrap();
         let (c, f) = views_of_one_solid(&mut rng, &scene, |rng| {
             DVec3::new(rng.random_range(1.8..2.2), rng.random_range(1.8..2.2), 1.5)
