@@ -53,12 +53,14 @@ pub(super) fn poles(
     for &o in occluders {
         let polygon = &planner.occluders()[o].polygon;
         let m = polygon.len();
+        let shadows: SmallVec<[Option<DVec2>; 8]> =
+            polygon.iter().map(|&v| from_centroid.shadow(v)).collect();
         for k in 0..m {
-            if from_centroid.vertex_corner(from_centroid.shadow(polygon[k]), polygon[k]) {
+            if from_centroid.vertex_corner(shadows[k], polygon[k]) {
                 pole(frame_j.normal, polygon[k]);
             }
             let (a, b) = (polygon[k], polygon[(k + 1) % m]);
-            let whole = from_centroid.shadow(a).is_some() && from_centroid.shadow(b).is_some();
+            let whole = shadows[k].is_some() && shadows[(k + 1) % m].is_some();
             let viewing = if whole { &seen[..1] } else { &seen[..] };
             for l in 0..3 {
                 if viewing.iter().any(|s| s.edge_corner(a, b, l)) {
