@@ -112,10 +112,14 @@ impl ShadowCorners {
     /// counts).
     fn shadow(&self, v: DVec3) -> Option<DVec2> {
         let h = self.frame.height(v);
-        (h > 0.0 && h < self.height).then(|| {
-            let p = self.viewer + (v - self.viewer) * (self.height / (self.height - h));
-            self.frame.to_local(p).truncate()
-        })
+        (h > 0.0 && h < self.height).then(|| self.project(v, h))
+    }
+
+    /// Where the line from the viewer through `x`, at height `h` over T_j's plane (below the
+    /// viewer's), meets that plane, in T_j's local coordinates.
+    fn project(&self, x: DVec3, h: f64) -> DVec2 {
+        let p = self.viewer + (x - self.viewer) * (self.height / (self.height - h));
+        self.frame.to_local(p).truncate()
     }
 
     /// Whether the vertex `v`, with this shadow, can be a corner of the visible part: its
@@ -147,11 +151,7 @@ impl ShadowCorners {
         let at = |h: f64| a + (b - a) * ((h - ha) / (hb - ha));
         let in_front = |x: DVec3, h: f64| if h < 0.0 { at(0.0) } else { x };
         let (a, b) = (in_front(a, ha), in_front(b, hb));
-        let project = |x: DVec3| {
-            let h = self.frame.height(x).max(0.0);
-            let p = self.viewer + (x - self.viewer) * (level / (level - h));
-            self.frame.to_local(p).truncate()
-        };
+        let project = |x: DVec3| self.project(x, self.frame.height(x).max(0.0));
         // The shadow: from p along d, for r in [0, 1] (a segment) or r >= 0 (a ray).
         let (p, d, ray) = if ha >= level || hb >= level {
             let (finite, to_level) = if ha >= level { (b, at(level)) } else { (a, at(level)) };
