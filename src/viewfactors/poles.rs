@@ -25,7 +25,12 @@ use crate::visibility::PairPlanner;
 /// at --tolerance 1e-8). A vertex behind T_j's plane or above the viewer's level makes no
 /// corner. Before, every such edge and vertex counted: the furnished room took 4.81 M
 /// evaluations at --tolerance 1e-6 and 8.60 M at 1e-8, now 2.91 M and 5.88 M, every entry as
-/// far from a run at 1e-10.
+/// far from a run at 1e-10. A shadow edge that turns about a point that stays put crosses an
+/// edge of T_j through that point only, and makes no pole: an occluder edge in T_i's plane (a
+/// wall's foot, seen from the ground), or one whose line meets T_j's plane on the line of T_j's
+/// edge; nor does a viewer on a pole count where the shadow there runs beside T_j's edge,
+/// not along it. Each had put poles along the sides of ground triangles at buildings'
+/// corners, which then took the tanh-sinh rule.
 /// Returns each plane's unit normal, a point and the sine of its angle with T_i's plane.
 pub(super) fn poles(
     ni: DVec3,
@@ -60,9 +65,27 @@ pub(super) fn poles(
                 pole(frame_j.normal, polygon[k]);
             }
             let (a, b) = (polygon[k], polygon[(k + 1) % m]);
+            // From every viewer on T_i, an edge in T_i's plane (a wall's foot) casts the line
+            // where T_i's plane meets T_j's: it does not turn, and crosses each edge of T_j at
+            // one point or nowhere.
+            let rounding = 1e-12 * (a.distance(b) + a.distance(piece[0]));
+            if [a, b].iter().all(|&x| ni.dot(x - piece[0]).abs() <= rounding) {
+                continue;
+            }
+            // Every shadow of the edge's line passes through the point where that line meets
+            // T_j's plane (an edge parallel to the plane has none: its shadow runs off whole
+            // where the viewer is level with it). Where that point lies on the line of T_j's
+            // edge l, the shadow crosses the edge's line there, from every viewer: the crossing
+            // stays put instead of running off (a roof's edge whose line meets a wall on the
+            // line of the wall element's side).
+            let (ha, hb) = (frame_j.height(a), frame_j.height(b));
+            let pivot = (ha != hb).then(|| frame_j.to_local(a + (b - a) * (ha / (ha - hb))));
             let whole = shadows[k].is_some() && shadows[(k + 1) % m].is_some();
             let viewing = if whole { &seen[..1] } else { &seen[..] };
             for l in 0..3 {
+                if pivot.is_some_and(|x| from_centroid.on_edge_line(x.truncate(), l)) {
+                    continue;
+                }
                 if viewing.iter().any(|s| s.edge_corner(a, b, l)) {
                     pole((b - a).cross(target[(l + 1) % 3] - target[l]), a);
                 }
@@ -83,6 +106,8 @@ struct ShadowCorners {
     corners: [DVec2; 3],
     /// The sign of T_j's orientation in its plane's coordinates.
     orientation: f64,
+    /// T_j's longest side.
+    size: f64,
     /// How far outside T_j a shadow corner still counts, as a side's cross product: each is
     /// the side's length times the distance from it, so T_j's size squared times the margin.
     margin: f64,
@@ -91,6 +116,11 @@ struct ShadowCorners {
 /// Within this fraction of T_j's size (or of a segment's length) a shadow corner counts as on
 /// T_j: a corner that rounding puts just outside keeps its pole.
 const CORNER_MARGIN: f64 = 1e-6;
+
+/// Within this fraction of T_j's size a point where an occluder edge's line meets T_j's plane
+/// counts as on the line of an edge of T_j (only rounding puts it off a line it lies on: a
+/// crossing that runs off to infinity from a point that near makes a pole too weak to matter).
+const PIVOT_ON_LINE: f64 = 1e-9;
 
 impl ShadowCorners {
     fn new(viewer: DVec3, frame: &PlaneFrame, target: &[DVec3; 3]) -> Self {
@@ -103,6 +133,7 @@ impl ShadowCorners {
             frame: *frame,
             corners,
             orientation: (b - a).perp_dot(c - a).signum(),
+            size,
             margin: CORNER_MARGIN * size * size,
         }
     }
@@ -138,6 +169,13 @@ impl ShadowCorners {
         side(a, b) >= -self.margin && side(b, c) >= -self.margin && side(c, a) >= -self.margin
     }
 
+    /// Whether the point `x` of T_j's plane (local coordinates) lies on the line of T_j's edge
+    /// `l`, within rounding of T_j's size.
+    fn on_edge_line(&self, x: DVec2, l: usize) -> bool {
+        let (c, e) = (self.corners[l], self.corners[(l + 1) % 3] - self.corners[l]);
+        e.perp_dot(x - c).abs() <= PIVOT_ON_LINE * self.size * e.length()
+    }
+
     /// Whether the shadow of the occluder edge from `a` to `b` can cut T_j's edge `l` (from
     /// corner `l` to `l + 1`): the shadow of its part in front of T_j's plane and short of the
     /// viewer's level over it (a part behind either hides nothing) meets that edge. Where the
@@ -166,10 +204,22 @@ impl ShadowCorners {
         };
         let (c, e) = (self.corners[l], self.corners[(l + 1) % 3] - self.corners[l]);
         let det = d.perp_dot(e);
-        if det.abs() <= 1e-12 * d.length() * e.length() {
-            return true; // parallel here: on the pole itself
-        }
         let w = c - p;
+        if det.abs() <= 1e-12 * d.length() * e.length() {
+            // Parallel here, the viewer on the pole itself: the shadow meets the edge only
+            // along its line, and from viewers nearby it crosses that line far off, outside T_j.
+            if w.perp_dot(d).abs() > CORNER_MARGIN * d.length() * e.length() {
+                return false;
+            }
+            let along = |x: DVec2| (x - c).dot(e) / e.length_squared();
+            let (s0, s1) = (along(p), along(p + d));
+            let (lo, hi) = match (ray, s1 >= s0) {
+                (false, _) => (s0.min(s1), s0.max(s1)),
+                (true, true) => (s0, f64::INFINITY),
+                (true, false) => (f64::NEG_INFINITY, s0),
+            };
+            return lo <= 1.0 + CORNER_MARGIN && hi >= -CORNER_MARGIN;
+        }
         let (r, s) = (w.perp_dot(e) / det, w.perp_dot(d) / det);
         let within = |t: f64| (-CORNER_MARGIN..=1.0 + CORNER_MARGIN).contains(&t);
         (r >= -CORNER_MARGIN && (ray || r <= 1.0 + CORNER_MARGIN)) && within(s)
@@ -179,7 +229,74 @@ impl ShadowCorners {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::{Face, Scene};
     use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    /// The poles that `poles` finds on the ground (T_i, the piece) for the element `target`
+    /// among one occluder `polygon`.
+    fn poles_among(target: [DVec3; 3], polygon: &[DVec3]) -> Vec<(DVec3, DVec3, f64)> {
+        let v = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+        let ground = vec![v(0.0, 0.0), v(12.0, 0.0), v(0.0, 12.0)];
+        let faces = vec![
+            Face::new("ground", ground.clone(), 0.5).unwrap(),
+            Face::new("element", target.to_vec(), 0.5).unwrap(),
+            Face::new("occluder", polygon.to_vec(), 0.5).unwrap(),
+        ];
+        let scene = Scene::new("poles", faces).unwrap();
+        let planner = PairPlanner::new(&scene);
+        let occluders: Vec<usize> = (0..planner.occluders().len())
+            .filter(|&o| planner.occluders()[o].polygon.iter().all(|x| polygon.contains(x)))
+            .collect();
+        assert!(!occluders.is_empty());
+        poles(DVec3::Z, &ground, &scene.faces[1].frame, &target, &occluders, &planner)
+    }
+
+    /// Whether a pole's line in the ground's plane is the line y = 5 there.
+    fn on_the_line_y_5(&(m, point, _): &(DVec3, DVec3, f64)) -> bool {
+        m.x.abs() < 1e-12 && m.dot(DVec3::new(0.0, 5.0, 0.0) - point).abs() < 1e-12
+    }
+
+    /// Edges whose shadows turn about a point that stays put make no pole. A wall segment
+    /// standing on the ground (T_i) along y = 5, T_j a wall element at x = -4 that reaches
+    /// below the ground: from every viewer on the ground the segment's foot casts the line
+    /// where the ground meets T_j's plane, which crosses T_j's side at one point. And a slat
+    /// whose edge leaves T_j's vertical side (y = 5) at a point: its shadow turns about that
+    /// point, where it crosses the side. The formula for a shadow edge parallel to T_j's side
+    /// would put a pole on the line y = 5 for each (it did before both were left out).
+    #[test]
+    fn edges_whose_shadows_turn_about_a_fixed_point_make_no_poles() {
+        let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let reaching_below = [v(-4.0, 2.0, -3.0), v(-4.0, 12.0, -3.0), v(-4.0, 7.0, 6.0)];
+        let segment = [v(2.0, 5.0, 0.0), v(6.0, 5.0, 0.0), v(6.0, 5.0, 3.0), v(2.0, 5.0, 3.0)];
+        let found = poles_among(reaching_below, &segment);
+        assert!(!found.iter().any(on_the_line_y_5), "{found:?}");
+        // The segment's top corners keep the poles of their level.
+        let levels = found.iter().filter(|(m, _, _)| m.cross(DVec3::X).length() < 1e-12);
+        assert!(levels.count() >= 2, "{found:?}");
+        let upright = [v(-4.0, 5.0, 0.0), v(-4.0, 9.0, 0.0), v(-4.0, 5.0, 6.0)];
+        let slat = [v(-4.0, 5.0, 2.5), v(2.0, 5.0, 4.0), v(2.0, 7.0, 4.0), v(-4.0, 7.0, 2.5)];
+        let found = poles_among(upright, &slat);
+        assert!(!found.iter().any(on_the_line_y_5), "{found:?}");
+        assert!(!found.is_empty());
+    }
+
+    /// Where the viewer is on an edge's pole, its shadow is parallel to T_j's edge: it meets
+    /// the edge only where it runs along the edge's line over part of it. T_j lies in z = 0 with
+    /// side 0 along x; each occluder edge rises from height 1 to 3 past the viewer's level 2,
+    /// so its shadow is a ray from its lower end's, along x.
+    #[test]
+    fn a_shadow_parallel_to_an_edge_meets_it_only_along_its_line() {
+        let target = [DVec3::ZERO, DVec3::new(4.0, 0.0, 0.0), DVec3::new(0.0, 4.0, 0.0)];
+        let frame = PlaneFrame::new(DVec3::ZERO, DVec3::Z, DVec3::X);
+        // A ray along y = -3, off side 0's line.
+        let off = ShadowCorners::new(DVec3::new(1.0, -3.0, 2.0), &frame, &target);
+        assert!(!off.edge_corner(DVec3::new(1.0, -3.0, 1.0), DVec3::new(5.0, -3.0, 3.0), 0));
+        // A ray along y = 0 from x = 1: along side 0.
+        let on = ShadowCorners::new(DVec3::new(-1.0, 0.0, 2.0), &frame, &target);
+        assert!(on.edge_corner(DVec3::new(0.0, 0.0, 1.0), DVec3::new(4.0, 0.0, 3.0), 0));
+        // From x = 6.5: on side 0's line, past its end.
+        assert!(!on.edge_corner(DVec3::new(2.75, 0.0, 1.0), DVec3::new(4.0, 0.0, 3.0), 0));
+    }
 
     /// Whether the polyline through `points` meets the segment from `c` to `d`.
     fn polyline_meets(points: &[DVec2], c: DVec2, d: DVec2) -> bool {
