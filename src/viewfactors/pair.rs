@@ -398,6 +398,27 @@ impl Context<'_> {
             / integrand_bound(to_target, part.target_area).max(RELAXED_AT_MOST);
         if distance <= TOUCHING * size {
             for t in patch.triangles() {
+                // A quadrilateral's half that touches nothing itself is a cell of its own.
+                if matches!(patch, Patch::Quad(_)) && !self.touches(&t, part) {
+                    let half =
+                        self.cell(i, j, Patch::Triangle(t), part, index, depth, rules, tally);
+                    cell.value += half.value;
+                    cell.error += half.error;
+                    continue;
+                }
+                // Two corners where occluders' edges meet T_i (a wall's foot between two
+                // buildings' corners): its halves have one each.
+                if let Some(halves) = self.between_obstacles(t, part)
+                    && depth < MAX_SPLITS
+                {
+                    for half in halves {
+                        let half = Patch::Triangle(half);
+                        let half = self.cell(i, j, half, part, index, depth + 1, rules, tally);
+                        cell.value += half.value;
+                        cell.error += half.error;
+                    }
+                    continue;
+                }
                 let at_corner = match self.at_obstacle_corner(t, part) {
                     Some((t, distance)) => {
                         let q =
@@ -513,6 +534,25 @@ impl Context<'_> {
             error = error.max((high - quarters).abs());
         }
         (high, error)
+    }
+
+    /// Whether the triangle `t` touches T_j, a pole line on its side of it or an obstacle (as
+    /// [`Context::cell`] measures them).
+    fn touches(&self, t: &[DVec3; 3], part: &Part) -> bool {
+        let size = Patch::Triangle(*t).size();
+        let to_target = convex_polygons_distance(t, &part.target);
+        part.distance(t, size, to_target).min(part.obstacle_distance(t)) <= TOUCHING * size
+    }
+
+    /// The halves of the triangle `t` split at the middle of a side whose ends are both where
+    /// occluders' edges meet T_i, if there is one.
+    fn between_obstacles(&self, t: [DVec3; 3], part: &Part) -> Option<[[DVec3; 3]; 2]> {
+        let near = TOUCHING * Patch::Triangle(t).size();
+        let at = t.map(|v| part.obstacle_distance(&[v]) <= near);
+        let k = (0..3).find(|&k| at[k] && at[(k + 1) % 3])?;
+        let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+        let middle = 0.5 * (a + b);
+        Some([[a, middle, c], [middle, b, c]])
     }
 
     /// The triangle `t` with its first corner put where T_j touches it, if T_j touches it there
