@@ -536,8 +536,8 @@ impl Context<'_> {
         (high, error)
     }
 
-    /// Whether the triangle `t` touches T_j, a pole line on its side of it or an obstacle (as
-    /// [`Context::cell`] measures them).
+    /// Whether the triangle `t` touches T_j, an obstacle or a pole line beside it, as
+    /// [`Context::cell`] measures a patch's distance from them.
     fn touches(&self, t: &[DVec3; 3], part: &Part) -> bool {
         let size = Patch::Triangle(*t).size();
         let to_target = convex_polygons_distance(t, &part.target);
@@ -584,7 +584,6 @@ impl Context<'_> {
         let contact = t[0];
         let elsewhere = |w: DVec3| w.distance(contact) > near;
         if part.target.iter().any(|&w| elsewhere(w) && convex_polygons_distance(&[w], &t) <= near)
-            || part.obstacle_distance(&t) <= near
             || part.pole_along_a_side(&t, size)
         {
             return None;
@@ -603,7 +602,7 @@ impl Context<'_> {
                 rest = rest.min(convex_polygons_distance(&t, &edge));
             }
         }
-        let apart = part.distance(&t, size, rest);
+        let apart = part.distance(&t, size, rest).min(part.obstacle_distance(&t));
         if apart <= near {
             return None;
         }
