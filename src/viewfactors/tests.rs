@@ -183,17 +183,23 @@ fn a_corner_touching_a_walls_foot_meets_each_tolerance() {
 }
 
 /// A ground triangle whose corner touches a tilted triangle's corner, and one whose corner
-/// touches a tilted triangle that reaches below the ground there: the collapsed Gauss rule
-/// about the contact ([`Context::at_target_corner`]) meets each tolerance, to the value the
-/// tanh-sinh rule converged to (at 1e-12, before), with a few hundred points where tanh-sinh
-/// took 1 749 and 8 745 at 1e-10.
+/// touches a tilted triangle that reaches below the ground there, the line where their planes
+/// meet crossing the tilted one or running on along the ground triangle's side, away from it:
+/// the collapsed Gauss rule about the contact ([`Context::at_target_corner`]) meets each
+/// tolerance, to the value the tanh-sinh rule converged to (at 1e-12, before), with a few
+/// hundred points where tanh-sinh took 1 749, 8 745 and 8 745 at 1e-10.
 #[test]
 fn a_corner_of_t_j_on_t_i_meets_each_tolerance_by_the_collapsed_rule() {
     let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
     let ground = vec![v(0.0, 0.0, 0.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0)];
     let above = vec![v(2.0, 0.0, 0.0), v(3.0, -2.0, 2.0), v(4.0, -1.0, 1.0)];
     let through = vec![v(2.0, 0.0, 0.0), v(4.0, 1.0, 1.0), v(3.0, 2.0, -1.0)];
-    for (tilted, converged) in [(above, 0.003670541089134861), (through, 0.003776603857304088)] {
+    let beyond = vec![v(2.0, 0.0, 0.0), v(4.0, 1.0, 1.0), v(4.0, -1.0, -1.0)];
+    for (tilted, converged) in [
+        (above, 0.003670541089134861),
+        (through, 0.003776603857304088),
+        (beyond, 0.0013778319071347338),
+    ] {
         let faces = vec![
             Face::new("ground", ground.clone(), 0.5).unwrap(),
             Face::new("tilted", tilted, 0.5).unwrap(),
