@@ -367,13 +367,7 @@ impl Context<'_> {
             return cell;
         }
         let size = patch.size();
-        // Boxes apart bound the distance from below, as the Gauss order needs; where they
-        // overlap, the polygons' own distance tells touching from near.
-        let to_target = match box_distance(bounding_box_3d(patch.corners()), part.target_box) {
-            0.0 => convex_polygons_distance(patch.corners(), &part.target),
-            d => d,
-        };
-        let distance = part.distance(patch.corners(), size, to_target);
+        let (to_target, distance) = part.reach(patch.corners(), size);
         // Where T_j reaches behind T_i's plane, the line where the planes meet bounds what the
         // points see and the integrand is not analytic on it; where it touches T_i at a corner
         // it runs just outside the triangle, and the tanh-sinh levels collapsed there can agree
@@ -540,8 +534,7 @@ impl Context<'_> {
     /// [`Context::cell`] measures a patch's distance from them.
     fn touches(&self, t: &[DVec3; 3], part: &Part) -> bool {
         let size = Patch::Triangle(*t).size();
-        let to_target = convex_polygons_distance(t, &part.target);
-        part.distance(t, size, to_target).min(part.obstacle_distance(t)) <= TOUCHING * size
+        part.reach(t, size).1.min(part.obstacle_distance(t)) <= TOUCHING * size
     }
 
     /// The halves of the triangle `t` split at the middle of a side whose ends are both where
@@ -566,10 +559,10 @@ impl Context<'_> {
     /// plane inside the triangle's angle is a contact along a line: none). Where T_j reaches
     /// behind T_i's plane, that has a side on the line where the planes meet. A real direction
     /// pointing away from the side is no singularity (the side's angle times the unit normal of
-    /// its plane with the point is analytic on its line beyond its ends): a louvre's slat
-    /// touching a jamb, the line along the slat triangle's side, took 5 506 tanh-sinh points. The rule then converges as on a patch apart, as at an obstacle's corner:
-    /// on the louvre room at --tolerance 1e-6 such triangles took 1 000 points each by the
-    /// tanh-sinh rule.
+    /// its plane with the point is analytic on its line beyond its ends). The rule then
+    /// converges as on a patch apart, as at an obstacle's corner: on the louvre room at
+    /// --tolerance 1e-6 such triangles took 1 000 points each by the tanh-sinh rule, and a
+    /// slat's triangle touching a jamb, the planes' line along its side, 5 506.
     fn at_target_corner(
         &self,
         t: [DVec3; 3],
@@ -579,8 +572,8 @@ impl Context<'_> {
     ) -> Option<([DVec3; 3], usize)> {
         let size = Patch::Triangle(t).size();
         let near = TOUCHING * size;
-        let touches = |x: DVec3| convex_polygons_distance(&[x], &part.target) <= near;
-        let on_target: SmallVec<[usize; 3]> = (0..3).filter(|&k| touches(t[k])).collect();
+        let on_target = |x: DVec3| convex_polygons_distance(&[x], &part.target) <= near;
+        let on_target: SmallVec<[usize; 3]> = (0..3).filter(|&k| on_target(t[k])).collect();
         let [k] = on_target[..] else { return None };
         let t = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]];
         let contact = t[0];
@@ -912,6 +905,18 @@ impl Part<'_> {
     /// [`Obstacle`]s that are further than `near` from the point `point`.
     fn obstacle_distance_past(&self, corners: &[DVec3], point: DVec3, near: f64) -> f64 {
         self.nearest_obstacle(corners, |o| convex_polygons_distance(&[point], o.corners()) > near)
+    }
+
+    /// Lower bounds of the distance from the outer patch with corners `corners` (longest side
+    /// `size`) to T_j, and to the points where the integrand is not analytic besides the
+    /// obstacles ([`Part::distance`]). Boxes apart bound the distance from below, as the Gauss
+    /// order needs; where they overlap, the polygons' own distance tells touching from near.
+    fn reach(&self, corners: &[DVec3], size: f64) -> (f64, f64) {
+        let to_target = match box_distance(bounding_box_3d(corners), self.target_box) {
+            0.0 => convex_polygons_distance(corners, &self.target),
+            d => d,
+        };
+        (to_target, self.distance(corners, size, to_target))
     }
 
     /// A lower bound of the distance from the outer patch with corners `t` (longest side

@@ -169,10 +169,15 @@ impl ShadowCorners {
         side(a, b) >= -self.margin && side(b, c) >= -self.margin && side(c, a) >= -self.margin
     }
 
+    /// T_j's edge `l` (from corner `l` to `l + 1`): its start and its direction, in T_j's plane.
+    fn side(&self, l: usize) -> (DVec2, DVec2) {
+        (self.corners[l], self.corners[(l + 1) % 3] - self.corners[l])
+    }
+
     /// Whether the point `x` of T_j's plane (local coordinates) lies on the line of T_j's edge
     /// `l`, within rounding of T_j's size.
     fn on_edge_line(&self, x: DVec2, l: usize) -> bool {
-        let (c, e) = (self.corners[l], self.corners[(l + 1) % 3] - self.corners[l]);
+        let (c, e) = self.side(l);
         e.perp_dot(x - c).abs() <= PIVOT_ON_LINE * self.size * e.length()
     }
 
@@ -202,7 +207,7 @@ impl ShadowCorners {
             let p = project(a);
             (p, project(b) - p, false)
         };
-        let (c, e) = (self.corners[l], self.corners[(l + 1) % 3] - self.corners[l]);
+        let (c, e) = self.side(l);
         let det = d.perp_dot(e);
         let w = c - p;
         if det.abs() <= 1e-12 * d.length() * e.length() {

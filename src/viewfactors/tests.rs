@@ -126,12 +126,9 @@ fn a_partition_standing_on_a_floor_element_meets_a_loose_tolerance() {
         Face::new("east", east, 0.5).unwrap(),
         Face::new("west", west, 0.5).unwrap(),
     ];
-    let scene = Scene::new("partition", faces).unwrap();
-    let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-    let planner = PairPlanner::new(&scene);
+    let fixture = Fixture::new(Scene::new("partition", faces).unwrap());
     let at = |tolerance: f64, each_direction: bool| {
-        let options = ViewFactorOptions { tolerance, each_direction, ..Default::default() };
-        view_factors(&scene, &mesh, &planner, &options, &crate::progress::Silent).unwrap()
+        fixture.view_factors(&ViewFactorOptions { tolerance, each_direction, ..Default::default() })
     };
     let tight = at(1e-11, true);
     assert!(tight.reciprocity_error() <= 1e-9, "{}", tight.reciprocity_error());
@@ -160,13 +157,10 @@ fn a_corner_touching_a_walls_foot_meets_each_tolerance() {
         vec![DVec3::new(11.0, 6.0, 0.0), DVec3::new(16.0, 6.0, 0.0), DVec3::new(16.0, 6.0, 5.0)];
     let faces =
         vec![Face::new("ground", ground, 0.5).unwrap(), Face::new("wall", wall, 0.5).unwrap()];
-    let scene = Scene::new("corner", faces).unwrap();
-    let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-    assert_eq!(mesh.len(), 2);
-    let planner = PairPlanner::new(&scene);
+    let fixture = Fixture::new(Scene::new("corner", faces).unwrap());
+    assert_eq!(fixture.mesh.len(), 2);
     let at = |tolerance: f64| {
-        let options = ViewFactorOptions { tolerance, ..Default::default() };
-        view_factors(&scene, &mesh, &planner, &options, &crate::progress::Silent).unwrap()
+        fixture.view_factors(&ViewFactorOptions { tolerance, ..Default::default() })
     };
     let converged = at(1e-12).get(0, 1);
     assert!((converged - 0.09655520673084).abs() < 1e-12, "{converged}");
@@ -204,13 +198,9 @@ fn a_corner_of_t_j_on_t_i_meets_each_tolerance_by_the_collapsed_rule() {
             Face::new("ground", ground.clone(), 0.5).unwrap(),
             Face::new("tilted", tilted, 0.5).unwrap(),
         ];
-        let scene = Scene::new("contact", faces).unwrap();
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
+        let fixture = Fixture::new(Scene::new("contact", faces).unwrap());
         for tolerance in [1e-6, 1e-8, 1e-10] {
-            let options = ViewFactorOptions { tolerance, ..Default::default() };
-            let f =
-                view_factors(&scene, &mesh, &planner, &options, &crate::progress::Silent).unwrap();
+            let f = fixture.view_factors(&ViewFactorOptions { tolerance, ..Default::default() });
             let off = (f.get(0, 1) - converged).abs();
             assert!(off <= tolerance && f.error_estimate <= tolerance, "{tolerance}: {off} off");
             assert!(f.evaluations <= 500, "{tolerance}: {} evaluations", f.evaluations);
@@ -339,6 +329,12 @@ impl Fixture {
     fn example(file: &str) -> Self {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(file);
         Self::new(crate::scene::load(&path).unwrap())
+    }
+
+    /// Every F_ij of the scene with `options`.
+    fn view_factors(&self, options: &ViewFactorOptions) -> ViewFactors {
+        let silent = &crate::progress::Silent;
+        super::view_factors(&self.scene, &self.mesh, &self.planner, options, silent).unwrap()
     }
 
     /// F_ij of the pair `(i, j)` at `tolerance`, among the occluders, and its estimated error.
