@@ -50,10 +50,11 @@ use serde::Serialize;
 use crate::assembly::{AssemblyOptions, PairIntegrator};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
+use crate::geometry::bounding_box_3d;
 use crate::mesh::{Element, Mesh};
 use crate::progress::Progress;
 use crate::scene::Scene;
-use crate::visibility::PairPlanner;
+use crate::visibility::{OccluderUnit, PairPlanner};
 
 mod events;
 mod opening;
@@ -285,14 +286,12 @@ pub fn view_factors(
         .map(|i| {
             let mut row = Vec::new();
             let mut tally = Tally::default();
-            // Whether any occluder can lie between the two faces: asked once per face.
-            let mut occluded: Vec<Option<bool>> = vec![None; faces];
-            let face = mesh.elements()[i].face;
+            // What may come between element i and each face: found once per face.
+            let mut between: Vec<Option<Between>> = (0..faces).map(|_| None).collect();
             for j in (0..n).filter(|&j| integrated(i, j)) {
                 let other = mesh.elements()[j].face;
-                let occluded = *occluded[other]
-                    .get_or_insert_with(|| !planner.candidates(face, other).is_empty());
-                let value = context.pair(i, j, occluded, &rules, &mut tally);
+                let between = between[other].get_or_insert_with(|| context.between(i, other));
+                let value = context.pair(i, j, between, &rules, &mut tally);
                 if value != 0.0 {
                     row.push((j as u32, value));
                 }
@@ -348,6 +347,46 @@ struct Context<'a> {
     planner: &'a PairPlanner,
     integrator: &'a PairIntegrator,
     options: &'a ViewFactorOptions,
+}
+
+/// What may come between the element of a row and the elements of one face, found once per row
+/// and face from the shaft between the element and the whole face (each pair's shaft lies
+/// inside it).
+pub(super) enum Between {
+    /// No occluder.
+    Nothing,
+    /// A building hides the whole face from the element.
+    Hidden,
+    /// These occluder units, each pair's searched among them.
+    Among(Vec<OccluderUnit>),
+    /// More units than a pair's search of the scene costs: each pair searches it.
+    Search,
+}
+
+/// The most occluder units a row keeps for a face ([`Between::Among`]): scanning a list of
+/// them costs a box test each, where a search of the scene's tree goes down from its root.
+const UNITS_KEPT: usize = 64;
+
+impl Context<'_> {
+    /// What may come between element `i` and face `face` ([`Between`]).
+    fn between(&self, i: usize, face: usize) -> Between {
+        let own = self.mesh.elements()[i].face;
+        if self.planner.candidates(own, face).is_empty() {
+            return Between::Nothing;
+        }
+        let from = bounding_box_3d(&self.mesh.elements()[i].vertices);
+        let to = bounding_box_3d(&self.scene.faces[face].vertices);
+        let units = self.planner.shaft_candidates(from, to, None);
+        if units.is_empty() {
+            Between::Nothing
+        } else if self.planner.solid_among_hides(own, face, from, to, &units) {
+            Between::Hidden
+        } else if units.len() > UNITS_KEPT {
+            Between::Search
+        } else {
+            Between::Among(units)
+        }
+    }
 }
 
 /// Point-to-element integrals evaluated and the largest error estimate of a row.

@@ -7,6 +7,7 @@ use std::f64::consts::PI;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
+use super::Between;
 use super::events::{clip_polygon_3d, contact_cuts, event_planes, split};
 use super::opening::Opening;
 use super::outer::Outer;
@@ -82,7 +83,7 @@ impl Context<'_> {
         &self,
         i: usize,
         j: usize,
-        occluded: bool,
+        between: &Between,
         rules: &OuterRules,
         tally: &mut Tally,
     ) -> f64 {
@@ -98,15 +99,18 @@ impl Context<'_> {
             return 0.0; // one wholly behind the other's plane
         }
         let (box_i, box_j) = (bounding_box_3d(&ei.vertices), bounding_box_3d(&ej.vertices));
-        let occluders = if occluded {
-            let (found, hidden) = self.planner.shaft_occluders(ei.face, ej.face, box_i, box_j);
-            if hidden {
-                return 0.0;
-            }
-            found
-        } else {
-            Vec::new()
+        let (a, b) = (ei.face, ej.face);
+        let (mut occluders, hidden) = match between {
+            Between::Nothing => (Vec::new(), false),
+            Between::Hidden => return 0.0,
+            Between::Among(units) => self.planner.shaft_occluders_among(a, b, box_i, box_j, units),
+            Between::Search => self.planner.shaft_occluders(a, b, box_i, box_j),
         };
+        if hidden {
+            return 0.0;
+        }
+        // In the order of their numbers, whichever search found them.
+        occluders.sort_unstable();
         let in_front = |h: [f64; 3]| h.iter().all(|&h| h >= -tol);
         let pieces = self.smooth_pieces((i, j), !in_front(hi), &occluders, tol);
         // Each piece has its own occluders, among the pair's: a piece in the light of all of

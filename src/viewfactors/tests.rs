@@ -288,6 +288,31 @@ fn a_wall_s_foot_between_two_corners_meets_each_tolerance() {
     }
 }
 
+/// Each row's occluders found once per face (the units that each pair's shaft is searched
+/// among, or the face hidden whole by a building) give every entry of city:3x2 exactly as
+/// each pair's own search of the scene.
+#[test]
+fn occluders_found_once_per_face_give_each_pair_s_entry() {
+    let fixture = Fixture::new(crate::scene::city(3, 2).unwrap());
+    let options = ViewFactorOptions { tolerance: 1e-6, ..Default::default() };
+    let f = fixture.view_factors(&options);
+    let (context, rules) = (fixture.context(&options), OuterRules::new(&options));
+    let areas: Vec<f64> = fixture.mesh.elements().iter().map(Element::area).collect();
+    let (mut tally, mut kinds) = (Tally::default(), [0; 3]);
+    for i in 0..f.len() {
+        for j in (0..f.len()).filter(|&j| areas[i].total_cmp(&areas[j]).then(i.cmp(&j)).is_lt()) {
+            let searched = context.pair(i, j, &Between::Search, &rules, &mut tally);
+            assert_eq!(f.get(i, j), searched, "({i}, {j})");
+            match context.between(i, fixture.mesh.elements()[j].face) {
+                Between::Hidden => kinds[0] += 1,
+                Between::Among(_) => kinds[1] += 1,
+                _ => kinds[2] += 1,
+            }
+        }
+    }
+    assert!(kinds[0] > 0 && kinds[1] > 0, "hidden, among, other: {kinds:?}");
+}
+
 /// city:4x4 at loose tolerances: every entry within the tolerance of a run at 1e-8, and the
 /// work falling with the tolerance. At 1e-3 it took 60 % of the evaluations at 1e-6 while the
 /// collapsed rule at buildings' corners kept at least 6 orders at every tolerance; now 36 %.
@@ -363,7 +388,13 @@ impl Fixture {
     fn pair_at(&self, (i, j): (usize, usize), tolerance: f64) -> (f64, f64) {
         let options = ViewFactorOptions { tolerance, ..Default::default() };
         let mut tally = Tally::default();
-        let value = self.context(&options).pair(i, j, true, &OuterRules::new(&options), &mut tally);
+        let value = self.context(&options).pair(
+            i,
+            j,
+            &Between::Search,
+            &OuterRules::new(&options),
+            &mut tally,
+        );
         (value, tally.error)
     }
 
@@ -574,7 +605,7 @@ fn a_closed_plate_hides_and_a_holed_one_shows_its_opening() {
             let opening = Opening::find(&ei.vertices, &ej.vertices, &among, &fixture.planner);
             openings += usize::from(opening.is_some_and(|o| o.pieces.len() == 4));
             let mut tally = Tally::default();
-            let got = context.pair(i, j, true, &rules, &mut tally);
+            let got = context.pair(i, j, &Between::Search, &rules, &mut tally);
             let want = brute_force_pair(&fixture, &context, (i, j), 64);
             assert!(got > 0.0 && (got - want).abs() <= 1e-5, "{i} -> {j}: {got} against {want}");
             checked += 1;
@@ -785,8 +816,8 @@ fn estimates_hold_across_events_that_are_not_cut_along() {
     let areas: Vec<f64> = fixture.mesh.elements().iter().map(|e| e.area()).collect();
     for (i, j) in [(284, 129), (250, 62)] {
         let mut tally = Tally::default();
-        let forward = context.pair(i, j, true, &rules, &mut tally);
-        let backward = context.pair(j, i, true, &rules, &mut tally);
+        let forward = context.pair(i, j, &Between::Search, &rules, &mut tally);
+        let backward = context.pair(j, i, &Between::Search, &rules, &mut tally);
         let ratio = areas[j] / areas[i];
         let off = (forward - ratio * backward).abs();
         let allowed = options.tolerance * (1.0 + ratio);
@@ -886,7 +917,7 @@ fn partly_shadowed_pairs_agree_with_brute_force_and_monte_carlo() {
             .par_iter()
             .map(|&(i, j)| {
                 let mut tally = Tally::default();
-                let f = context.pair(i, j, true, &rules, &mut tally);
+                let f = context.pair(i, j, &Between::Search, &rules, &mut tally);
                 let coarse = brute_force_pair(&fixture, &context, (i, j), 96);
                 let fine = brute_force_pair(&fixture, &context, (i, j), 192);
                 let (mean, error, _) =

@@ -87,6 +87,45 @@ impl PairPlanner {
         (found, hidden)
     }
 
+    /// [`PairPlanner::shaft_occluders`] among `units` (those of
+    /// [`PairPlanner::shaft_candidates`] for boxes around these), without a search of the
+    /// scene: a building among them that hides the boxes settles it before any piece is tried.
+    /// The same pieces, in the order of `units`.
+    pub fn shaft_occluders_among(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+        units: &[OccluderUnit],
+    ) -> (Vec<usize>, bool) {
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        let tol = self.pair_tolerance(a, b);
+        if self.occluders.unit_solid_hides(units, (a, b), &from, &to, tol) {
+            return (Vec::new(), true);
+        }
+        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
+        let found = self.occluders.pieces_within(a, b, &volume, units);
+        let hidden = self.crossed_by_one(&found, &from, &to, tol);
+        (found, hidden)
+    }
+
+    /// Whether a convex solid among `units` (not one with a face of `a` or `b`) hides the box
+    /// `nodes` on face `a` from the box `elements` on face `b` ([`crate::visibility`]'s
+    /// `Solid::hides`).
+    pub fn solid_among_hides(
+        &self,
+        a: usize,
+        b: usize,
+        nodes: (DVec3, DVec3),
+        elements: (DVec3, DVec3),
+        units: &[OccluderUnit],
+    ) -> bool {
+        let tol = self.pair_tolerance(a, b);
+        let (from, to) = (box_corners(nodes), box_corners(elements));
+        self.occluders.unit_solid_hides(units, (a, b), &from, &to, tol)
+    }
+
     /// Those of `candidates` (occluder pieces, none of faces `a` and `b`) that may meet a
     /// segment from the convex polygon `from` on face `a` to the convex polygon `to` on face
     /// `b`, and whether one of them crosses every such segment (exactly: the crossings of the
