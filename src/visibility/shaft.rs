@@ -27,30 +27,15 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
         candidates: Option<&[OccluderUnit]>,
     ) -> Shaft {
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        // A building among the candidates that hides the boxes settles the block before the
-        // shaft's planes are set up and any of the pieces is searched (most blocks between a
-        // city's streets).
-        if let Some(units) = candidates {
-            let tol = self.pair_tolerance(a, b);
-            if self.occluders.unit_solid_hides(units, (a, b), &from, &to, tol) {
-                return Shaft::Hidden;
-            }
-        }
-        let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
-        let found: Vec<usize> = match candidates {
-            Some(units) => self.occluders.pieces_within(a, b, &volume, units),
-            None => self.occluders.inside(a, b, &volume).collect(),
+        let (found, hidden) = match candidates {
+            Some(units) => self.shaft_occluders_among(a, b, nodes, elements, units),
+            None => self.shaft_occluders(a, b, nodes, elements),
         };
-        if found.is_empty() {
-            return Shaft::Clear;
+        match (hidden, found.is_empty()) {
+            (true, _) => Shaft::Hidden,
+            (false, true) => Shaft::Clear,
+            (false, false) => Shaft::Partial,
         }
-        // With candidates every solid has been tried: only single pieces are left to try.
-        let hidden = match candidates {
-            Some(_) => self.crossed_by_one(&found, &from, &to, tol),
-            None => self.hides_shaft(&found, (a, b), &from, &to, tol),
-        };
-        if hidden { Shaft::Hidden } else { Shaft::Partial }
     }
 
     /// The occluders, as units (convex solids whole, the other pieces alone), of `within` (all
@@ -99,13 +84,15 @@ impl PairPlanner {
         elements: (DVec3, DVec3),
         units: &[OccluderUnit],
     ) -> (Vec<usize>, bool) {
-        let (from, to) = (box_corners(nodes), box_corners(elements));
-        let tol = self.pair_tolerance(a, b);
-        if self.occluders.unit_solid_hides(units, (a, b), &from, &to, tol) {
+        // A building among the units that hides the boxes settles it before the shaft's planes
+        // are set up and any of the pieces is searched (most blocks between a city's streets).
+        if self.solid_among_hides(a, b, nodes, elements, units) {
             return (Vec::new(), true);
         }
         let (volume, tol) = self.shaft_volume(a, b, nodes, elements);
         let found = self.occluders.pieces_within(a, b, &volume, units);
+        // Every solid has been tried: only single pieces are left to try.
+        let (from, to) = (box_corners(nodes), box_corners(elements));
         let hidden = self.crossed_by_one(&found, &from, &to, tol);
         (found, hidden)
     }
