@@ -286,12 +286,12 @@ pub fn view_factors(
         .map(|i| {
             let mut row = Vec::new();
             let mut tally = Tally::default();
-            // What may come between element i and each face: found once per face.
+            // What may come between element i and each face: found once per face, where a
+            // pair needs it.
             let mut between: Vec<Option<Between>> = (0..faces).map(|_| None).collect();
             for j in (0..n).filter(|&j| integrated(i, j)) {
-                let other = mesh.elements()[j].face;
-                let between = between[other].get_or_insert_with(|| context.between(i, other));
-                let value = context.pair(i, j, between, &rules, &mut tally);
+                let other = &mut between[mesh.elements()[j].face];
+                let value = context.pair(i, j, other, &rules, &mut tally);
                 if value != 0.0 {
                     row.push((j as u32, value));
                 }

@@ -83,7 +83,7 @@ impl Context<'_> {
         &self,
         i: usize,
         j: usize,
-        between: &Between,
+        between: &mut Option<Between>,
         rules: &OuterRules,
         tally: &mut Tally,
     ) -> f64 {
@@ -100,7 +100,8 @@ impl Context<'_> {
         }
         let (box_i, box_j) = (bounding_box_3d(&ei.vertices), bounding_box_3d(&ej.vertices));
         let (a, b) = (ei.face, ej.face);
-        let (mut occluders, hidden) = match between {
+        // Found once for the face, by the first of its pairs that gets this far.
+        let (mut occluders, hidden) = match between.get_or_insert_with(|| self.between(i, b)) {
             Between::Nothing => (Vec::new(), false),
             Between::Hidden => return 0.0,
             Between::Among(units) => self.planner.shaft_occluders_among(a, b, box_i, box_j, units),

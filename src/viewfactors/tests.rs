@@ -301,7 +301,7 @@ fn occluders_found_once_per_face_give_each_pair_s_entry() {
     let (mut tally, mut kinds) = (Tally::default(), [0; 3]);
     for i in 0..f.len() {
         for j in (0..f.len()).filter(|&j| areas[i].total_cmp(&areas[j]).then(i.cmp(&j)).is_lt()) {
-            let searched = context.pair(i, j, &Between::Search, &rules, &mut tally);
+            let searched = context.pair(i, j, &mut Some(Between::Search), &rules, &mut tally);
             assert_eq!(f.get(i, j), searched, "({i}, {j})");
             match context.between(i, fixture.mesh.elements()[j].face) {
                 Between::Hidden => kinds[0] += 1,
@@ -391,7 +391,7 @@ impl Fixture {
         let value = self.context(&options).pair(
             i,
             j,
-            &Between::Search,
+            &mut Some(Between::Search),
             &OuterRules::new(&options),
             &mut tally,
         );
@@ -605,7 +605,7 @@ fn a_closed_plate_hides_and_a_holed_one_shows_its_opening() {
             let opening = Opening::find(&ei.vertices, &ej.vertices, &among, &fixture.planner);
             openings += usize::from(opening.is_some_and(|o| o.pieces.len() == 4));
             let mut tally = Tally::default();
-            let got = context.pair(i, j, &Between::Search, &rules, &mut tally);
+            let got = context.pair(i, j, &mut Some(Between::Search), &rules, &mut tally);
             let want = brute_force_pair(&fixture, &context, (i, j), 64);
             assert!(got > 0.0 && (got - want).abs() <= 1e-5, "{i} -> {j}: {got} against {want}");
             checked += 1;
@@ -816,8 +816,8 @@ fn estimates_hold_across_events_that_are_not_cut_along() {
     let areas: Vec<f64> = fixture.mesh.elements().iter().map(|e| e.area()).collect();
     for (i, j) in [(284, 129), (250, 62)] {
         let mut tally = Tally::default();
-        let forward = context.pair(i, j, &Between::Search, &rules, &mut tally);
-        let backward = context.pair(j, i, &Between::Search, &rules, &mut tally);
+        let forward = context.pair(i, j, &mut Some(Between::Search), &rules, &mut tally);
+        let backward = context.pair(j, i, &mut Some(Between::Search), &rules, &mut tally);
         let ratio = areas[j] / areas[i];
         let off = (forward - ratio * backward).abs();
         let allowed = options.tolerance * (1.0 + ratio);
@@ -917,7 +917,7 @@ fn partly_shadowed_pairs_agree_with_brute_force_and_monte_carlo() {
             .par_iter()
             .map(|&(i, j)| {
                 let mut tally = Tally::default();
-                let f = context.pair(i, j, &Between::Search, &rules, &mut tally);
+                let f = context.pair(i, j, &mut Some(Between::Search), &rules, &mut tally);
                 let coarse = brute_force_pair(&fixture, &context, (i, j), 96);
                 let fine = brute_force_pair(&fixture, &context, (i, j), 192);
                 let (mean, error, _) =
