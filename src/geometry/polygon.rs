@@ -97,14 +97,19 @@ pub fn bounding_box_3d(points: &[DVec3]) -> (DVec3, DVec3) {
 }
 
 fn scale_of(poly: &[DVec2]) -> f64 {
-    let (lo, hi) = bounding_box(poly);
-    (hi - lo).length()
+    scale_squared_of(poly).sqrt()
 }
 
-/// Removes repeated vertices (within `eps`) in place and returns whether three distinct
+/// The square of [`scale_of`]: the tolerance tests below compare squares, which spares a
+/// square root per element and per edge where every element of a face is clipped.
+fn scale_squared_of(poly: &[DVec2]) -> f64 {
+    let (lo, hi) = bounding_box(poly);
+    (hi - lo).length_squared()
+}
+
+/// Removes repeated vertices (within `sqrt(eps2)`) in place and returns whether three distinct
 /// vertices and some area are left.
-fn clean(poly: &mut SmallPolygon<DVec2>, eps: f64) -> bool {
-    let eps2 = eps * eps;
+fn clean(poly: &mut SmallPolygon<DVec2>, eps2: f64) -> bool {
     poly.dedup_by(|a, b| (*a - *b).length_squared() <= eps2);
     while poly.len() > 1 && (poly[0] - poly[poly.len() - 1]).length_squared() <= eps2 {
         poly.pop();
@@ -123,9 +128,9 @@ pub fn clip_convex(poly: &[DVec2], hp: &HalfPlane) -> Option<Vec<DVec2>> {
 /// [`clip_convex`] into `out` (cleared first), without a heap allocation for small polygons;
 /// returns whether anything with area is left.
 pub fn clip_convex_into(poly: &[DVec2], hp: &HalfPlane, out: &mut SmallPolygon<DVec2>) -> bool {
-    let scale = scale_of(poly);
-    let d = line_values(poly, hp, scale);
-    keep_side(poly, &d, scale, out)
+    let scale2 = scale_squared_of(poly);
+    let d = line_values(poly, hp, scale2);
+    keep_side(poly, &d, scale2, out)
 }
 
 /// The part of the convex polygon `poly` inside the convex counter-clockwise `window`: clipped
@@ -168,23 +173,23 @@ pub fn clip_to_half_planes(
     }
 }
 
-/// The half-plane's values at the vertices of a polygon of size `scale`, those within the
-/// tolerance of the line snapped to 0.
-fn line_values(poly: &[DVec2], hp: &HalfPlane, scale: f64) -> SmallVec<[f64; INLINE_VERTICES]> {
-    let eps = ON_LINE * scale * hp.normal.length();
+/// The half-plane's values at the vertices of a polygon of size `sqrt(scale2)`, those within the
+/// tolerance of the line (`ON_LINE` of the size, times the normal's length) snapped to 0.
+fn line_values(poly: &[DVec2], hp: &HalfPlane, scale2: f64) -> SmallVec<[f64; INLINE_VERTICES]> {
+    let eps2 = ON_LINE * ON_LINE * scale2 * hp.normal.length_squared();
     poly.iter()
         .map(|&p| {
             let v = hp.eval(p);
-            if v.abs() <= eps { 0.0 } else { v }
+            if v * v <= eps2 { 0.0 } else { v }
         })
         .collect()
 }
 
-/// The part of a convex polygon of size `scale` where the values `d` at its vertices are
+/// The part of a convex polygon of size `sqrt(scale2)` where the values `d` at its vertices are
 /// non-negative, into `out` (cleared first); returns whether it has area. Where `d` holds
 /// the values of a half-plane ([`line_values`]), this is [`clip_convex`]; their negatives (to
 /// the bit) give the part outside.
-fn keep_side(poly: &[DVec2], d: &[f64], scale: f64, out: &mut SmallPolygon<DVec2>) -> bool {
+fn keep_side(poly: &[DVec2], d: &[f64], scale2: f64, out: &mut SmallPolygon<DVec2>) -> bool {
     out.clear();
     if d.iter().all(|&v| v >= 0.0) {
         out.extend_from_slice(poly);
@@ -193,18 +198,23 @@ fn keep_side(poly: &[DVec2], d: &[f64], scale: f64, out: &mut SmallPolygon<DVec2
     } else {
         keep_nonnegative_side(poly, d, out);
     }
-    clean(out, ON_LINE * scale)
+    clean(out, ON_LINE * ON_LINE * scale2)
 }
 
 /// Whether every point of `points` lies in a counter-clockwise convex polygon, boundary included
 /// up to a relative tolerance (of the polygon's size, measured once).
 pub fn convex_contains(poly: &[DVec2], points: &[DVec2]) -> bool {
-    let eps = ON_LINE * scale_of(poly);
+    // A point is inside an edge where its cross product is at least -eps |q - p|: compared
+    // as squares where it is negative.
+    let eps2 = ON_LINE * ON_LINE * scale_squared_of(poly);
     let n = poly.len();
     (0..n).all(|k| {
         let (p, q) = (poly[k], poly[(k + 1) % n]);
-        let margin = -eps * (q - p).length();
-        points.iter().all(|&x| (q - p).perp_dot(x - p) >= margin)
+        let margin2 = eps2 * (q - p).length_squared();
+        points.iter().all(|&x| {
+            let cross = (q - p).perp_dot(x - p);
+            cross >= 0.0 || cross * cross <= margin2
+        })
     })
 }
 
@@ -316,16 +326,16 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
         let inside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
         let [a, b] = &mut parts;
         let (current, next) = if rest == 0 { (a, b) } else { (b, a) };
-        let scale = scale_of(current);
-        let d = line_values(current, &inside, scale);
+        let scale2 = scale_squared_of(current);
+        let d = line_values(current, &inside, scale2);
         if kept && d.iter().all(|&v| v >= 0.0) {
             continue;
         }
         let flipped: SmallVec<[f64; INLINE_VERTICES]> = d.iter().map(|&v| -v).collect();
-        if keep_side(current, &flipped, scale, &mut outside) {
+        if keep_side(current, &flipped, scale2, &mut outside) {
             out.push(outside.to_vec());
         }
-        if !keep_side(current, &d, scale, next) {
+        if !keep_side(current, &d, scale2, next) {
             return out;
         }
         rest = 1 - rest;

@@ -8,7 +8,7 @@ use smallvec::SmallVec;
 use super::Context;
 use super::opening::Opening;
 use crate::geometry::{self, SmallPolygon};
-use crate::visibility::{Caster, FaceView, Visibility};
+use crate::visibility::{Caster, FaceView, Shadows, Visibility};
 
 /// How the point-to-element integral of a pair is found at each outer point of a piece.
 #[derive(Clone, Copy)]
@@ -195,12 +195,8 @@ impl Shapes {
 /// the intersections of an even number of shadows added, those of an odd number taken. The
 /// intersections grow one shadow at a time, in index order: one that is empty, or whose box is
 /// apart from the next shadow's, ends that branch (no set holding both meets).
-fn inclusion_exclusion(
-    window: Vec<DVec2>,
-    shadows: Vec<Vec<DVec2>>,
-) -> (Vec<Vec<DVec2>>, Vec<Vec<DVec2>>) {
-    type Boxes = SmallVec<[(DVec2, DVec2); INCLUSION_EXCLUSION]>;
-    let boxes: Boxes = shadows.iter().map(|s| geometry::bounding_box(s)).collect();
+fn inclusion_exclusion(window: Vec<DVec2>, shadows: Shadows) -> (Vec<Vec<DVec2>>, Vec<Vec<DVec2>>) {
+    let boxes = shadows.boxes();
     let apart = |(lo, hi): (DVec2, DVec2), (slo, shi): (DVec2, DVec2)| {
         hi.x < slo.x || shi.x < lo.x || hi.y < slo.y || shi.y < lo.y
     };
@@ -225,7 +221,7 @@ fn inclusion_exclusion(
         }
     }
     let [added, mut taken] = signed;
-    taken.splice(0..0, shadows);
+    taken.splice(0..0, shadows.into_polygons());
     (added, taken)
 }
 

@@ -33,7 +33,7 @@ use hiders::Hider;
 pub use hiders::RecentHiders;
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder, OccluderUnit};
-use projection::{Pyramid, ShadowSet, polygon_scale, pyramid_sides, shadow};
+use projection::{Pyramid, ShadowSet, pyramid_sides, shadow};
 pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
 pub use stats::PairStats;
@@ -73,8 +73,49 @@ pub enum FaceView {
         /// straddles that plane.
         clip: Option<HalfPlane>,
         /// Convex shadows (face coordinates, counter-clockwise) of the occluders.
-        shadows: Vec<Vec<DVec2>>,
+        shadows: Shadows,
     },
+}
+
+/// The convex shadows of a view (face coordinates, counter-clockwise), each with its bounding
+/// box: a view serves every element of its face, and each element is tested against every
+/// shadow's box first.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Shadows {
+    polygons: Vec<Vec<DVec2>>,
+    boxes: Vec<(DVec2, DVec2)>,
+}
+
+impl Shadows {
+    /// Shadows with their boxes measured.
+    pub fn new(polygons: Vec<Vec<DVec2>>) -> Self {
+        let boxes = polygons.iter().map(|s| bounding_box(s)).collect();
+        Self { polygons, boxes }
+    }
+
+    /// Shadows whose boxes are known.
+    pub(super) fn with_boxes(shadows: impl Iterator<Item = (Vec<DVec2>, (DVec2, DVec2))>) -> Self {
+        let (polygons, boxes) = shadows.unzip();
+        Self { polygons, boxes }
+    }
+
+    /// Each shadow's bounding box, in order.
+    pub fn boxes(&self) -> &[(DVec2, DVec2)] {
+        &self.boxes
+    }
+
+    /// The polygons alone.
+    pub fn into_polygons(self) -> Vec<Vec<DVec2>> {
+        self.polygons
+    }
+}
+
+impl std::ops::Deref for Shadows {
+    type Target = [Vec<DVec2>];
+
+    fn deref(&self) -> &[Vec<DVec2>] {
+        &self.polygons
+    }
 }
 
 impl FaceView {
@@ -291,7 +332,7 @@ impl PairPlanner {
                 .iter()
                 .filter_map(|&o| shadow(p, z, f, &window, &sides, &self.occluders.pieces[o]))
                 .collect();
-            return FaceView::Visible { clip, shadows };
+            return FaceView::Visible { clip, shadows: Shadows::new(shadows) };
         }
         let tol = self.pair_tolerance(own_face, face);
         let pieces = &self.occluders.pieces;
@@ -487,7 +528,7 @@ impl PairPlanner {
                 Err(view) => return view,
             };
         if candidates.is_empty() {
-            return FaceView::Visible { clip, shadows: Vec::new() };
+            return FaceView::Visible { clip, shadows: Shadows::default() };
         }
         let f = &self.faces[face];
         let tol = self.pair_tolerance(own_face, face);
@@ -513,12 +554,18 @@ impl PairPlanner {
         };
         let clipped = match clip {
             Some(hp) => {
-                let scale = polygon_scale(poly);
-                let eps = PLANE_TOLERANCE * scale * hp.normal.length();
-                if poly.iter().all(|&q| hp.eval(q) <= eps) {
+                // eps = PLANE_TOLERANCE * size * |normal|, compared as squares (no square
+                // roots for every element of a face).
+                let (lo, hi) = bounding_box(poly);
+                let eps2 = PLANE_TOLERANCE.powi(2)
+                    * (hi - lo).length_squared()
+                    * hp.normal.length_squared();
+                let within = |v: f64| v <= 0.0 || v * v <= eps2;
+                let below = |v: f64| v < 0.0 && v * v > eps2;
+                if poly.iter().all(|&q| within(hp.eval(q))) {
                     return Visibility::Skip(SkipReason::FacingAway);
                 }
-                if poly.iter().any(|&q| hp.eval(q) < -eps) {
+                if poly.iter().any(|&q| below(hp.eval(q))) {
                     match clip_convex(poly, hp) {
                         Some(c) => Some(c),
                         None => return Visibility::Skip(SkipReason::FacingAway),
@@ -533,10 +580,10 @@ impl PairPlanner {
         // leave the one piece as it is, nothing is allocated.
         let one = clipped.as_deref().unwrap_or(poly);
         let (lo, hi) = bounding_box(one);
-        let mut shadows = shadows.iter();
+        let mut shadows = shadows.iter().zip(shadows.boxes());
         let mut cut = None;
-        for s in shadows.by_ref() {
-            if !boxes_overlap((lo, hi), bounding_box(s)) {
+        for (s, &shadow_box) in shadows.by_ref() {
+            if !boxes_overlap((lo, hi), shadow_box) {
                 continue;
             }
             if convex_contains(s, one) {
@@ -558,8 +605,7 @@ impl PairPlanner {
             };
         };
         let mut next = Vec::with_capacity(pieces.len());
-        for s in shadows {
-            let shadow_box = bounding_box(s);
+        for (s, &shadow_box) in shadows {
             for piece in pieces.drain(..) {
                 if !boxes_overlap(bounding_box(&piece), shadow_box) {
                     next.push(piece);

@@ -3,9 +3,9 @@
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use super::PlannerFace;
 use super::occluders::Occluder;
 use super::solids::Solid;
+use super::{PlannerFace, Shadows};
 use crate::geometry::{
     HalfPlane, SmallPolygon, bounding_box, clip_polygon_3d, clip_to_convex, clip_to_half_planes,
     convex_contains, convex_hull, signed_area, wholly_inside_3d,
@@ -462,8 +462,8 @@ impl ShadowSet {
         self.solids.last().filter(|&&(t, _)| t == s).map(|&(_, whole)| whole)
     }
 
-    pub(super) fn into_shadows(self) -> Vec<Vec<DVec2>> {
-        self.casts.into_iter().map(|c| c.shadow).collect()
+    pub(super) fn into_shadows(self) -> Shadows {
+        Shadows::with_boxes(self.casts.into_iter().map(|c| (c.shadow, c.shadow_box)))
     }
 }
 
