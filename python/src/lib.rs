@@ -577,13 +577,16 @@ fn view_factors<'py>(
             Ok::<_, radiosity::Error>((f, summary))
         })
         .map_err(raised)?;
-    let csr = radiosity::report::Csr::from_view_factors(&f);
+    let as_i64 = |k: usize| i64::try_from(k).expect("an index fits in i64");
+    let indptr: Vec<i64> = f.row_starts.iter().map(|&k| as_i64(k)).collect();
+    let indices: Vec<i64> = f.columns.iter().map(|&j| i64::from(j)).collect();
     let summary = serde_json::to_string(&summary).expect("the summary is JSON");
+    let n = f.len();
     Ok((
-        csr.indptr.into_pyarray(py),
-        csr.indices.into_pyarray(py),
-        csr.data.into_pyarray(py),
-        f.len(),
+        indptr.into_pyarray(py),
+        indices.into_pyarray(py),
+        f.values.into_pyarray(py),
+        n,
         f.areas.into_pyarray(py),
         summary,
     ))

@@ -64,11 +64,11 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
 /// F as a NumPy file (`.npy`) or as CSV (`.csv`), one row per element, or only its non-zero
 /// entries: SciPy's sparse CSR (`.npz`, `scipy.sparse.load_npz`) or Matrix Market (`.mtx`).
 fn write_matrix(path: &str, f: &ViewFactors, surface: &str) -> Result<()> {
-    let sparse = || report::Csr::from_view_factors(f);
+    let sparse = report::CsrRows::of_view_factors(f);
     if path.ends_with(".npz") {
-        report::write_npz(path, &sparse())?;
+        report::write_npz(path, sparse)?;
     } else if path.ends_with(".mtx") {
-        report::write_mtx(path, &sparse(), &format!("view factors F_ij of {surface}, row i"))?;
+        report::write_mtx(path, sparse, &format!("view factors F_ij of {surface}, row i"))?;
     } else if path.ends_with(".npy") {
         report::write_npy(path, f.len(), &f.to_dense())?;
     } else if path.ends_with(".csv") {

@@ -9,7 +9,7 @@ mod vtk;
 
 pub use nodes_csv::write_node_csv;
 pub use render::{Camera, DEFAULT_VIEW, Tone, render_png};
-pub use sparse::{Csr, write_mtx, write_npz};
+pub use sparse::{CsrRows, write_mtx, write_npz};
 pub use study_figures::write_study_figures;
 pub use vtk::write_vtu;
 

@@ -7,59 +7,38 @@ use std::io::Write;
 use crate::error::Result;
 use crate::viewfactors::ViewFactors;
 
-/// A matrix in compressed sparse rows: row i's entries are `data[indptr[i]..indptr[i + 1]]`, in
-/// the columns `indices[...]`, increasing.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Csr {
+/// A sparse matrix by rows, borrowed from where it is kept (the view factors' own arrays):
+/// the files below are written from it without a copy of its entries.
+#[derive(Clone, Copy, Debug)]
+pub struct CsrRows<'a> {
     /// Rows.
     pub rows: usize,
     /// Columns.
     pub cols: usize,
     /// Where each row starts in `indices` and `data`, and where the last ends (rows + 1 values).
-    pub indptr: Vec<i64>,
-    /// Column of each stored entry.
-    pub indices: Vec<i64>,
+    pub indptr: &'a [usize],
+    /// Column of each stored entry, increasing within a row.
+    pub indices: &'a [u32],
     /// Value of each stored entry.
-    pub data: Vec<f64>,
+    pub data: &'a [f64],
 }
 
-impl Csr {
-    /// The non-zero entries of the row-major `rows` × `cols` matrix `values`.
-    #[cfg(test)]
-    fn from_dense(rows: usize, cols: usize, values: &[f64]) -> Self {
-        assert_eq!(values.len(), rows * cols, "a {rows} x {cols} matrix");
-        let mut csr = Self { rows, cols, indptr: vec![0], indices: Vec::new(), data: Vec::new() };
-        for row in values.chunks(cols.max(1)).take(rows) {
-            for (j, &v) in row.iter().enumerate().filter(|(_, v)| **v != 0.0) {
-                csr.indices.push(j as i64);
-                csr.data.push(v);
-            }
-            csr.indptr.push(csr.data.len() as i64);
-        }
-        csr
-    }
-
+impl<'a> CsrRows<'a> {
     /// The non-zero view factors F_ij, as they are stored.
-    pub fn from_view_factors(f: &ViewFactors) -> Self {
-        let to_i64 = |k: usize| i64::try_from(k).expect("an index fits in i64");
+    pub fn of_view_factors(f: &'a ViewFactors) -> Self {
         Self {
             rows: f.len(),
             cols: f.len(),
-            indptr: f.row_starts.iter().map(|&k| to_i64(k)).collect(),
-            indices: f.columns.iter().map(|&j| i64::from(j)).collect(),
-            data: f.values.clone(),
+            indptr: &f.row_starts,
+            indices: &f.columns,
+            data: &f.values,
         }
-    }
-
-    /// Stored (non-zero) entries.
-    pub fn nonzeros(&self) -> usize {
-        self.data.len()
     }
 }
 
-/// One NumPy `.npy` file (format 1.0): `descr` the dtype, `shape` the dimensions (none: a
-/// scalar), `data` the little-endian bytes.
-fn npy(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
+/// The header of a NumPy `.npy` file (format 1.0): `descr` the dtype, `shape` the dimensions
+/// (none: a scalar); the data, little-endian, follows it.
+fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
     let dims = match shape {
         [] => "()".to_string(),
         [n] => format!("({n},)"),
@@ -74,54 +53,67 @@ fn npy(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
     let mut out = b"\x93NUMPY\x01\x00".to_vec();
     out.extend_from_slice(&(header.len() as u16).to_le_bytes());
     out.extend_from_slice(header.as_bytes());
-    out.extend_from_slice(data);
     out
 }
 
-fn le_bytes<T: Copy, const N: usize>(values: &[T], to_le: impl Fn(T) -> [u8; N]) -> Vec<u8> {
-    values.iter().flat_map(|&v| to_le(v)).collect()
+/// Writes `values` little-endian, a block at a time (a large matrix's arrays are not copied
+/// whole into bytes).
+fn write_le<T: Copy, const N: usize>(
+    out: &mut impl Write,
+    values: &[T],
+    to_le: impl Fn(T) -> [u8; N],
+) -> std::io::Result<()> {
+    let mut bytes = Vec::with_capacity(N * WRITE_BLOCK);
+    for block in values.chunks(WRITE_BLOCK) {
+        bytes.clear();
+        bytes.extend(block.iter().flat_map(|&v| to_le(v)));
+        out.write_all(&bytes)?;
+    }
+    Ok(())
 }
 
-/// Writes `csr` as SciPy's sparse `.npz` (an uncompressed zip of `data`, `indices`, `indptr`,
-/// `format` and `shape`).
-pub fn write_npz(path: &str, csr: &Csr) -> Result<()> {
-    let shape = [csr.rows as i64, csr.cols as i64];
-    let arrays = [
-        ("data.npy", npy("<f8", &[csr.data.len()], &le_bytes(&csr.data, f64::to_le_bytes))),
-        (
-            "indices.npy",
-            npy("<i8", &[csr.indices.len()], &le_bytes(&csr.indices, i64::to_le_bytes)),
-        ),
-        ("indptr.npy", npy("<i8", &[csr.indptr.len()], &le_bytes(&csr.indptr, i64::to_le_bytes))),
-        ("format.npy", npy("|S3", &[], b"csr")),
-        ("shape.npy", npy("<i8", &[2], &le_bytes(&shape, i64::to_le_bytes))),
-    ];
+/// Entries converted to bytes at a time by [`write_le`].
+const WRITE_BLOCK: usize = 1 << 16;
+
+/// Writes `m` as SciPy's sparse `.npz` (an uncompressed zip of `data`, `indices`, `indptr`,
+/// `format` and `shape`), streamed: memory beyond the matrix's stays a few blocks.
+pub fn write_npz(path: &str, m: CsrRows<'_>) -> Result<()> {
+    let as_i64 = |k: usize| i64::try_from(k).expect("an index fits in i64");
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);
     let mut zip = zip::ZipWriter::new(file);
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Stored)
-        .large_file(arrays[0].1.len() > u32::MAX as usize / 2);
-    for (name, bytes) in arrays {
+        .large_file(8 * m.data.len() > u32::MAX as usize / 2);
+    let start = |zip: &mut zip::ZipWriter<_>, name: &str, descr: &str, shape: &[usize]| {
         zip.start_file(name, options).map_err(std::io::Error::from)?;
-        zip.write_all(&bytes)?;
-    }
+        zip.write_all(&npy_header(descr, shape))
+    };
+    start(&mut zip, "data.npy", "<f8", &[m.data.len()])?;
+    write_le(&mut zip, m.data, f64::to_le_bytes)?;
+    start(&mut zip, "indices.npy", "<i8", &[m.indices.len()])?;
+    write_le(&mut zip, m.indices, |j| i64::from(j).to_le_bytes())?;
+    start(&mut zip, "indptr.npy", "<i8", &[m.indptr.len()])?;
+    write_le(&mut zip, m.indptr, |k| as_i64(k).to_le_bytes())?;
+    start(&mut zip, "format.npy", "|S3", &[])?;
+    zip.write_all(b"csr")?;
+    start(&mut zip, "shape.npy", "<i8", &[2])?;
+    write_le(&mut zip, &[m.rows, m.cols], |k| as_i64(k).to_le_bytes())?;
     zip.finish().map_err(std::io::Error::from)?;
     Ok(())
 }
 
-/// Writes `csr` as a Matrix Market coordinate file (1-based indices, values that read back to
+/// Writes `m` as a Matrix Market coordinate file (1-based indices, values that read back to
 /// the same f64).
-pub fn write_mtx(path: &str, csr: &Csr, comment: &str) -> Result<()> {
+pub fn write_mtx(path: &str, m: CsrRows<'_>, comment: &str) -> Result<()> {
     let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(out, "%%MatrixMarket matrix coordinate real general")?;
     for line in comment.lines() {
         writeln!(out, "% {line}")?;
     }
-    writeln!(out, "{} {} {}", csr.rows, csr.cols, csr.nonzeros())?;
-    for i in 0..csr.rows {
-        let (start, end) = (csr.indptr[i] as usize, csr.indptr[i + 1] as usize);
-        for k in start..end {
-            writeln!(out, "{} {} {:e}", i + 1, csr.indices[k] + 1, csr.data[k])?;
+    writeln!(out, "{} {} {}", m.rows, m.cols, m.data.len())?;
+    for i in 0..m.rows {
+        for k in m.indptr[i]..m.indptr[i + 1] {
+            writeln!(out, "{} {} {:e}", i + 1, m.indices[k] + 1, m.data[k])?;
         }
     }
     out.flush()?;
@@ -132,38 +124,49 @@ pub fn write_mtx(path: &str, csr: &Csr, comment: &str) -> Result<()> {
 mod tests {
     use super::*;
 
-    /// 3 x 4 with an empty row, a negative entry, and a value that needs all 17 digits. (The
-    /// `.npz` is read back, through the binary, in `tests/scenes.rs`.)
-    fn example() -> Csr {
+    /// 3 x 4 with an empty row, a negative entry, and a value that needs all 17 digits, stored
+    /// as the view factors store theirs. (The `.npz` is read back, through the binary, in
+    /// `tests/scenes.rs`.)
+    fn example() -> (Vec<usize>, Vec<u32>, Vec<f64>) {
         let dense = [0.0, 1.5, 0.0, -2.0, 0.0, 0.0, 0.0, 0.0, 0.1 + 0.2, 0.0, 0.0, 7e-300];
-        Csr::from_dense(3, 4, &dense)
-    }
-
-    #[test]
-    fn csr_holds_the_non_zero_entries_row_by_row() {
-        let csr = example();
-        assert_eq!(csr.indptr, vec![0, 2, 2, 4]);
-        assert_eq!(csr.indices, vec![1, 3, 0, 3]);
-        assert_eq!(csr.data, vec![1.5, -2.0, 0.1 + 0.2, 7e-300]);
-        assert_eq!(csr.nonzeros(), 4);
+        let (mut indptr, mut indices, mut data) = (vec![0], Vec::new(), Vec::new());
+        for row in dense.chunks(4) {
+            for (j, &v) in row.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+                indices.push(j as u32);
+                data.push(v);
+            }
+            indptr.push(data.len());
+        }
+        (indptr, indices, data)
     }
 
     #[test]
     fn npy_headers_end_on_64_bytes() {
         for shape in [&[][..], &[7], &[123_456_789]] {
-            let bytes = npy("<f8", shape, &[]);
+            let bytes = npy_header("<f8", shape);
             assert_eq!(bytes.len() % 64, 0, "{shape:?}");
             assert_eq!(bytes.last(), Some(&b'\n'));
         }
     }
 
     #[test]
+    fn blocks_written_little_endian_are_the_values_in_order() {
+        let values: Vec<u32> = (0..3 * WRITE_BLOCK as u32 / 2).collect();
+        let mut out = Vec::new();
+        write_le(&mut out, &values, |v| i64::from(v).to_le_bytes()).unwrap();
+        let back: Vec<u32> =
+            out.chunks(8).map(|b| i64::from_le_bytes(b.try_into().unwrap()) as u32).collect();
+        assert_eq!(back, values);
+    }
+
+    #[test]
     fn matrix_market_lists_each_entry_once_one_based_and_exact() {
-        let csr = example();
+        let (indptr, indices, data) = example();
+        let m = CsrRows { rows: 3, cols: 4, indptr: &indptr, indices: &indices, data: &data };
         let path =
             std::env::temp_dir().join(format!("radiosity-sparse-{}.mtx", std::process::id()));
         let path = path.to_str().unwrap();
-        write_mtx(path, &csr, "view factors").unwrap();
+        write_mtx(path, m, "view factors").unwrap();
         let text = std::fs::read_to_string(path).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], "%%MatrixMarket matrix coordinate real general");
