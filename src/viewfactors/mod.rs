@@ -281,7 +281,7 @@ pub fn view_factors(
     let integrated = |i: usize, j: usize| {
         options.each_direction || areas[i].total_cmp(&areas[j]).then(i.cmp(&j)).is_lt()
     };
-    let mut rows: Vec<(Vec<(u32, f64)>, Tally)> = (0..n)
+    let rows: Vec<(Vec<(u32, f64)>, Tally)> = (0..n)
         .into_par_iter()
         .map(|i| {
             let mut row = Vec::new();
@@ -297,35 +297,58 @@ pub fn view_factors(
                 }
             }
             progress.advance(1);
+            // The row's growth slack freed now: the rows wait for one another, a large city's
+            // tens of millions of entries.
+            row.shrink_to_fit();
             (row, tally)
         })
         .collect();
-    if !options.each_direction {
-        // F_ji = A_i F_ij / A_j, whose error is F_ij's times A_i / A_j <= 1.
-        let mut mirrored: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-        for (i, (row, _)) in rows.iter().enumerate() {
-            for &(j, v) in row {
-                mirrored[j as usize].push((i as u32, areas[i] * v / areas[j as usize]));
-            }
-        }
-        for ((row, _), more) in rows.iter_mut().zip(mirrored) {
-            row.extend(more);
-            row.sort_unstable_by_key(|&(j, _)| j);
+    let mirrored = !options.each_direction;
+    // Each row's length, its own entries and, where F_ji = A_i F_ij / A_j is taken from row i
+    // (its error is F_ij's times A_i / A_j <= 1), those that the other rows give it; then every
+    // entry put in place, the rows dropped one by one, and each row sorted by column. Memory:
+    // the rows computed and the final arrays, no copy of either.
+    let mut row_starts = vec![0; n + 1];
+    for (i, (row, _)) in rows.iter().enumerate() {
+        row_starts[i + 1] += row.len();
+        if mirrored {
+            row.iter().for_each(|&(j, _)| row_starts[j as usize + 1] += 1);
         }
     }
-    let nonzeros = rows.iter().map(|(row, _)| row.len()).sum();
-    let mut row_starts = Vec::with_capacity(n + 1);
-    row_starts.push(0);
-    let (mut columns, mut values) = (Vec::with_capacity(nonzeros), Vec::with_capacity(nonzeros));
+    for i in 0..n {
+        row_starts[i + 1] += row_starts[i];
+    }
+    let nonzeros = row_starts[n];
+    let (mut columns, mut values) = (vec![0u32; nonzeros], vec![0.0; nonzeros]);
+    let mut next = row_starts[..n].to_vec();
+    let mut put = |i: usize, j: u32, v: f64| {
+        columns[next[i]] = j;
+        values[next[i]] = v;
+        next[i] += 1;
+    };
     let (mut error_estimate, mut evaluations) = (0.0f64, 0);
-    for (row, tally) in rows {
+    for (i, (row, tally)) in rows.into_iter().enumerate() {
         for (j, v) in row {
-            columns.push(j);
-            values.push(v);
+            put(i, j, v);
+            if mirrored {
+                put(j as usize, i as u32, areas[i] * v / areas[j as usize]);
+            }
         }
-        row_starts.push(columns.len());
         error_estimate = error_estimate.max(tally.error);
         evaluations += tally.evaluations;
+    }
+    let mut entries = Vec::new();
+    for i in 0..n {
+        let range = row_starts[i]..row_starts[i + 1];
+        entries.clear();
+        entries.extend(
+            columns[range.clone()].iter().copied().zip(values[range.clone()].iter().copied()),
+        );
+        entries.sort_unstable_by_key(|&(j, _)| j);
+        for (k, (j, v)) in range.zip(entries.iter().copied()) {
+            columns[k] = j;
+            values[k] = v;
+        }
     }
     let each_direction = options.each_direction;
     Ok(ViewFactors {
