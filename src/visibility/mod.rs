@@ -33,7 +33,7 @@ use hiders::Hider;
 pub use hiders::RecentHiders;
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder, OccluderUnit};
-use projection::{Pyramid, ShadowSet, pyramid_sides, shadow};
+use projection::{Pyramid, ShadowSet, lowest_height, pyramid_sides, shadow};
 pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
 pub use stats::PairStats;
@@ -389,7 +389,9 @@ impl PairPlanner {
         let mut cast = |unit: OccluderUnit| match unit {
             OccluderUnit::Piece(o) => {
                 let solid = self.occluders.solid_for_view(o, own_face, face);
-                pyramid.cast_part(&pieces[o], solid, solids, || hides(o), &mut shadows).then_some(o)
+                pyramid
+                    .cast_part(&pieces[o], solid, None, solids, || hides(o), &mut shadows)
+                    .then_some(o)
             }
             OccluderUnit::Solid(s) => {
                 let list = &self.occluders.solid_pieces[s];
@@ -400,7 +402,8 @@ impl PairPlanner {
                     if !candidate(o) {
                         continue;
                     }
-                    if pyramid.cast_part(&pieces[o], whole, solids, || hides(o), &mut shadows) {
+                    if pyramid.cast_part(&pieces[o], whole, None, solids, || hides(o), &mut shadows)
+                    {
                         return Some(o);
                     }
                     match whole.and_then(|s| shadows.solid_cast(s)) {
@@ -497,7 +500,9 @@ impl PairPlanner {
             .iter()
             .map(|&piece| Caster {
                 piece,
-                solid: self.occluders.solid_for_view(piece, own_face, face),
+                solid: self.occluders.solid_for_view(piece, own_face, face).map(|s| {
+                    (s, lowest_height(&self.occluders.solids[s], &self.faces[face].face.frame))
+                }),
             })
             .collect()
     }
@@ -539,7 +544,9 @@ impl PairPlanner {
         for &Caster { piece: o, solid } in candidates {
             let piece = &self.occluders.pieces[o];
             let crosses_all = || piece.crosses_every_segment(&[p], &corners, tol, -tol);
-            if pyramid.cast_part(piece, solid, &self.occluders.solids, crosses_all, &mut shadows) {
+            let (solid, lowest) = (solid.map(|(s, _)| s), solid.map(|(_, h)| h));
+            let solids = &self.occluders.solids;
+            if pyramid.cast_part(piece, solid, lowest, solids, crosses_all, &mut shadows) {
                 return FaceView::Skip(SkipReason::Hidden);
             }
         }
@@ -729,11 +736,13 @@ fn view_volume(
 }
 
 /// An occluder piece as it casts between two faces ([`PairPlanner::casters`]): with the convex
-/// solid it bounds, if that solid may occlude between them (it casts its shadow whole).
+/// solid it bounds, if that solid may occlude between them (it casts its shadow whole), and
+/// the height of the solid's lowest corner over the second face's plane (the same for every
+/// point that casts it there).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Caster {
     piece: usize,
-    solid: Option<usize>,
+    solid: Option<(usize, f64)>,
 }
 
 #[cfg(test)]

@@ -78,10 +78,12 @@ impl Pyramid<'_> {
     /// into `solids`), if any: the first of the solid's pieces that may shadow the window casts
     /// the solid's whole shadow ([`Pyramid::cast_solid`]), and its other pieces cast nothing
     /// more; where the solid cannot be projected whole, each piece casts its own.
+    /// `lowest`: the solid's [`lowest_height`] over the face's plane, where it is known.
     pub(super) fn cast_part(
         &self,
         piece: &Occluder,
         solid: Option<usize>,
+        lowest: Option<f64>,
         solids: &[Solid],
         crosses_all: impl FnOnce() -> bool,
         shadows: &mut ShadowSet,
@@ -92,7 +94,7 @@ impl Pyramid<'_> {
             Some(&(_, false)) => return self.cast(piece, crosses_all, shadows),
             None => {}
         }
-        match self.cast_solid(&solids[s], shadows) {
+        match self.cast_solid(&solids[s], lowest, shadows) {
             Some(hidden) => {
                 shadows.solids.push((s, true));
                 hidden
@@ -112,8 +114,13 @@ impl Pyramid<'_> {
     /// [`Pyramid::projection`] asks), the projection of its part in the pyramid
     /// ([`Pyramid::solid_in_pyramid`]). `None` where none of these can be found, or the hull
     /// has no area.
-    fn cast_solid(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
-        if let Some(hidden) = self.cast_solid_cone(solid, shadows) {
+    fn cast_solid(
+        &self,
+        solid: &Solid,
+        lowest: Option<f64>,
+        shadows: &mut ShadowSet,
+    ) -> Option<bool> {
+        if let Some(hidden) = self.cast_solid_cone(solid, lowest, shadows) {
             return Some(hidden);
         }
         let Some(projected) = self.project::<SmallVec<[DVec2; 16]>>(&solid.vertices) else {
@@ -135,12 +142,16 @@ impl Pyramid<'_> {
     /// Cheaper than a hull of projections, and the same for a solid taller than the apex.
     /// `None` where the solid reaches behind the plane, the apex lies within rounding of it,
     /// or a silhouette edge points at the apex (the other ways then decide).
-    fn cast_solid_cone(&self, solid: &Solid, shadows: &mut ShadowSet) -> Option<bool> {
+    fn cast_solid_cone(
+        &self,
+        solid: &Solid,
+        lowest: Option<f64>,
+        shadows: &mut ShadowSet,
+    ) -> Option<bool> {
         let frame = &self.face.face.frame;
         let tol = 1e-12 * solid.size;
-        if solid.planes.len() > 32
-            || solid.vertices.iter().any(|&x| frame.height(x) < -1e-12 * (solid.size + self.z))
-        {
+        let lowest = lowest.unwrap_or_else(|| lowest_height(solid, frame));
+        if solid.planes.len() > 32 || lowest < -1e-12 * (solid.size + self.z) {
             return None;
         }
         // The planes that face the apex, by more than rounding.
@@ -465,6 +476,11 @@ impl ShadowSet {
     pub(super) fn into_shadows(self) -> Shadows {
         Shadows::with_boxes(self.casts.into_iter().map(|c| (c.shadow, c.shadow_box)))
     }
+}
+
+/// The height of `solid`'s lowest corner over the plane of `frame`.
+pub(super) fn lowest_height(solid: &Solid, frame: &crate::geometry::PlaneFrame) -> f64 {
+    solid.vertices.iter().map(|&x| frame.height(x)).fold(f64::INFINITY, f64::min)
 }
 
 pub(super) fn polygon_scale(poly: &[DVec2]) -> f64 {
