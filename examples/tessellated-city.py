@@ -4,6 +4,10 @@ scene that puts it under a sky (a panel at height 60 facing down, E = 1, rho = 0
 
     python3 examples/tessellated-city.py 12 12 /tmp/city12   # writes city12.stl, city12.toml
     radiosity solve --scene /tmp/city12.toml --refine 0
+    radiosity viewfactors --scene /tmp/city12.stl --refine 0 --tolerance 1e-6 --output F.npz
+
+(the view factors among the buildings and the ground alone: each triangle's sky view factor is
+1 minus its row sum).
 """
 import struct, sys, random
 nx, ny = int(sys.argv[1]), int(sys.argv[2])
