@@ -559,11 +559,12 @@ impl PairPlanner {
             FaceView::Skip(reason) => return Visibility::Skip(*reason),
             FaceView::Visible { clip, shadows } => (clip, shadows),
         };
+        let poly_box = bounding_box(poly);
         let clipped = match clip {
             Some(hp) => {
                 // eps = PLANE_TOLERANCE * size * |normal|, compared as squares (no square
                 // roots for every element of a face).
-                let (lo, hi) = bounding_box(poly);
+                let (lo, hi) = poly_box;
                 let eps2 = PLANE_TOLERANCE.powi(2)
                     * (hi - lo).length_squared()
                     * hp.normal.length_squared();
@@ -586,7 +587,7 @@ impl PairPlanner {
         // Most elements of a face seen in part are seen whole or not at all: while the shadows
         // leave the one piece as it is, nothing is allocated.
         let one = clipped.as_deref().unwrap_or(poly);
-        let (lo, hi) = bounding_box(one);
+        let (lo, hi) = clipped.as_deref().map_or(poly_box, bounding_box);
         let mut shadows = shadows.iter().zip(shadows.boxes());
         let mut cut = None;
         for (s, &shadow_box) in shadows.by_ref() {
