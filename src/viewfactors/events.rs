@@ -22,6 +22,7 @@ pub(super) fn event_planes(
     target: &[DVec3; 3],
     occluders: &[usize],
     planner: &PairPlanner,
+    faces: (usize, usize),
 ) -> Vec<Event> {
     let polygons: Vec<&[DVec3]> =
         occluders.iter().map(|&o| planner.occluders()[o].polygon.as_slice()).collect();
@@ -32,6 +33,8 @@ pub(super) fn event_planes(
         .map(|(&normal, polygon)| Event::across(normal, polygon[0]))
         .collect();
     let twins = EdgeTwins::new(&polygons, &normals);
+    let solids: Vec<Option<usize>> =
+        occluders.iter().map(|&o| planner.solid_between(o, faces.0, faces.1)).collect();
     // The vertices of one polygon against the edges of another; `None` is the target.
     let mut vertex_edge = |vertex_owner: Option<usize>, edge_owner: Option<usize>, side| {
         let corners = |owner: Option<usize>| owner.map_or(target.as_slice(), |o| polygons[o]);
@@ -61,6 +64,15 @@ pub(super) fn event_planes(
         vertex_edge(Some(k), None, EventSide::Behind);
         // Two shadows' corner and edge meet on T_j only if the plane of the three cuts T_j.
         for l in k + 1..polygons.len() {
+            // Two faces of one convex solid have none: a line through a vertex of one and a
+            // point of an edge of the other lies in a face's plane (that face's own event) or
+            // passes through the solid, where neither is on its outline from the viewer. The
+            // solids' faces make most of a city's pairs of occluders (tessellated city 5 x 5
+            // without its sky at --tolerance 1e-6: the same .npz to the byte, 14.26 -> 13.52 s
+            // on average over three alternate runs).
+            if solids[k].is_some() && solids[k] == solids[l] {
+                continue;
+            }
             vertex_edge(Some(k), Some(l), EventSide::Either);
             vertex_edge(Some(l), Some(k), EventSide::Either);
         }

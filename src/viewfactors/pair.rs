@@ -211,7 +211,8 @@ impl Context<'_> {
             pieces = pieces.iter().filter_map(|p| clip_polygon_3d(p, n, -n.dot(o))).collect();
         }
         let (ti, tj) = ((&ei.vertices, &fa.frame), (&ej.vertices, &fb.frame));
-        let events = event_planes(&ei.vertices, &ej.vertices, occluders, self.planner);
+        let events =
+            event_planes(&ei.vertices, &ej.vertices, occluders, self.planner, (ei.face, ej.face));
         for event in contact_cuts(ti, tj, tol).into_iter().chain(events) {
             let mut next = Vec::with_capacity(pieces.len() + 1);
             for piece in pieces {

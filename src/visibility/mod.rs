@@ -492,6 +492,12 @@ impl PairPlanner {
         Ok(Window { z, clip, polygon, corners })
     }
 
+    /// The convex solid that occluder piece `piece` bounds, where that solid may occlude
+    /// between faces `own_face` and `face` (it has neither as a face).
+    pub fn solid_between(&self, piece: usize, own_face: usize, face: usize) -> Option<usize> {
+        self.occluders.solid_for_view(piece, own_face, face)
+    }
+
     /// The occluder pieces `candidates` as they cast shadows between faces `own_face` and
     /// `face`, each with the convex solid it bounds where that solid may occlude between them:
     /// found once for the many points of a piece that [`PairPlanner::part_view_among`] takes.
