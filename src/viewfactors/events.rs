@@ -44,11 +44,12 @@ pub(super) fn event_planes(
             for k in 0..m {
                 let (e0, e1) = (edges[k], edges[(k + 1) % m]);
                 let wedge = Wedge { apex: v, d1: e0 - v, d2: e1 - v };
-                // The cheap tests first: most planes miss the viewer or the target.
-                if let Some(normal) = wedge.normal()
+                // The cheap tests first: most edges of a solid are not on its outline from the
+                // vertex, and most planes miss the viewer or the target.
+                if edge_owner.is_none_or(|o| twins.edge_may_outline(o, k, v))
+                    && let Some(normal) = wedge.normal()
                     && cuts(normal, v, viewer)
                     && (!matches!(side, EventSide::Either) || cuts(normal, v, target))
-                    && edge_owner.is_none_or(|o| twins.edge_may_outline(o, k, v))
                     && let Some(extent) = wedge.extent(viewer, side)
                     && vertex_owner.is_none_or(|o| twins.vertex_may_outline(o, l, e0, e1))
                 {
