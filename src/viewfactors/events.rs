@@ -12,7 +12,8 @@ use crate::visibility::PairPlanner;
 /// occluder is an edge, and its shadow changes side); through a vertex of the target and an edge
 /// of the occluder (EV: the viewer sees the vertex just past the edge), through an edge of the
 /// target and a vertex of the occluder (VE), and between two occluders the same (a shadow's
-/// corner crossing another shadow's edge). A vertex–edge event happens only where the viewer can
+/// corner crossing another shadow's edge), unless both bound one convex solid that may occlude
+/// between `faces` (T_i's and T_j's). A vertex–edge event happens only where the viewer can
 /// be on its plane: on the rays through the vertex and the edge on the side the event needs,
 /// a segment of the viewing element (most planes miss it), and only the pieces that segment
 /// reaches are cut along it. Curved (EEE) events between three mutually skew edges are not

@@ -506,7 +506,7 @@ impl PairPlanner {
             .iter()
             .map(|&piece| Caster {
                 piece,
-                solid: self.occluders.solid_for_view(piece, own_face, face).map(|s| {
+                solid: self.solid_between(piece, own_face, face).map(|s| {
                     (s, lowest_height(&self.occluders.solids[s], &self.faces[face].face.frame))
                 }),
             })
