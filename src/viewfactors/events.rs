@@ -249,13 +249,13 @@ impl<'a> EdgeTwins<'a> {
 /// every entry within 1.9e-13 of before, 4 012 fewer of 30.5 M evaluations). The pairs of
 /// occluders that take one polygon or the other are skipped alike, since both bound the same
 /// solid.
-struct SolidRepeats {
+pub(super) struct SolidRepeats {
     vertices: Vec<u32>,
     edges: Vec<u32>,
 }
 
 impl SolidRepeats {
-    fn new(polygons: &[&[DVec3]], solids: &[Option<usize>]) -> Self {
+    pub(super) fn new(polygons: &[&[DVec3]], solids: &[Option<usize>]) -> Self {
         let mut repeats =
             Self { vertices: vec![0; polygons.len()], edges: vec![0; polygons.len()] };
         for (o, polygon) in polygons.iter().enumerate() {
@@ -278,11 +278,11 @@ impl SolidRepeats {
         repeats
     }
 
-    fn vertex(&self, o: usize, k: usize) -> bool {
+    pub(super) fn vertex(&self, o: usize, k: usize) -> bool {
         k < 32 && self.vertices[o] >> k & 1 == 1
     }
 
-    fn edge(&self, o: usize, k: usize) -> bool {
+    pub(super) fn edge(&self, o: usize, k: usize) -> bool {
         k < 32 && self.edges[o] >> k & 1 == 1
     }
 }

@@ -155,6 +155,7 @@ impl Context<'_> {
                     &ej.vertices,
                     &shaft.blocking,
                     self.planner,
+                    (ei.face, ej.face),
                 ),
                 obstacles: self.obstacles(i, &shaft.blocking),
                 sight: if shaft.blocking.is_empty() && in_front(hj) {
