@@ -176,21 +176,17 @@ struct EdgeTwins<'a> {
 
 impl<'a> EdgeTwins<'a> {
     fn new(polygons: &'a [&'a [DVec3]], normals: &'a [DVec3]) -> Self {
-        let edge = |p: &[DVec3], k: usize| (p[k], p[(k + 1) % p.len()]);
         let twins = polygons
             .iter()
             .enumerate()
             .map(|(a, p)| {
                 (0..p.len())
                     .map(|k| {
-                        let (u, v) = edge(p, k);
-                        polygons.iter().enumerate().find_map(|(b, q)| {
-                            let shared = (0..q.len()).any(|l| {
-                                let (x, y) = edge(q, l);
-                                (x == v && y == u) || (x == u && y == v)
-                            });
-                            (b != a && shared).then_some(normals[b])
-                        })
+                        let (u, v) = (p[k], p[(k + 1) % p.len()]);
+                        polygons
+                            .iter()
+                            .enumerate()
+                            .find_map(|(b, q)| (b != a && has_edge(q, u, v)).then_some(normals[b]))
                     })
                     .collect()
             })
@@ -263,15 +259,10 @@ impl SolidRepeats {
             let m = polygon.len().min(32);
             let earlier = (0..o).filter(|&b| solids[b] == Some(solid)).map(|b| polygons[b]);
             for other in earlier {
-                let n = other.len();
                 for k in 0..m {
                     let (u, v) = (polygon[k], polygon[(k + 1) % polygon.len()]);
                     repeats.vertices[o] |= u32::from(other.contains(&u)) << k;
-                    let shared = (0..n).any(|l| {
-                        let (x, y) = (other[l], other[(l + 1) % n]);
-                        (x == v && y == u) || (x == u && y == v)
-                    });
-                    repeats.edges[o] |= u32::from(shared) << k;
+                    repeats.edges[o] |= u32::from(has_edge(other, u, v)) << k;
                 }
             }
         }
@@ -285,6 +276,16 @@ impl SolidRepeats {
     pub(super) fn edge(&self, o: usize, k: usize) -> bool {
         k < 32 && self.edges[o] >> k & 1 == 1
     }
+}
+
+/// Whether the segment from `u` to `v` is an edge of `polygon`, either way round (faces of one
+/// scene file share their vertices to the bit).
+fn has_edge(polygon: &[DVec3], u: DVec3, v: DVec3) -> bool {
+    let n = polygon.len();
+    (0..n).any(|l| {
+        let (x, y) = (polygon[l], polygon[(l + 1) % n]);
+        (x == v && y == u) || (x == u && y == v)
+    })
 }
 
 /// Whether the plane through `point` with `normal` has corners of `polygon` strictly on both
