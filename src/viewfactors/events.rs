@@ -484,22 +484,17 @@ pub(super) fn clip_polygon_3d(poly: &[DVec3], normal: DVec3, offset: f64) -> Opt
 #[cfg(test)]
 mod tests {
     use glam::DVec3;
+    use rand::{Rng, SeedableRng, rngs::StdRng};
 
-    use super::{Wedge, cuts, event_planes};
-    use crate::mesh::{Mesh, MeshKind};
-    use crate::visibility::PairPlanner;
+    use super::super::tests::Fixture;
+    use super::{Event, Wedge, cuts, event_planes};
 
     /// Wherever `Wedge::may_cut` settles a plane without its unit normal, `cuts` with the unit
     /// normal says the same; triangles within rounding of the plane are never settled.
     #[test]
     fn planes_settled_without_the_unit_normal_miss_the_polygon() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = StdRng::seed_from_u64(7);
+        let mut next = move || rng.random_range(-0.5..0.5);
         let mut settled = 0;
         for trial in 0..20_000 {
             let apex = DVec3::new(next(), next(), next()) * 10.0;
@@ -526,35 +521,33 @@ mod tests {
     /// faces and whose upper edges are edges of two: each vertex–edge event is still found once.
     #[test]
     fn a_city_s_vertex_edge_events_are_found_once() {
-        let scene = crate::scene::city(3, 2).unwrap();
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let elements = mesh.elements();
-        let n = elements.len();
+        let fixture = Fixture::new(crate::scene::city(3, 2).unwrap());
+        let elements = fixture.mesh.elements();
         let mut found = 0;
-        for k in (0..n * n).step_by(3) {
-            let (ei, ej) = (&elements[k / n], &elements[k % n]);
-            let occluders = planner.candidates(ei.face, ej.face);
-            if ei.face == ej.face || occluders.len() < 2 {
-                continue;
-            }
+        for (i, j, occluders) in fixture.pairs_among_occluders(3) {
+            let (ei, ej) = (&elements[i], &elements[j]);
             let faces = (ei.face, ej.face);
-            let events = event_planes(&ei.vertices, &ej.vertices, &occluders, &planner, faces);
+            let events =
+                event_planes(&ei.vertices, &ej.vertices, &occluders, &fixture.planner, faces);
             // Those through a corner of the occluders (a corner of T_j may be one too, as where
             // a ground triangle's corner is a building's).
-            let at_occluders = |e: &&super::Event| {
+            let at_occluders = |e: &&Event| {
                 e.extent.is_some()
                     && !ei.vertices.contains(&e.point)
                     && !ej.vertices.contains(&e.point)
             };
             let segments: Vec<_> = events.iter().filter(at_occluders).collect();
             for (a, x) in segments.iter().enumerate() {
-                let same = |y: &&&super::Event| {
+                let same = |y: &&&Event| {
                     x.point == y.point
                         && (x.normal == y.normal || x.normal == -y.normal)
                         && x.extent == y.extent
                 };
-                assert!(!segments[a + 1..].iter().any(|y| same(&y)), "pair {k}: {:?}", x.point);
+                assert!(
+                    !segments[a + 1..].iter().any(|y| same(&y)),
+                    "pair ({i}, {j}): {:?}",
+                    x.point
+                );
             }
             found += segments.len();
         }

@@ -378,31 +378,24 @@ mod tests {
     /// planes of each occluder's own, and on all of them, with fewer repeats.
     #[test]
     fn a_city_s_shared_corners_and_edges_make_the_same_poles_fewer_times() {
-        use crate::mesh::{Mesh, MeshKind};
-        let scene = crate::scene::city(3, 2).unwrap();
-        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
-        let planner = PairPlanner::new(&scene);
-        let elements = mesh.elements();
-        let n = elements.len();
+        let fixture = super::super::tests::Fixture::new(crate::scene::city(3, 2).unwrap());
+        let (scene, elements) = (&fixture.scene, fixture.mesh.elements());
         let same = |&(m, p, _): &(DVec3, DVec3, f64), &(q, r, _): &(DVec3, DVec3, f64)| {
             m.cross(q).length() < 1e-12 && m.dot(r - p).abs() < 1e-9 * (1.0 + p.length())
         };
         let (mut together, mut alone) = (0, 0);
-        for k in (0..n * n).step_by(5) {
-            let (ei, ej) = (&elements[k / n], &elements[k % n]);
-            let occluders = planner.candidates(ei.face, ej.face);
-            if ei.face == ej.face || occluders.len() < 2 {
-                continue;
-            }
+        for (i, j, occluders) in fixture.pairs_among_occluders(5) {
+            let (ei, ej) = (&elements[i], &elements[j]);
             let (ni, frame_j) = (scene.faces[ei.face].frame.normal, &scene.faces[ej.face].frame);
             let faces = (ei.face, ej.face);
             let among = |occluders: &[usize]| {
-                poles(ni, &ei.vertices, frame_j, &ej.vertices, occluders, &planner, faces)
+                let planner = &fixture.planner;
+                poles(ni, &ei.vertices, frame_j, &ej.vertices, occluders, planner, faces)
             };
             let all = among(&occluders);
             let each: Vec<_> = occluders.iter().flat_map(|&o| among(&[o])).collect();
-            assert!(each.iter().all(|x| all.iter().any(|y| same(x, y))), "pair {k}");
-            assert!(all.iter().all(|x| each.iter().any(|y| same(x, y))), "pair {k}");
+            assert!(each.iter().all(|x| all.iter().any(|y| same(x, y))), "pair ({i}, {j})");
+            assert!(all.iter().all(|x| each.iter().any(|y| same(x, y))), "pair ({i}, {j})");
             (together, alone) = (together + all.len(), alone + each.len());
         }
         assert!(together > 100 && 10 * together < 9 * alone, "{together} against {alone}");

@@ -355,21 +355,35 @@ fn example_before(file: &str, name: &str) -> Scene {
 }
 
 /// A scene at refine 0 and what a [`Context`] of its view factors borrows.
-struct Fixture {
-    scene: Scene,
-    mesh: Mesh,
-    planner: PairPlanner,
+pub(super) struct Fixture {
+    pub(super) scene: Scene,
+    pub(super) mesh: Mesh,
+    pub(super) planner: PairPlanner,
     disc: Discretization,
     integrator: PairIntegrator,
 }
 
 impl Fixture {
-    fn new(scene: Scene) -> Self {
+    pub(super) fn new(scene: Scene) -> Self {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
         let planner = PairPlanner::new(&scene);
         let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
         let integrator = PairIntegrator::new(Method::Centroid, &AssemblyOptions::default());
         Self { scene, mesh, planner, disc, integrator }
+    }
+
+    /// Every `step`-th pair `(i, j)` of the matrix, row by row, of elements on two faces between
+    /// which at least two occluders may come, with those occluders.
+    pub(super) fn pairs_among_occluders(&self, step: usize) -> Vec<(usize, usize, Vec<usize>)> {
+        let elements = self.mesh.elements();
+        let n = elements.len();
+        (0..n * n)
+            .step_by(step)
+            .map(|k| (k / n, k % n))
+            .filter(|&(i, j)| elements[i].face != elements[j].face)
+            .map(|(i, j)| (i, j, self.planner.candidates(elements[i].face, elements[j].face)))
+            .filter(|(_, _, occluders)| occluders.len() >= 2)
+            .collect()
     }
 
     /// The scene `examples/FILE`.
