@@ -33,7 +33,8 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::quadrature::ImtRule;
 use crate::visibility::{
-    FaceSight, PairPlanner, PairStats, PartSight, RecentHiders, Views, Visibility, by_face,
+    ElementBoxes, FaceSight, PairPlanner, PairStats, PartSight, RecentHiders, Views, Visibility,
+    by_face,
 };
 
 /// Evaluates the collocation integrals of one (node, element) pair.
@@ -282,11 +283,13 @@ pub fn assemble(
     let dof = disc.dof();
     let mut matrix = CollocationMatrix::zeros(dof)?;
     let integrator = PairIntegrator::new(disc.method, options);
+    let boxes = face_boxes(mesh, disc);
     let stats = matrix
         .rows_mut()
         .enumerate()
         .map_init(RecentHiders::default, |hiders, (i, row)| {
-            let s = assemble_row(&disc.nodes[i], row, mesh, disc, planner, &integrator, hiders);
+            let surface = (mesh, disc, boxes.as_slice());
+            let s = assemble_row(&disc.nodes[i], row, surface, planner, &integrator, hiders);
             progress.advance(1);
             s
         })
@@ -328,6 +331,8 @@ struct ThinElements {
     integrator: PairIntegrator,
     /// Positions in `elements` by face, as the row walk takes them.
     by_face: Vec<(usize, Vec<usize>)>,
+    /// The elements of each of those faces with the boxes of their halves.
+    boxes: Vec<ElementBoxes>,
 }
 
 impl ThinElements {
@@ -341,10 +346,19 @@ impl ThinElements {
         }
         let by_face =
             by_face(elements.iter().enumerate().map(|(k, &j)| (disc.elements[j].face, k)));
+        let boxes = by_face
+            .iter()
+            .map(|(_, list)| {
+                ElementBoxes::new(
+                    list.iter().map(|&k| disc.elements[elements[k]].in_face()).collect(),
+                )
+            })
+            .collect();
         Some(Self {
             per: disc.method.nodes_per_element(),
             integrator: PairIntegrator::new(disc.method, options),
             by_face,
+            boxes,
             elements,
         })
     }
@@ -369,18 +383,16 @@ impl ThinElements {
             write(k, values.map(|v| scale * v));
         };
         let faces = self.by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
-        planner.walk_row(
-            &node.viewer(),
-            faces,
-            Views::Fresh(hiders),
-            |_, list, sight| match sight {
+        planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |face, list, sight| {
+            match sight {
                 FaceSight::Hidden(reason) => list.for_each(|k| put(k, &Visibility::Skip(reason))),
                 FaceSight::Whole => list.for_each(|k| put(k, &Visibility::Full)),
-                FaceSight::Part(mut part) => list.for_each(|k| {
-                    put(k, &part.element(&disc.elements[self.elements[k]].in_face()))
-                }),
-            },
-        );
+                FaceSight::Part(mut part) => {
+                    let g = self.by_face.iter().position(|(f, _)| *f == face).expect("a face");
+                    part.elements(&self.boxes[g], |at, vis| put(self.by_face[g].1[at], &vis))
+                }
+            }
+        });
     }
 }
 
@@ -435,13 +447,15 @@ pub fn apply_at(
     let Problem { mesh, disc, planner, .. } = problem;
     options.quadrature.validate()?;
     let integrator = PairIntegrator::new(disc.method, options);
+    let boxes = face_boxes(mesh, disc);
     Ok(points
         .par_iter()
         .map_init(
             || (vec![0.0; disc.dof()], RecentHiders::default()),
             |(row, hiders), point| {
                 row.fill(0.0);
-                assemble_row(point, row, mesh, disc, planner, &integrator, hiders);
+                let surface = (mesh, disc, boxes.as_slice());
+                assemble_row(point, row, surface, planner, &integrator, hiders);
                 row.iter().zip(u).map(|(k, v)| k * v).sum()
             },
         )
@@ -470,8 +484,7 @@ pub(crate) fn push_fan<T: Copy>(
 pub(crate) fn assemble_row(
     node: &Node,
     row: &mut [f64],
-    mesh: &Mesh,
-    disc: &Discretization,
+    (mesh, disc, boxes): (&Mesh, &Discretization, &[ElementBoxes]),
     planner: &PairPlanner,
     integrator: &PairIntegrator,
     hiders: &mut RecentHiders,
@@ -479,26 +492,58 @@ pub(crate) fn assemble_row(
     let scale = node.rho / PI;
     let mut batch = lanes::Batch::default();
     let faces = (0..mesh.face_count()).map(|face| (face, mesh.face_range(face)));
-    let stats = planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, range, sight| {
-        let visible = match sight {
-            FaceSight::Hidden(_) => return,
-            FaceSight::Whole => None,
-            FaceSight::Part(part) => Some(part),
-        };
-        fill_row(range, visible, node, disc, integrator, row, &mut batch);
-    });
+    let stats =
+        planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |face, range, sight| {
+            let visible = match sight {
+                FaceSight::Hidden(_) => return,
+                FaceSight::Whole => None,
+                FaceSight::Part(part) => Some((part, &boxes[face])),
+            };
+            fill_row(range, visible, node, disc, integrator, row, &mut batch);
+        });
     batch.flush(|j, v| row[j] += scale * v);
     stats
 }
 
 /// The entries of the elements `range` of one face in `node`'s row (zero before): all whole, or
-/// each as `part` sees it. Whole elements and visible pieces wait in `batch` where the centroid
-/// method's closed form applies, and add into their entries. (A function of its own, with every
-/// reference a parameter, so that the compiler knows the row's stores leave the discretization
-/// alone: as a closure over them, the loop took a sixth longer on the five-piece surface.)
+/// each as `part` sees it (the face's elements with the boxes of their halves). Whole elements
+/// and visible pieces wait in `batch` where the centroid method's closed form applies, and add
+/// into their entries.
 fn fill_row(
     range: Range<usize>,
-    mut part: Option<PartSight<'_>>,
+    part: Option<(PartSight<'_>, &ElementBoxes)>,
+    node: &Node,
+    disc: &Discretization,
+    integrator: &PairIntegrator,
+    row: &mut [f64],
+    batch: &mut lanes::Batch<usize>,
+) {
+    let per = disc.method.nodes_per_element();
+    // The lanes add into the entries: written first, since a fresh matrix's untouched page read
+    // maps the zero page, and the write after it faults again and flushes every core's TLB
+    // (five-piece refine 4 took 2.4 times as long).
+    row[range.start * per..range.end * per].fill(0.0);
+    match part {
+        None => {
+            for j in range {
+                fill_entry(j, &Visibility::Full, node, disc, integrator, row, batch);
+            }
+        }
+        Some((mut part, boxes)) => part.elements(boxes, |k, vis| {
+            if !matches!(vis, Visibility::Skip(_)) {
+                fill_entry(range.start + k, &vis, node, disc, integrator, row, batch)
+            }
+        }),
+    }
+}
+
+/// Element j's entries in `node`'s row as `vis` says it is seen. (A function of its own, with
+/// every reference a parameter, so that the compiler knows the row's stores leave the
+/// discretization alone: as a closure over them, the loop took a sixth longer on the five-piece
+/// surface.)
+fn fill_entry(
+    j: usize,
+    vis: &Visibility,
     node: &Node,
     disc: &Discretization,
     integrator: &PairIntegrator,
@@ -507,33 +552,34 @@ fn fill_row(
 ) {
     let per = disc.method.nodes_per_element();
     let scale = node.rho / PI;
-    // The lanes add into the entries: written first, since a fresh matrix's untouched page read
-    // maps the zero page, and the write after it faults again and flushes every core's TLB
-    // (five-piece refine 4 took 2.4 times as long).
-    row[range.start * per..range.end * per].fill(0.0);
-    for j in range {
-        let el = &disc.elements[j];
-        let vis = match &mut part {
-            None => Visibility::Full,
-            Some(part) => part.element(&el.in_face()),
-        };
-        let sink = |j: usize, v: f64| row[j] += scale * v;
-        let pair = (j, &mut *batch);
-        let Some(values) = integrator.integrate_or_batch(
-            el,
-            &disc.bases[j],
-            node.position,
-            node.normal,
-            &vis,
-            pair,
-            sink,
-        ) else {
-            continue;
-        };
-        for (c, v) in values.iter().take(per).enumerate() {
-            row[j * per + c] = scale * v;
-        }
+    let el = &disc.elements[j];
+    let sink = |j: usize, v: f64| row[j] += scale * v;
+    let Some(values) = integrator.integrate_or_batch(
+        el,
+        &disc.bases[j],
+        node.position,
+        node.normal,
+        vis,
+        (j, batch),
+        sink,
+    ) else {
+        return;
+    };
+    for (c, v) in values.iter().take(per).enumerate() {
+        row[j * per + c] = scale * v;
     }
+}
+
+/// Each face's elements with the boxes of their halves ([`ElementBoxes`]), for the rows that
+/// see the face in part. A face's elements are its refined triangles four by four, so the
+/// halves of its list lie apart.
+pub(crate) fn face_boxes(mesh: &Mesh, disc: &Discretization) -> Vec<ElementBoxes> {
+    (0..mesh.face_count())
+        .map(|face| {
+            let range = mesh.face_range(face);
+            ElementBoxes::new(disc.elements[range].iter().map(|el| el.in_face()).collect())
+        })
+        .collect()
 }
 
 #[cfg(test)]

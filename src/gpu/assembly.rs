@@ -19,7 +19,7 @@ use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::shaders::{self, Precision};
 use super::storage::{Narrowing, StorageError};
-use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem};
+use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem, face_boxes};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
 use crate::kernels::far_field::FarFieldRule;
@@ -27,7 +27,9 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::quadrature::ImtRule;
 use crate::scene::Scene;
-use crate::visibility::{FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility};
+use crate::visibility::{
+    ElementBoxes, FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility,
+};
 
 /// Upper bounds on the work of one tile, below what the device allows (for tests and tuning).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -118,8 +120,7 @@ fn plan_row(
     unit: f64,
     i: usize,
     scene: &Scene,
-    mesh: &Mesh,
-    disc: &Discretization,
+    (mesh, disc, boxes): (&Mesh, &Discretization, &[ElementBoxes]),
     planner: &PairPlanner,
     hiders: &mut RecentHiders,
 ) -> RowPlan {
@@ -143,8 +144,9 @@ fn plan_row(
             plan.views[face * VIEW_STRIDE..face * VIEW_STRIDE + 7]
                 .copy_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, scale]);
             let FaceSight::Part(mut part) = sight else { return };
-            for j in range {
-                match part.element(&disc.elements[j].in_face()) {
+            part.elements(&boxes[face], |k, visibility| {
+                let j = range.start + k;
+                match visibility {
                     Visibility::Full => {}
                     Visibility::Skip(_) => plan.exceptions.push((j as u32, Vec::new())),
                     Visibility::Partial(pieces) => {
@@ -156,7 +158,7 @@ fn plan_row(
                         plan.exceptions.push((j as u32, local));
                     }
                 }
-            }
+            });
         });
     plan
 }
@@ -165,15 +167,14 @@ fn plan_tile(
     unit: f64,
     rows: Range<usize>,
     scene: &Scene,
-    mesh: &Mesh,
-    disc: &Discretization,
+    (mesh, disc, boxes): (&Mesh, &Discretization, &[ElementBoxes]),
     planner: &PairPlanner,
 ) -> TilePlan {
     let row_plans: Vec<RowPlan> = rows
         .clone()
         .into_par_iter()
         .map_init(RecentHiders::default, |hiders, i| {
-            plan_row(unit, i, scene, mesh, disc, planner, hiders)
+            plan_row(unit, i, scene, (mesh, disc, boxes), planner, hiders)
         })
         .collect();
     let mut views = Vec::with_capacity(rows.len() * mesh.face_count() * VIEW_STRIDE);
@@ -491,9 +492,10 @@ impl<'a> GpuAssembler<'a> {
             bytes_uploaded: uploaded.elements.size() + uploaded.tables.size(),
             ..Default::default()
         };
+        let boxes = face_boxes(mesh, disc);
         let timed_plan = |t: &Range<usize>| {
             let started = std::time::Instant::now();
-            let plan = plan_tile(unit, t.clone(), scene, mesh, disc, planner);
+            let plan = plan_tile(unit, t.clone(), scene, (mesh, disc, &boxes), planner);
             self.timings.lock().expect("timings lock").planning_seconds +=
                 started.elapsed().as_secs_f64();
             plan

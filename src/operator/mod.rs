@@ -46,7 +46,9 @@ use crate::error::{Error, Result};
 use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::progress::{Progress, in_stage};
-use crate::visibility::{FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face};
+use crate::visibility::{
+    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face,
+};
 
 use blocks::{BlockPlan, FacePairs};
 use cluster::{ClusterTree, Item};
@@ -951,25 +953,34 @@ impl Entries<'_> {
         // The block's elements face by face (positions k in the block), as the walk takes them.
         let by_face =
             by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face, k)));
+        // Each face's elements in the block with the boxes of their halves, for the nodes
+        // that see the face in part.
+        let boxes: Vec<ElementBoxes> = by_face
+            .iter()
+            .map(|(_, list)| {
+                let element = |&k: &usize| self.disc.elements[element_ids[k]].in_face();
+                ElementBoxes::new(list.iter().map(element).collect())
+            })
+            .collect();
         let mut stats = PairStats::default();
         views.prepare(t, tc.len());
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
             let viewer = self.disc.nodes[i].viewer();
             let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
             let kept = Views::Kept(&mut views.rows[r]);
-            stats += self.planner.walk_row(&viewer, faces, kept, |_, list, sight| match sight {
+            stats += self.planner.walk_row(&viewer, faces, kept, |face, list, sight| match sight {
                 FaceSight::Hidden(_) => {}
                 FaceSight::Whole => {
                     list.for_each(|k| each(r, k, i, element_ids[k], Visibility::Full))
                 }
                 FaceSight::Part(mut part) => {
-                    for k in list {
-                        let j = element_ids[k];
-                        let vis = part.element(&self.disc.elements[j].in_face());
+                    let g = by_face.iter().position(|(f, _)| *f == face).expect("a block's face");
+                    part.elements(&boxes[g], |at, vis| {
                         if !matches!(vis, Visibility::Skip(_)) {
-                            each(r, k, i, j, vis);
+                            let k = by_face[g].1[at];
+                            each(r, k, i, element_ids[k], vis)
                         }
-                    }
+                    });
                 }
             });
         }

@@ -4,8 +4,9 @@
 //! Work is organised per (node, face): the node's [`FaceView`] of a face holds the half-plane left
 //! by the node's tangent plane (when the face straddles it) and the shadows of the occluders that
 //! can lie between the node's face and this one, centrally projected from the node onto the face's
-//! plane. Each element of the face is then classified against the view ([`PairPlanner::visible`]):
-//! no clip and no shadow means every element is fully visible, without per-element work.
+//! plane. Each element of the face is then classified against the view ([`PairPlanner::visible`]),
+//! or a run of them at once by their box ([`PairPlanner::visible_in_box`]): no clip and no shadow
+//! means every element is fully visible, without per-element work.
 //!
 //! Shadows are convex (occluders are split into convex pieces; a convex solid among them casts
 //! one shadow, the window's part in its cone from the node), and the visible part of an element
@@ -34,7 +35,7 @@ pub use hiders::RecentHiders;
 use occluders::ViewVolume;
 pub use occluders::{Acceleration, Occluder, OccluderUnit};
 use projection::{Pyramid, ShadowSet, lowest_height, pyramid_sides, shadow};
-pub use row::{FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
+pub use row::{ElementBoxes, FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
 pub use shaft::Shaft;
 pub use stats::PairStats;
 
@@ -557,6 +558,42 @@ impl PairPlanner {
             }
         }
         FaceView::Visible { clip, shadows: shadows.into_shadows() }
+    }
+
+    /// What `view` shows of every convex polygon inside the box `(lo, hi)` (face coordinates),
+    /// where the box alone tells and it is the same for all: nothing where the box lies behind
+    /// the tangent plane's clip or inside one shadow, the whole polygon where the box is clear
+    /// of both the clip (past its tolerance) and every shadow's box; `None` otherwise. Where it
+    /// answers, [`PairPlanner::visible`] answers the same for each polygon in the box: its
+    /// tests are linear in the points (a polygon's are convex combinations of the box's
+    /// corners) and its tolerance grows with the polygon's size, which the box's bounds.
+    pub fn visible_in_box(&self, view: &FaceView, (lo, hi): (DVec2, DVec2)) -> Option<Visibility> {
+        let (clip, shadows) = match view {
+            FaceView::Skip(reason) => return Some(Visibility::Skip(*reason)),
+            FaceView::Visible { clip, shadows } => (clip, shadows),
+        };
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        if let Some(hp) = clip {
+            let eps2 =
+                PLANE_TOLERANCE.powi(2) * (hi - lo).length_squared() * hp.normal.length_squared();
+            let values = corners.map(|q| hp.eval(q));
+            if values.iter().all(|&v| v <= 0.0) {
+                return Some(Visibility::Skip(SkipReason::FacingAway));
+            }
+            if !values.iter().all(|&v| v > 0.0 && v * v > eps2) {
+                return None;
+            }
+        }
+        let mut clear = true;
+        for (s, &shadow_box) in shadows.iter().zip(shadows.boxes()) {
+            if boxes_overlap((lo, hi), shadow_box) {
+                if convex_contains(s, &corners) {
+                    return Some(Visibility::Skip(SkipReason::Hidden));
+                }
+                clear = false;
+            }
+        }
+        clear.then_some(Visibility::Full)
     }
 
     /// The visible part of a convex counter-clockwise polygon `poly` (face coordinates) under `view`.

@@ -6,7 +6,12 @@
 //! For one viewer: a point that reflects nothing (rho = 0) has a zero row and sees nothing; else
 //! each face is viewed once ([`PairPlanner::face_view_with`]); a skipped face hides all its
 //! elements, an unobstructed one shows them all whole without per-element work, and otherwise
-//! each element is clipped to its exactly visible part ([`PairPlanner::visible`]).
+//! each element is clipped to its exactly visible part ([`PairPlanner::visible`]), except where
+//! a half of the face's elements ([`ElementBoxes`]) has a box that the view shows whole or hides
+//! whole: its elements are taken so at once (a louvre's slat shadows a few of a face's elements,
+//! not all).
+
+use std::ops::Range;
 
 use glam::{DVec2, DVec3};
 use rustc_hash::FxHashMap;
@@ -89,6 +94,80 @@ impl PartSight<'_> {
         let visibility = self.planner.visible(self.view, polygon);
         self.stats.record(&visibility, 1);
         visibility
+    }
+
+    /// What the viewer sees of each of the elements that `tree` holds, counted, given to
+    /// `visit` with the element's position in its list. A half of the tree whose box the viewer sees whole, or not at all,
+    /// is taken so at once ([`PairPlanner::visible_in_box`]); the elements of the others one by
+    /// one.
+    pub fn elements(&mut self, tree: &ElementBoxes, mut visit: impl FnMut(usize, Visibility)) {
+        let mut at = 0;
+        while let Some(node) = tree.nodes.get(at) {
+            let range = node.range.clone();
+            if let Some(visibility) = self.planner.visible_in_box(self.view, node.bounds) {
+                self.stats.record(&visibility, range.len() as u64);
+                range.for_each(|k| visit(k, visibility.clone()));
+                at = node.past;
+            } else if range.len() <= ElementBoxes::LEAF {
+                for k in range {
+                    visit(k, self.element(&tree.polygons[k]));
+                }
+                at = node.past;
+            } else {
+                at += 1;
+            }
+        }
+    }
+}
+
+/// The boxes of a list of elements of one face (face coordinates), halved down to a few
+/// elements: a viewer that sees a half's box whole or not at all sees each of its elements so.
+/// The halves are runs of the list, so a list in the order of a cluster tree (which bisects
+/// space) has halves that lie apart.
+#[derive(Debug)]
+pub struct ElementBoxes {
+    /// The elements (convex, counter-clockwise, face coordinates).
+    polygons: Vec<[DVec2; 3]>,
+    /// Depth first: each node, then its halves.
+    nodes: Vec<BoxNode>,
+}
+
+#[derive(Debug)]
+struct BoxNode {
+    /// Positions in the list.
+    range: Range<usize>,
+    bounds: (DVec2, DVec2),
+    /// Index of the node after its subtree.
+    past: usize,
+}
+
+impl ElementBoxes {
+    /// Most elements of a half classified one by one rather than halved again.
+    const LEAF: usize = 4;
+
+    /// The tree over the elements `polygons` (convex, counter-clockwise, face coordinates).
+    pub fn new(polygons: Vec<[DVec2; 3]>) -> Self {
+        let mut tree = Self { polygons, nodes: Vec::new() };
+        tree.add(0..tree.polygons.len());
+        tree
+    }
+
+    fn add(&mut self, range: Range<usize>) {
+        if range.is_empty() {
+            return;
+        }
+        let bounds = self.polygons[range.clone()].iter().flatten().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        );
+        let at = self.nodes.len();
+        self.nodes.push(BoxNode { range: range.clone(), bounds, past: 0 });
+        if range.len() > Self::LEAF {
+            let middle = range.start + range.len() / 2;
+            self.add(range.start..middle);
+            self.add(middle..range.end);
+        }
+        self.nodes[at].past = self.nodes.len();
     }
 }
 

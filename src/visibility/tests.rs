@@ -672,3 +672,99 @@ fn a_building_hides_what_no_single_wall_hides_and_ray_casting_confirms_it() {
     }
     assert!(hidden > 50 && by_solid_only > 10, "{hidden} hidden, {by_solid_only} by a solid only");
 }
+
+#[test]
+fn halves_of_a_face_seen_whole_or_not_at_all_leave_every_element_as_it_is_seen_alone() {
+    // The louvre room at refine 3: from nodes all over it, the faces they see in part (shadowed
+    // by the slats and the partition, or clipped by the node's plane). Each element must come
+    // out of the tree of halves as it does classified alone, up to a sliver (an element that
+    // one shadow holds, cut first by another, leaves pieces of rounding size), and a box the
+    // view settles at once (seen whole, hidden, behind the node) must hold only elements so
+    // seen. Both kinds of settled boxes must occur, or the comparison proves nothing.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/louvre-room.toml");
+    let scene = crate::scene::load(&path).unwrap();
+    let mesh = Mesh::new(&scene, &MeshKind::Uniform, 3).unwrap();
+    let planner = PairPlanner::new(&scene);
+    let polygons: Vec<Vec<[DVec2; 3]>> = (0..mesh.face_count())
+        .map(|face| {
+            let frame = &scene.faces[face].frame;
+            mesh.elements()[mesh.face_range(face)]
+                .iter()
+                .map(|el| el.vertices.map(|v| frame.to_plane(v)))
+                .collect()
+        })
+        .collect();
+    let trees: Vec<ElementBoxes> = polygons.iter().map(|p| ElementBoxes::new(p.clone())).collect();
+    let class = |v: &Visibility| std::mem::discriminant(v);
+    // A piece of rounding size where the other sees nothing.
+    let sliver = |x: &Visibility, y: &Visibility, element: &[DVec2; 3]| match (x, y) {
+        (Visibility::Partial(pieces), Visibility::Skip(_))
+        | (Visibility::Skip(_), Visibility::Partial(pieces)) => {
+            let seen: f64 = pieces.iter().map(|p| signed_area(p)).sum();
+            seen.abs() <= 1e-12 * signed_area(element)
+        }
+        _ => false,
+    };
+    let mut rng = StdRng::seed_from_u64(7);
+    let (mut compared, mut slivers, mut settled) = (0, 0, [0usize; 2]);
+    for el in mesh.elements().iter().step_by(13) {
+        let viewer = Viewer {
+            position: el.centroid(),
+            normal: scene.faces[el.face].frame.normal,
+            face: el.face,
+            rho: 0.5,
+        };
+        for face in 0..mesh.face_count() {
+            let view = planner.face_view(viewer.position, viewer.normal, el.face, face);
+            let FaceView::Visible { .. } = view else { continue };
+            if view.is_unobstructed() {
+                continue;
+            }
+            let alone: Vec<Visibility> =
+                polygons[face].iter().map(|p| planner.visible(&view, p)).collect();
+            // Runs of elements (the tree's halves and others), settled by their box or not.
+            for _ in 0..8 {
+                let n = polygons[face].len();
+                let start = rng.random_range(0..n);
+                let end = rng.random_range(start + 1..=n.min(start + 64));
+                let run = &polygons[face][start..end];
+                let bounds = crate::geometry::bounding_box(&run.concat());
+                if let Some(v) = planner.visible_in_box(&view, bounds) {
+                    settled[usize::from(matches!(v, Visibility::Full))] += 1;
+                    for (a, element) in alone[start..end].iter().zip(run) {
+                        assert!(
+                            class(a) == class(&v) || sliver(a, &v, element),
+                            "{a:?} in a box taken as {v:?}"
+                        );
+                    }
+                }
+            }
+            let mut by_tree: Vec<Option<Visibility>> = vec![None; alone.len()];
+            let faces = std::iter::once((face, 0..alone.len()));
+            planner.walk_row(
+                &viewer,
+                faces,
+                Views::Fresh(&mut RecentHiders::default()),
+                |_, _, s| {
+                    let FaceSight::Part(mut part) = s else { panic!("a face seen in part") };
+                    part.elements(&trees[face], |k, v| by_tree[k] = Some(v));
+                },
+            );
+            for ((a, b), element) in alone.iter().zip(&by_tree).zip(&polygons[face]) {
+                let b = b.clone().expect("every element visited");
+                match (a, &b) {
+                    (Visibility::Skip(_), Visibility::Skip(_))
+                    | (Visibility::Full, Visibility::Full) => {}
+                    (Visibility::Partial(x), Visibility::Partial(y)) => assert_eq!(x, y),
+                    _ => {
+                        assert!(sliver(a, &b, element), "{a:?} alone, {b:?} by the tree");
+                        slivers += 1;
+                    }
+                }
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 100_000 && settled[0] > 1000 && settled[1] > 1000, "{compared} {settled:?}");
+    assert!(slivers * 10_000 < compared, "{slivers} slivers of {compared}");
+}
