@@ -566,7 +566,7 @@ impl PairPlanner {
     /// of both the clip (past its tolerance) and every shadow's box; `None` otherwise. Where it
     /// answers, [`PairPlanner::visible`] answers the same for each polygon in the box: its
     /// tests are linear in the points (a polygon's are convex combinations of the box's
-    /// corners) and its tolerance grows with the polygon's size, which the box's bounds.
+    /// corners) and its tolerance grows with the polygon's size, which the box bounds.
     pub fn visible_in_box(&self, view: &FaceView, (lo, hi): (DVec2, DVec2)) -> Option<Visibility> {
         let (clip, shadows) = match view {
             FaceView::Skip(reason) => return Some(Visibility::Skip(*reason)),

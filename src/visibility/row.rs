@@ -97,9 +97,9 @@ impl PartSight<'_> {
     }
 
     /// What the viewer sees of each of the elements that `tree` holds, counted, given to
-    /// `visit` with the element's position in its list. A half of the tree whose box the viewer sees whole, or not at all,
-    /// is taken so at once ([`PairPlanner::visible_in_box`]); the elements of the others one by
-    /// one.
+    /// `visit` with the element's position in its list. A half of the tree whose box the viewer
+    /// sees whole, or not at all, is taken so at once ([`PairPlanner::visible_in_box`]); the
+    /// elements of the others one by one.
     pub fn elements(&mut self, tree: &ElementBoxes, mut visit: impl FnMut(usize, Visibility)) {
         let mut at = 0;
         while let Some(node) = tree.nodes.get(at) {
