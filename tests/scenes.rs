@@ -41,6 +41,26 @@ fn the_five_piece_surface_from_a_file_gives_the_built_in_numbers() {
 }
 
 #[test]
+fn the_staircase_hall_closes_and_its_steps_shadow_in_part() {
+    // A scene written for checks that no code was tuned for: a free-standing staircase in a
+    // closed hall (the floor cut around its footprint, its sides non-convex), lit by a window.
+    let v = json(&[
+        "inspect",
+        "--scene",
+        "examples/staircase-hall.toml",
+        "--refine",
+        "1",
+        "--json",
+        "-",
+    ]);
+    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
+    assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "{lo} {hi}");
+    assert!(
+        v["pairs_partial"].as_u64().unwrap() > 1000 && v["pairs_hidden"].as_u64().unwrap() > 1000
+    );
+}
+
+#[test]
 fn the_furnished_room_closes_sees_exactly_and_writes_its_outputs() {
     let v = json(&[
         "inspect",
