@@ -140,6 +140,14 @@ pub enum Visibility {
 /// Relative tolerance for "on the line" decisions when clipping by a tangent plane (no slivers).
 const PLANE_TOLERANCE: f64 = 1e-12;
 
+/// The square of the tolerance within which a polygon in the box `(lo, hi)` counts as on the
+/// line of the tangent plane's clip `hp`: PLANE_TOLERANCE times the box's diagonal times
+/// |normal|, compared as squares (no square roots for every element of a face). It grows with
+/// the box, so a box's test bounds those of the polygons inside it.
+fn clip_tolerance_squared(hp: &HalfPlane, (lo, hi): (DVec2, DVec2)) -> f64 {
+    PLANE_TOLERANCE.powi(2) * (hi - lo).length_squared() * hp.normal.length_squared()
+}
+
 /// A point's height above a plane is known to within this many ulps of its distance from the
 /// plane's origin.
 const HEIGHT_ROUNDING: f64 = 8.0 * f64::EPSILON;
@@ -574,8 +582,7 @@ impl PairPlanner {
         };
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
         if let Some(hp) = clip {
-            let eps2 =
-                PLANE_TOLERANCE.powi(2) * (hi - lo).length_squared() * hp.normal.length_squared();
+            let eps2 = clip_tolerance_squared(hp, (lo, hi));
             let values = corners.map(|q| hp.eval(q));
             if values.iter().all(|&v| v <= 0.0) {
                 return Some(Visibility::Skip(SkipReason::FacingAway));
@@ -605,12 +612,7 @@ impl PairPlanner {
         let poly_box = bounding_box(poly);
         let clipped = match clip {
             Some(hp) => {
-                // eps = PLANE_TOLERANCE * size * |normal|, compared as squares (no square
-                // roots for every element of a face).
-                let (lo, hi) = poly_box;
-                let eps2 = PLANE_TOLERANCE.powi(2)
-                    * (hi - lo).length_squared()
-                    * hp.normal.length_squared();
+                let eps2 = clip_tolerance_squared(hp, poly_box);
                 let within = |v: f64| v <= 0.0 || v * v <= eps2;
                 let below = |v: f64| v < 0.0 && v * v > eps2;
                 if poly.iter().all(|&q| within(hp.eval(q))) {
