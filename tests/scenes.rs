@@ -40,21 +40,20 @@ fn the_five_piece_surface_from_a_file_gives_the_built_in_numbers() {
     }
 }
 
+/// `inspect` of a closed scene file at `refine`, whose rows of K/rho must sum to 1 within 1e-12
+/// (Lemma 2.1), as JSON.
+fn inspect_closed_scene(scene: &str, refine: &str) -> serde_json::Value {
+    let v = json(&["inspect", "--scene", scene, "--refine", refine, "--json", "-"]);
+    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
+    assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "{scene} refine {refine}: {lo} {hi}");
+    v
+}
+
 #[test]
 fn the_staircase_hall_closes_and_its_steps_shadow_in_part() {
     // A scene written for checks that no code was tuned for: a free-standing staircase in a
     // closed hall (the floor cut around its footprint, its sides non-convex), lit by a window.
-    let v = json(&[
-        "inspect",
-        "--scene",
-        "examples/staircase-hall.toml",
-        "--refine",
-        "1",
-        "--json",
-        "-",
-    ]);
-    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
-    assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "{lo} {hi}");
+    let v = inspect_closed_scene("examples/staircase-hall.toml", "1");
     assert!(
         v["pairs_partial"].as_u64().unwrap() > 1000 && v["pairs_hidden"].as_u64().unwrap() > 1000
     );
@@ -62,17 +61,7 @@ fn the_staircase_hall_closes_and_its_steps_shadow_in_part() {
 
 #[test]
 fn the_furnished_room_closes_sees_exactly_and_writes_its_outputs() {
-    let v = json(&[
-        "inspect",
-        "--scene",
-        "examples/furnished-room.toml",
-        "--refine",
-        "1",
-        "--json",
-        "-",
-    ]);
-    let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
-    assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "{lo} {hi}");
+    let v = inspect_closed_scene("examples/furnished-room.toml", "1");
     assert!(v["pairs_partial"].as_u64().unwrap() > 0 && v["pairs_hidden"].as_u64().unwrap() > 0);
 
     let dir = temp_dir("room");
@@ -677,10 +666,7 @@ fn the_louvre_room_closes_and_is_lit_through_its_slats() {
     // walls, in the partition's plane: seen edge-on, it must hide nothing on either side (it
     // hid half a slat, and the row summed to 0.99684).
     for refine in ["1", "2"] {
-        let scene = "examples/louvre-room.toml";
-        let v = json(&["inspect", "--scene", scene, "--refine", refine, "--json", "-"]);
-        let (lo, hi) = (v["row_sum_min"].as_f64().unwrap(), v["row_sum_max"].as_f64().unwrap());
-        assert!(lo > 1.0 - 1e-12 && hi < 1.0 + 1e-12, "refine {refine}: {lo} {hi}");
+        let v = inspect_closed_scene("examples/louvre-room.toml", refine);
         assert!(v["pairs_partial"].as_u64().unwrap() > 0);
         assert!(v["pairs_hidden"].as_u64().unwrap() > 0);
     }
