@@ -324,6 +324,15 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
     let n = hole.len();
     for k in 0..n {
         let inside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
+        // What is left lies in `piece`: a line that leaves every corner of `piece` inside
+        // leaves all of what is left inside, its values there as well, and changes nothing.
+        // Most of a hole's lines do (an element that a shadow's side crosses is cut by that
+        // side alone), and this test of `piece`'s corners costs less than taking the values of
+        // what is left with their tolerance (louvre room refine 5, `--shadowed-blocks`:
+        // 22.7-24.1 -> 19.9-20.5 s, the same operator).
+        if piece.iter().all(|&p| inside.eval(p) >= 0.0) {
+            continue;
+        }
         let [a, b] = &mut parts;
         let (current, next) = if rest == 0 { (a, b) } else { (b, a) };
         let scale2 = scale_squared_of(current);
@@ -468,6 +477,60 @@ mod tests {
     fn strictly_inside(poly: &[DVec2], x: DVec2) -> bool {
         let n = poly.len();
         (0..n).all(|k| (poly[(k + 1) % n] - poly[k]).perp_dot(x - poly[k]) > 1e-12)
+    }
+
+    /// Triangles against random convex holes (hexagons, or thin slivers that one side of the
+    /// triangle's worth crosses): the pieces lie in the triangle and outside the hole, and
+    /// their area is the triangle's less its intersection with the hole, clipped by the hole's
+    /// half-planes one after another (an independent path). Among them are holes whose lines
+    /// leave every corner of the triangle inside but one or two, which the subtraction passes
+    /// over without testing what is left.
+    #[test]
+    fn subtraction_leaves_the_triangle_less_its_intersection_with_the_hole() {
+        use rand::{Rng, SeedableRng, rngs::StdRng};
+        let mut rng = StdRng::seed_from_u64(11);
+        let mut cut_by_fewer_lines = 0;
+        for trial in 0..4000 {
+            let mut point = |r: f64| DVec2::new(rng.random_range(-r..r), rng.random_range(-r..r));
+            let triangle = {
+                let t = [point(1.0), point(1.0), point(1.0)];
+                let area = (t[1] - t[0]).perp_dot(t[2] - t[0]);
+                if area.abs() < 1e-3 {
+                    continue;
+                }
+                if area > 0.0 { t.to_vec() } else { vec![t[0], t[2], t[1]] }
+            };
+            let centre = point(1.0);
+            let stretch = if trial % 2 == 0 { DVec2::new(1.0, 1.0) } else { DVec2::new(3.0, 0.05) };
+            let corners: Vec<DVec2> = (0..6).map(|_| centre + point(0.8) * stretch).collect();
+            let hole = convex_hull(&corners).to_vec();
+            if hole.len() < 3 {
+                continue;
+            }
+            let parts = subtract_convex(&triangle, &hole);
+            let inside_hole =
+                hole.iter().enumerate().try_fold(triangle.clone(), |part, (k, &a)| {
+                    let line = HalfPlane::left_of(a, hole[(k + 1) % hole.len()]);
+                    clip_convex(&part, &line).map(|c| c.to_vec())
+                });
+            let taken = inside_hole.as_deref().map_or(0.0, signed_area);
+            let left: f64 = parts.iter().map(|p| signed_area(p)).sum();
+            let want = signed_area(&triangle) - taken;
+            assert!((left - want).abs() < 1e-12, "{trial}: area {left} against {want}");
+            for p in &parts {
+                assert!(signed_area(p) > 0.0, "{trial}: {p:?}");
+                let centroid = p.iter().copied().sum::<DVec2>() / p.len() as f64;
+                assert!(strictly_inside(&triangle, centroid) && !strictly_inside(&hole, centroid));
+            }
+            let lines_crossing = (0..hole.len())
+                .filter(|&k| {
+                    let line = HalfPlane::left_of(hole[k], hole[(k + 1) % hole.len()]);
+                    triangle.iter().any(|&x| line.eval(x) < 0.0)
+                })
+                .count();
+            cut_by_fewer_lines += usize::from(taken > 0.0 && lines_crossing < hole.len());
+        }
+        assert!(cut_by_fewer_lines > 500, "{cut_by_fewer_lines} holes with lines passed over");
     }
 
     #[test]
