@@ -14,8 +14,8 @@ pub use frame::PlaneFrame;
 pub use polygon::{
     HalfPlane, SmallPolygon, bounding_box, bounding_box_3d, box_corners, boxes_overlap,
     clip_convex, clip_convex_into, clip_polygon_3d, clip_to_convex, clip_to_half_planes,
-    convex_contains, convex_hull, convex_partition, distance_to_convex, polygon_contains,
-    signed_area, subtract_convex, triangulate, wholly_inside_3d,
+    convex_apart, convex_contains, convex_hull, convex_partition, distance_to_convex,
+    polygon_contains, signed_area, subtract_convex, triangulate, wholly_inside_3d,
 };
 
 /// Vectors used throughout: glam's f64 vectors.

@@ -304,6 +304,17 @@ fn monotone_chain(pts: &mut [DVec2], hull: &mut [DVec2]) -> usize {
     corners
 }
 
+/// Whether a side of the convex counter-clockwise polygon `hole` has every corner of `piece`
+/// strictly outside its line: then the two do not meet, and [`subtract_convex`] would leave
+/// `piece` whole (a shadow whose box meets an element's but not the element).
+pub fn convex_apart(piece: &[DVec2], hole: &[DVec2]) -> bool {
+    let n = hole.len();
+    (0..n).any(|k| {
+        let outside = HalfPlane::left_of(hole[k], hole[(k + 1) % n]);
+        piece.iter().all(|&p| outside.eval(p) < 0.0)
+    })
+}
+
 /// `piece \ hole` for convex counter-clockwise polygons, as disjoint convex pieces.
 ///
 /// Walks the hole's edges: the part of what is left that lies outside an edge's line is a piece of
@@ -484,12 +495,13 @@ mod tests {
     /// their area is the triangle's less its intersection with the hole, clipped by the hole's
     /// half-planes one after another (an independent path). Among them are holes whose lines
     /// leave every corner of the triangle inside but one or two, which the subtraction passes
-    /// over without testing what is left.
+    /// over without testing what is left, and holes that [`convex_apart`] finds apart (none of
+    /// them meets the triangle).
     #[test]
     fn subtraction_leaves_the_triangle_less_its_intersection_with_the_hole() {
         use rand::{Rng, SeedableRng, rngs::StdRng};
         let mut rng = StdRng::seed_from_u64(11);
-        let mut cut_by_fewer_lines = 0;
+        let (mut cut_by_fewer_lines, mut apart) = (0, 0);
         for trial in 0..4000 {
             let mut point = |r: f64| DVec2::new(rng.random_range(-r..r), rng.random_range(-r..r));
             let triangle = {
@@ -514,6 +526,10 @@ mod tests {
                     clip_convex(&part, &line).map(|c| c.to_vec())
                 });
             let taken = inside_hole.as_deref().map_or(0.0, signed_area);
+            if convex_apart(&triangle, &hole) {
+                assert!(taken == 0.0, "{trial}: apart, yet {taken} of the hole in the triangle");
+                apart += 1;
+            }
             let left: f64 = parts.iter().map(|p| signed_area(p)).sum();
             let want = signed_area(&triangle) - taken;
             assert!((left - want).abs() < 1e-12, "{trial}: area {left} against {want}");
@@ -531,6 +547,7 @@ mod tests {
             cut_by_fewer_lines += usize::from(taken > 0.0 && lines_crossing < hole.len());
         }
         assert!(cut_by_fewer_lines > 500, "{cut_by_fewer_lines} holes with lines passed over");
+        assert!(apart > 200, "{apart} holes apart from the triangle");
     }
 
     #[test]

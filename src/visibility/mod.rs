@@ -45,8 +45,8 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use crate::geometry::{
-    HalfPlane, PlaneFrame, bounding_box, boxes_overlap, clip_convex, convex_contains, convex_hull,
-    subtract_convex,
+    HalfPlane, PlaneFrame, bounding_box, boxes_overlap, clip_convex, convex_apart, convex_contains,
+    convex_hull, subtract_convex,
 };
 use crate::scene::{COPLANAR_DISTANCE, Scene};
 
@@ -636,7 +636,7 @@ impl PairPlanner {
         let mut shadows = shadows.iter().zip(shadows.boxes());
         let mut cut = None;
         for (s, &shadow_box) in shadows.by_ref() {
-            if !boxes_overlap((lo, hi), shadow_box) {
+            if !boxes_overlap((lo, hi), shadow_box) || convex_apart(one, s) {
                 continue;
             }
             if convex_contains(s, one) {
@@ -660,7 +660,7 @@ impl PairPlanner {
         let mut next = Vec::with_capacity(pieces.len());
         for (s, &shadow_box) in shadows {
             for piece in pieces.drain(..) {
-                if !boxes_overlap(bounding_box(&piece), shadow_box) {
+                if !boxes_overlap(bounding_box(&piece), shadow_box) || convex_apart(&piece, s) {
                     next.push(piece);
                     continue;
                 }
