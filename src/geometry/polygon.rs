@@ -490,8 +490,9 @@ mod tests {
         (0..n).all(|k| (poly[(k + 1) % n] - poly[k]).perp_dot(x - poly[k]) > 1e-12)
     }
 
-    /// Triangles against random convex holes (hexagons, or thin slivers that one side of the
-    /// triangle's worth crosses): the pieces lie in the triangle and outside the hole, and
+    /// Triangles against random convex holes (hulls of six points, round or long and thin, so
+    /// that many cross a triangle from side to side): the pieces lie in the triangle and outside
+    /// the hole, and
     /// their area is the triangle's less its intersection with the hole, clipped by the hole's
     /// half-planes one after another (an independent path). Among them are holes whose lines
     /// leave every corner of the triangle inside but one or two, which the subtraction passes
