@@ -464,6 +464,12 @@ impl FactorSlice {
     }
 }
 
+thread_local! {
+    /// A thread's scratch for [`ShadowedLeaf::apply_add`]: the prefix sums of a leaf's columns
+    /// and a row's sum of runs, kept from one leaf to the next.
+    static PREFIX: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// A leaf of a shadowed block that a shadow boundary crosses.
 #[derive(Clone, Debug)]
 pub(super) struct ShadowedLeaf {
@@ -479,38 +485,82 @@ impl ShadowedLeaf {
     /// `y += B x`: per row, the factors' product summed over each run of columns seen whole
     /// (prefix sums of `V_q x_q`, one difference per run), then the partly visible entries.
     pub(super) fn apply_add(&self, x: &[f64], y: &mut [f64]) {
-        let factors = &self.slice.factors;
-        let (k, c) = (factors.rank(), x.len());
-        let mut prefix = vec![0.0; (c + 1) * k];
-        let at = self.slice.col0 as usize * k;
-        on_values!(&factors.v, v => {
-            for (q, row) in v[at..at + c * k].chunks_exact(k.max(1)).enumerate() {
-                let (before, after) = prefix.split_at_mut((q + 1) * k);
-                let (before, after) = (&before[q * k..], &mut after[..k]);
-                for l in 0..k {
-                    after[l] = before[l] + wide(row[l]) * x[q];
+        PREFIX.with_borrow_mut(|scratch| {
+            on_values!(&self.slice.factors.v, v => on_values!(&self.slice.factors.u, u => {
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma")
+                {
+                    // SAFETY: AVX2 and FMA were detected at run time just above.
+                    return unsafe { self.whole_add_avx2(u, v, x, y, scratch) };
                 }
-            }
-        });
-        let words = mask_words(c);
-        let mut sum = vec![0.0; k];
-        let row0 = self.slice.row0 as usize;
-        on_values!(&factors.u, u => {
-            for (r, (yi, mask)) in y.iter_mut().zip(self.whole.chunks_exact(words)).enumerate() {
-                let mut any = false;
-                sum.fill(0.0);
-                each_run(mask, |a, b| {
-                    any = true;
-                    for l in 0..k {
-                        sum[l] += prefix[b * k + l] - prefix[a * k + l];
-                    }
-                });
-                if any {
-                    *yi += dot(&u[(row0 + r) * k..(row0 + r + 1) * k], &sum);
-                }
-            }
+                self.whole_add(u, v, x, y, scratch)
+            }))
         });
         self.partial.apply_add(x, y);
+    }
+
+    /// [`Self::whole_add`] compiled for AVX2 and FMA (four rank terms at a time).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn whole_add_avx2<U: Copy + Into<f64>, V: Copy + Into<f64>>(
+        &self,
+        u: &[U],
+        v: &[V],
+        x: &[f64],
+        y: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
+        self.whole_add(u, v, x, y, scratch)
+    }
+
+    /// `y += B x` over the pairs seen whole, with the factors `u` and `v` and the prefix sums in
+    /// `scratch`. A row whose mask is its predecessor's reuses its sum of runs (neighbouring
+    /// nodes mostly see the same elements whole).
+    #[inline(always)]
+    fn whole_add<U: Copy + Into<f64>, V: Copy + Into<f64>>(
+        &self,
+        u: &[U],
+        v: &[V],
+        x: &[f64],
+        y: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
+        let k = self.slice.factors.rank();
+        if k == 0 {
+            return;
+        }
+        let c = x.len();
+        scratch.clear();
+        scratch.resize((c + 2) * k, 0.0);
+        let (prefix, sum) = scratch.split_at_mut((c + 1) * k);
+        let at = self.slice.col0 as usize * k;
+        for (q, (row, &xq)) in v[at..at + c * k].chunks_exact(k).zip(x).enumerate() {
+            let (before, after) = prefix.split_at_mut((q + 1) * k);
+            let (before, after) = (&before[q * k..], &mut after[..k]);
+            for ((a, &b), &vl) in after.iter_mut().zip(before).zip(row) {
+                *a = b + vl.into() * xq;
+            }
+        }
+        let words = mask_words(c);
+        let row0 = self.slice.row0 as usize;
+        let mut last: Option<&[u64]> = None;
+        for (r, (yi, mask)) in y.iter_mut().zip(self.whole.chunks_exact(words)).enumerate() {
+            if mask.iter().all(|&w| w == 0) {
+                continue;
+            }
+            if last != Some(mask) {
+                sum.fill(0.0);
+                each_run(mask, |a, b| {
+                    let (hi, lo) = (&prefix[b * k..(b + 1) * k], &prefix[a * k..(a + 1) * k]);
+                    for ((s, &h), &l) in sum.iter_mut().zip(hi).zip(lo) {
+                        *s += h - l;
+                    }
+                });
+                last = Some(mask);
+            }
+            *yi += dot(&u[(row0 + r) * k..(row0 + r + 1) * k], sum);
+        }
     }
 
     /// The leaf as the non-zero entries of a block of its own, of `rows` × `width`: the
