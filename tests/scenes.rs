@@ -60,6 +60,21 @@ fn the_staircase_hall_closes_and_its_steps_shadow_in_part() {
 }
 
 #[test]
+fn the_louvre_window_closes_and_its_slats_shadow_the_room_in_part() {
+    // The window fills its opening in the east wall, so the room is closed (Lemma 2.1), and the
+    // slats hanging inside it shadow in part the pairs between the window and the room.
+    for refine in ["1", "2"] {
+        let v = inspect_closed_scene("examples/louvre-window.toml", refine);
+        assert!(v["n"].as_u64() == Some(40 << (2 * refine.parse::<u32>().unwrap())), "{v}");
+        assert!(
+            v["pairs_partial"].as_u64().unwrap() > 1000
+                && v["pairs_hidden"].as_u64().unwrap() > 1000,
+            "{v}"
+        );
+    }
+}
+
+#[test]
 fn the_furnished_room_closes_sees_exactly_and_writes_its_outputs() {
     let v = inspect_closed_scene("examples/furnished-room.toml", "1");
     assert!(v["pairs_partial"].as_u64().unwrap() > 0 && v["pairs_hidden"].as_u64().unwrap() > 0);
@@ -942,6 +957,7 @@ fn occluded_scenes_compress_to_within_ten_times_the_tolerance_of_their_dense_mat
     let cases = [
         (file("examples/furnished-room.toml"), 3, true),
         (file("examples/louvre-room.toml"), 3, true),
+        (file("examples/louvre-window.toml"), 3, true),
         (file("examples/occluded-box.toml"), 3, true),
         ("city:4x4:lit".to_string(), 2, false),
     ];
