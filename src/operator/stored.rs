@@ -531,9 +531,11 @@ impl ShadowedLeaf {
             return;
         }
         let c = x.len();
-        scratch.clear();
+        // Only the first prefix row needs zeros: the others are written before they are read,
+        // and the sum is cleared before its first row.
         scratch.resize((c + 2) * k, 0.0);
         let (prefix, sum) = scratch.split_at_mut((c + 1) * k);
+        prefix[..k].fill(0.0);
         let at = self.slice.col0 as usize * k;
         for (q, (row, &xq)) in v[at..at + c * k].chunks_exact(k).zip(x).enumerate() {
             let (before, after) = prefix.split_at_mut((q + 1) * k);
