@@ -630,7 +630,8 @@ fn shadowed_blocks_keep_fewer_exact_entries_and_the_same_row_sums() {
         let args = ["inspect", "--scene", "examples/louvre-room.toml", "--refine", "3"];
         json(&[&args[..], &["--operator", "compressed", "--json", "-"], extra].concat())
     };
-    let (plain, shadowed) = (run(&[]), run(&["--shadowed-blocks"]));
+    let (plain, shadowed) = (run(&["--no-shadowed-blocks"]), run(&["--shadowed-blocks"]));
+    assert_eq!(plain["shadowed_blocks"], 0, "{plain}");
     let entries = |v: &serde_json::Value| v["near_entries"].as_f64().unwrap();
     assert!(entries(&shadowed) < 0.8 * entries(&plain), "{shadowed} against {plain}");
     // The same pairs partly visible (a handful may fall on the other side of a sliver's
@@ -641,6 +642,38 @@ fn shadowed_blocks_keep_fewer_exact_entries_and_the_same_row_sums() {
         let sum = shadowed[key].as_f64().unwrap();
         assert!((sum - 1.0).abs() <= 1e-5, "{key} {sum}");
     }
+}
+
+#[test]
+fn shadowed_blocks_are_made_by_default_where_faces_hold_many_elements_and_say_so() {
+    // Five-piece at refine 4 holds 512 elements a face, at refine 3 128: the default makes
+    // shadowed blocks on the first alone, with a note saying why; the flags force either.
+    let run = |refine: &str, extra: &[&str]| {
+        let args = ["inspect", "--scene", "five-piece", "--refine", refine, "--operator"];
+        let (ok, out, err) =
+            radiosity(&[&args[..], &["compressed", "--json", "-"], extra].concat());
+        assert!(ok, "{err}");
+        let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+        (report["shadowed_blocks"].as_u64().unwrap(), err)
+    };
+    let (blocks, err) = run("4", &[]);
+    assert!(blocks > 0 && err.contains("shadowed blocks on (512 elements per face"), "{err}");
+    let (blocks, err) = run("3", &[]);
+    assert!(blocks == 0 && err.contains("shadowed blocks off (128 elements per face"), "{err}");
+    let (blocks, err) = run("4", &["--no-shadowed-blocks"]);
+    assert!(blocks == 0 && !err.contains("shadowed blocks"), "{err}");
+    let (blocks, _) = run("3", &["--shadowed-blocks"]);
+    assert!(blocks > 0);
+    let (ok, _, err) = radiosity(&[
+        "inspect",
+        "--scene",
+        "five-piece",
+        "--refine",
+        "3",
+        "--shadowed-blocks",
+        "--no-shadowed-blocks",
+    ]);
+    assert!(!ok && err.contains("cannot be used with"), "{err}");
 }
 
 #[test]

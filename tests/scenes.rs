@@ -971,7 +971,11 @@ fn occluded_scenes_compress_to_within_ten_times_the_tolerance_of_their_dense_mat
         for (tolerance, shadowed_blocks) in
             [1e-6, 1e-9].into_iter().flat_map(|t| [(t, false), (t, true)])
         {
-            let options = CompressionOptions { tolerance, shadowed_blocks, ..Default::default() };
+            let options = CompressionOptions {
+                tolerance,
+                shadowed_blocks: shadowed_blocks.into(),
+                ..Default::default()
+            };
             let op =
                 CompressedOperator::build(&problem, &assembly, &options, None, &Silent).unwrap();
             let name =

@@ -21,7 +21,7 @@ use radiosity::distributed::Ranks;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
 use radiosity::mesh::{LineExtent, S5Diagonals};
-use radiosity::operator::{CompressionOptions, OperatorChoice};
+use radiosity::operator::{CompressionOptions, OperatorChoice, ShadowedBlocks};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
 use radiosity::problems::{EmissionCases, EmissionOptions, TrueSolution};
 use radiosity::report::Tone;
@@ -251,10 +251,14 @@ pub(crate) struct OperatorArgs {
     #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
     pub(crate) compression_tolerance: f64,
     /// Compress the blocks that occluders or tangent planes cut once, without occlusion, and
-    /// keep only their partly visible pairs exact: less memory and setup on rooms, slower
-    /// products
-    #[arg(long)]
+    /// keep only their partly visible pairs exact: less memory and setup where faces hold many
+    /// elements [default: where they hold at least 512 on average]
+    #[arg(long, conflicts_with = "no_shadowed_blocks")]
     pub(crate) shadowed_blocks: bool,
+    /// Never make shadowed blocks: split the blocks that occluders or tangent planes cut down
+    /// to exact leaves and low-rank blocks
+    #[arg(long)]
+    pub(crate) no_shadowed_blocks: bool,
     /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
     /// matrix that would pass it is refused before it is built, a compressed operator before
     /// it is built if what it surely stores would, or else where its build reaches it
@@ -305,7 +309,11 @@ impl OperatorArgs {
             OperatorArg::Compressed => OperatorChoice::Compressed,
         };
         config.compression.tolerance = self.compression_tolerance;
-        config.compression.shadowed_blocks = self.shadowed_blocks;
+        config.compression.shadowed_blocks = match (self.shadowed_blocks, self.no_shadowed_blocks) {
+            (true, _) => ShadowedBlocks::On,
+            (_, true) => ShadowedBlocks::Off,
+            _ => ShadowedBlocks::Auto,
+        };
         radiosity::assembly::set_memory_limit(self.memory_limit);
         config.compression.validate()
     }

@@ -6,8 +6,8 @@ use std::cell::OnceCell;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::CompressionOptions;
 use super::cluster::{Cluster, ClusterTree};
+use super::{CompressionOptions, ShadowedBlocks};
 use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
 use crate::geometry::box_corners;
@@ -48,7 +48,7 @@ impl<'a> FacePairs<'a> {
         planner: &'a PairPlanner,
         options: &CompressionOptions,
     ) -> Self {
-        Self { scene, planner, planes_shadow: options.shadowed_blocks }
+        Self { scene, planner, planes_shadow: options.shadowed_blocks == ShadowedBlocks::On }
     }
 
     fn class(
@@ -330,7 +330,10 @@ impl Walk<'_> {
             plan.far.push((t, s));
             return None;
         }
-        if class == PairClass::Shadowed && admissible && self.options.shadowed_blocks {
+        if class == PairClass::Shadowed
+            && admissible
+            && self.options.shadowed_blocks == ShadowedBlocks::On
+        {
             let mut block = ShadowedBlock { t, s, seen: Vec::new(), leaves: Vec::new() };
             match self.children(t, s, SHADOWED_LEAF * self.options.mixed_leaf_size) {
                 None => block.leaves.push((t, s)),

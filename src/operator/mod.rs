@@ -150,11 +150,64 @@ pub struct CompressionOptions {
     /// plane) are split down to clusters this small: their partly visible pairs lie near a
     /// surface in pair space, so smaller leaves store fewer entries around them.
     pub mixed_leaf_size: usize,
-    /// Admissible blocks that occluders or tangent planes cut become shadowed blocks
+    /// Whether admissible blocks that occluders or tangent planes cut become shadowed blocks
     /// (`operator/shadowed.rs`): compressed once without occlusion, exact only on their partly
-    /// visible pairs. Less memory and setup on rooms, slower products (docs/performance.md).
-    pub shadowed_blocks: bool,
+    /// visible pairs.
+    pub shadowed_blocks: ShadowedBlocks,
 }
+
+/// Whether the compressed operator has shadowed blocks ([`CompressionOptions::shadowed_blocks`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShadowedBlocks {
+    /// Where faces hold at least [`SHADOWED_FROM_ELEMENTS_PER_FACE`] elements on average
+    /// ([`ShadowedBlocks::decide`]).
+    #[default]
+    Auto,
+    /// Always.
+    On,
+    /// Never: such blocks are split down to exact leaves and low-rank blocks.
+    Off,
+}
+
+impl ShadowedBlocks {
+    /// Whether a problem of this shape has shadowed blocks, and for [`ShadowedBlocks::Auto`]
+    /// what decided it. A shadowed block's one factorisation stands for the many small blocks
+    /// its shadows would split it into, and its leaves are four mixed leaves wide: on large
+    /// faces that saves setup and memory, on faces of a few leaves it is one more cross
+    /// approximation, at a tighter tolerance, over blocks that end mostly exact.
+    pub fn decide(self, shape: ProblemShape) -> (bool, Option<String>) {
+        match self {
+            Self::On => (true, None),
+            Self::Off => (false, None),
+            Self::Auto => {
+                let per_face = shape.elements as f64 / shape.faces.max(1) as f64;
+                let on = per_face >= SHADOWED_FROM_ELEMENTS_PER_FACE;
+                let (name, than) = if on { ("on", "at least") } else { ("off", "fewer than") };
+                let why = format!(
+                    "shadowed blocks {name} ({per_face:.0} elements per face, {than} \
+                     {SHADOWED_FROM_ELEMENTS_PER_FACE})"
+                );
+                (on, Some(why))
+            }
+        }
+    }
+}
+
+impl From<bool> for ShadowedBlocks {
+    /// [`ShadowedBlocks::On`] or [`ShadowedBlocks::Off`].
+    fn from(on: bool) -> Self {
+        if on { Self::On } else { Self::Off }
+    }
+}
+
+/// Mean elements per face from which [`ShadowedBlocks::Auto`] makes shadowed blocks. Measured
+/// on the EPYC (`solve --operator compressed`, whole run, with them and without): the lit
+/// city:4x4 at refine 3 (128 per face) 3.0 s against 2.4 s, at refine 4 (512) the same time
+/// and memory; the staircase hall at refine 5 (2 048) 24.4 s and 0.94 GB against 31.1 s and
+/// 1.10 GB; five-piece refine 7 (32 768) 11.5 s against 14.4 s; the louvre window at refine 6
+/// (8 192) about 95 s and 3.7 GB against 157 s and 6.4 GB (docs/performance.md).
+pub const SHADOWED_FROM_ELEMENTS_PER_FACE: f64 = 512.0;
 
 impl Default for CompressionOptions {
     fn default() -> Self {
@@ -170,7 +223,7 @@ impl Default for CompressionOptions {
             eta: 2.0,
             leaf_size: 32,
             mixed_leaf_size: 32,
-            shadowed_blocks: false,
+            shadowed_blocks: ShadowedBlocks::Auto,
         }
     }
 }
@@ -390,6 +443,11 @@ impl CompressedOperator {
         let waited_before = ranks.map(|r| r.traffic().seconds);
         options.validate()?;
         assembly.quadrature.validate()?;
+        let (shadowed, why) = options.shadowed_blocks.decide(ProblemShape::of(problem));
+        if let Some(why) = why {
+            progress.note(&why);
+        }
+        let options = &CompressionOptions { shadowed_blocks: shadowed.into(), ..*options };
         let per = disc.method.nodes_per_element();
         let faces = FacePairs::new(scene, planner, options);
         let (nodes, elements, plan) = in_stage(progress, "blocks", || {

@@ -26,11 +26,23 @@ fn compressed(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator 
 /// with the CPU's pair evaluation.
 fn build(c: &Case, tolerance: f64, leaf_size: usize, batched: bool) -> CompressedOperator {
     let options = CompressionOptions { tolerance, leaf_size, ..Default::default() };
+    build_with(c, &options, batched)
+}
+
+/// The operator without shadowed blocks, whatever the faces' sizes.
+fn plain(c: &Case, tolerance: f64, leaf_size: usize) -> CompressedOperator {
+    let shadowed_blocks = ShadowedBlocks::Off;
+    let options =
+        CompressionOptions { tolerance, leaf_size, shadowed_blocks, ..Default::default() };
+    build_with(c, &options, false)
+}
+
+fn build_with(c: &Case, options: &CompressionOptions, batched: bool) -> CompressedOperator {
     let assembly = AssemblyOptions::default();
     let integrator = PairIntegrator::new(c.disc.method, &assembly);
     let cpu = crate::assembly::CpuPairs::new(&c.disc, &integrator);
     let batches = batched.then_some(&cpu as &dyn PairEvaluation);
-    CompressedOperator::build(c, &assembly, &options, batches, &crate::progress::Silent).unwrap()
+    CompressedOperator::build(c, &assembly, options, batches, &crate::progress::Silent).unwrap()
 }
 
 fn dense(c: &Case) -> CollocationMatrix {
@@ -213,6 +225,23 @@ fn the_automatic_choice_keeps_small_faces_dense_and_compresses_large_ones() {
     assert_eq!(OperatorChoice::Dense.decide(shape(40_960, 40_960, 5)), (false, None));
 }
 
+#[test]
+fn shadowed_blocks_are_chosen_where_faces_hold_many_elements() {
+    let shape = |elements, faces| ProblemShape { dof: elements, elements, faces };
+    // The lit city:4x4 at refine 3 (146 faces, 128 elements each): where they cost time.
+    let (on, why) = ShadowedBlocks::Auto.decide(shape(18_688, 146));
+    let why = why.unwrap();
+    assert!(!on && why.contains("shadowed blocks off") && why.contains("128 elements"), "{why}");
+    // The louvre window at refine 5: 2 048 elements a face.
+    let (on, why) = ShadowedBlocks::Auto.decide(shape(40_960, 20));
+    assert!(on && why.unwrap().contains("shadowed blocks on (2048 elements per face"));
+    // From the threshold on, and as asked for whatever the shape.
+    assert!(ShadowedBlocks::Auto.decide(shape(2_560, 5)).0);
+    assert_eq!(ShadowedBlocks::On.decide(shape(100, 50)), (true, None));
+    assert_eq!(ShadowedBlocks::Off.decide(shape(40_960, 20)), (false, None));
+    assert_eq!(ShadowedBlocks::from(true), ShadowedBlocks::On);
+}
+
 /// A dense block of `width` columns stored by its non-zero entries, in its own precision.
 fn stored_sparse(data: &BlockData, width: usize) -> BlockData {
     let BlockData::Dense(d) = data else { panic!("not dense: {data:?}") };
@@ -262,11 +291,11 @@ fn written_and_read(op: &CompressedOperator) -> (CompressedOperator, Vec<u8>) {
 #[test]
 fn a_written_operator_reads_back_block_for_block() {
     // The five-piece surface has low-rank and dense blocks; one is stored sparse below. Values
-    // in f64 (1e-8) and in f32 (1e-6). (The parts of shadowed blocks would be written as
-    // the low-rank and sparse blocks they stand for.)
+    // in f64 (1e-8) and in f32 (1e-6). Without shadowed blocks, whose parts are written as
+    // the low-rank and sparse blocks they stand for (`shadowed_blocks_of`).
     let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 4);
     for tolerance in [1e-8, 1e-6] {
-        let mut op = compressed(&c, tolerance, 16);
+        let mut op = plain(&c, tolerance, 16);
         // One block of each kind at least.
         let kinds = |op: &CompressedOperator| {
             let mut kinds = [0; 3];
@@ -360,7 +389,7 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
         let leaves = if shadowed_blocks { 8 } else { CompressionOptions::default().leaf_size };
         let options = CompressionOptions {
             tolerance: 1e-8,
-            shadowed_blocks,
+            shadowed_blocks: shadowed_blocks.into(),
             leaf_size: leaves,
             mixed_leaf_size: leaves,
             ..Default::default()
@@ -469,7 +498,7 @@ fn shadowed_blocks_of(c: Case) {
         tolerance,
         leaf_size: 8,
         mixed_leaf_size: 8,
-        shadowed_blocks: true,
+        shadowed_blocks: ShadowedBlocks::On,
         ..Default::default()
     };
     let assembly = AssemblyOptions::default();

@@ -160,7 +160,8 @@ pub fn run_compression(
                 c.method = method;
                 c.backend = backend;
                 c.operator = operator;
-                let shadowed_blocks = series.shadowed_blocks;
+                // The plain plan unless asked for: a series compares one plan across sizes.
+                let shadowed_blocks = series.shadowed_blocks.into();
                 c.compression =
                     CompressionOptions { tolerance, shadowed_blocks, ..Default::default() };
                 c.solver = SolverOptions::with(SolverChoice::Auto);
