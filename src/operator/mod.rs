@@ -472,7 +472,10 @@ impl CompressedOperator {
         let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
         guard.check(precision.bytes() * certain)?;
 
-        let integrator = PairIntegrator::new(disc.method, assembly);
+        let integrator = match precision {
+            Precision::F32 => PairIntegrator::for_single_precision(disc.method, assembly),
+            Precision::F64 => PairIntegrator::new(disc.method, assembly),
+        };
         let entries = Entries {
             mesh,
             disc,
