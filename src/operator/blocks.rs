@@ -103,6 +103,24 @@ impl<'a> FacePairs<'a> {
             || vertices.iter().all(|&v| fa.normal.dot(v - p) <= 0.0)
             || el.frame.height(p) <= 0.0
     }
+
+    /// Whether [`FacePairs::nothing_between`] is false for every node of `nodes` and element of
+    /// `elements`, as their boxes tell: no face pair in one plane, and each box clear of the
+    /// other's planes by a thousandth of the block's size, which covers an element's own plane
+    /// leaning from its face's within the planarity tolerance. Far blocks mostly are, and their
+    /// cross approximations then skip the test of each entry.
+    pub(super) fn every_pair_gives(&self, nodes: &Cluster, elements: &Cluster) -> bool {
+        let margin = 1e-3 * (nodes.diameter() + elements.diameter() + nodes.distance(elements));
+        let clear = |face: usize, cluster: &Cluster| {
+            height_range(&self.scene.faces[face].frame, cluster.bounds()).0 > margin
+        };
+        nodes.faces.iter().all(|&a| {
+            elements
+                .faces
+                .iter()
+                .all(|&b| !self.planner.same_plane(a, b) && clear(a, elements) && clear(b, nodes))
+        })
+    }
 }
 
 /// The occluder pieces that may come between a block's two clusters, found when a shaft test

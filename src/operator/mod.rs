@@ -1140,7 +1140,8 @@ impl Entries<'_> {
 
     /// The values of the pairs (node i, element j) of a smooth block, in order: all of each
     /// element's basis functions, or only `basis`. The centroid method's closed forms are
-    /// evaluated in lanes.
+    /// evaluated in lanes. `continued`: the kernel over every element whole, without testing
+    /// each pair for planes that make it give nothing ([`FacePairs::nothing_between`]).
     fn smooth_values(
         &self,
         pairs: impl Iterator<Item = (usize, usize)>,
@@ -1228,6 +1229,9 @@ impl Entries<'_> {
         let (m, c) = (tc.len(), sc.len() * per);
         let node_ids = &self.nodes.order[tc.start..tc.end];
         let element_ids = &self.elements.order[sc.start..sc.end];
+        // Where no pair can give nothing, every entry is the kernel over the whole element, as
+        // in a continued block.
+        let continued = continued || faces.every_pair_gives(tc, sc);
         let row = |r: usize| {
             let i = node_ids[r];
             self.smooth_values(element_ids.iter().map(|&j| (i, j)), None, faces, continued)
