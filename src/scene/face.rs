@@ -278,8 +278,8 @@ impl Face {
     /// As [`Face::is_coplanar_with`], the larger size of the two faces given (measured only for
     /// faces with parallel normals): for callers that keep the sizes.
     pub fn is_coplanar_at_size(&self, other: &Face, size: impl FnOnce() -> f64) -> bool {
-        // Squared, without a square root: the compressed operator's cross approximations ask
-        // this of every entry of a plain low-rank block.
+        // Squared, without a square root: pair plans and cross approximations ask this of
+        // many (node, element) pairs.
         let sine_squared = self.frame.normal.cross(other.frame.normal).length_squared();
         if sine_squared >= COPLANAR_ANGLE * COPLANAR_ANGLE {
             return false; // most pairs: decided before the sizes are measured
