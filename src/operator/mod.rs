@@ -88,6 +88,11 @@ impl ProblemShape {
             faces: problem.scene.faces.len(),
         }
     }
+
+    /// Mean elements per face, what both automatic choices look at.
+    pub fn elements_per_face(&self) -> f64 {
+        self.elements as f64 / self.faces.max(1) as f64
+    }
 }
 
 impl OperatorChoice {
@@ -102,7 +107,7 @@ impl OperatorChoice {
             Self::Compressed => (true, None),
             Self::Auto if shape.dof <= AUTO_COMPRESSED_ABOVE => (false, None),
             Self::Auto => {
-                let per_face = shape.elements as f64 / shape.faces.max(1) as f64;
+                let per_face = shape.elements_per_face();
                 let dense_bytes = 8.0 * (shape.dof as f64).powi(2);
                 let fits = memory_allowance().is_none_or(|a| dense_bytes <= a);
                 let gib = dense_bytes / (1u64 << 30) as f64;
@@ -181,7 +186,7 @@ impl ShadowedBlocks {
             Self::On => (true, None),
             Self::Off => (false, None),
             Self::Auto => {
-                let per_face = shape.elements as f64 / shape.faces.max(1) as f64;
+                let per_face = shape.elements_per_face();
                 let on = per_face >= SHADOWED_FROM_ELEMENTS_PER_FACE;
                 let (name, than) = if on { ("on", "at least") } else { ("off", "fewer than") };
                 let why = format!(
