@@ -242,6 +242,41 @@ fn shadowed_blocks_are_chosen_where_faces_hold_many_elements() {
     assert_eq!(ShadowedBlocks::from(true), ShadowedBlocks::On);
 }
 
+#[test]
+fn far_blocks_whose_boxes_clear_the_planes_have_no_pair_that_gives_nothing() {
+    // `every_pair_gives` lets a cross approximation skip the test of each pair; wherever it
+    // says so, the test of each pair must agree. The cube's faces meet along edges (blocks
+    // beside them touch the other face's plane), the five-piece surface has its plate.
+    let scenes = [(cube().unwrap(), 3), (five_piece(SurfaceParameters::default()).unwrap(), 3)];
+    for (scene, refine) in scenes {
+        let c = case(scene, Method::Centroid, refine);
+        let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
+        let faces = FacePairs::new(&c.scene, &c.planner, &options);
+        let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, &options);
+        let (mut clear, mut not) = (0, 0);
+        for &(t, s) in &plan.far {
+            let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
+            if !faces.every_pair_gives(tc, sc) {
+                not += 1;
+                continue;
+            }
+            clear += 1;
+            for &i in &nodes.order[tc.start..tc.end] {
+                let node = &c.disc.nodes[i];
+                for &j in &elements.order[sc.start..sc.end] {
+                    let (el, vertices) = (&c.disc.elements[j], &c.mesh.elements()[j].vertices);
+                    assert!(
+                        !faces.nothing_between(node.face, node.position, el, vertices),
+                        "block ({t}, {s}): node {i}, element {j}"
+                    );
+                }
+            }
+        }
+        assert!(clear > 0 && not > 0, "{clear} clear, {not} not");
+    }
+}
+
 /// A dense block of `width` columns stored by its non-zero entries, in its own precision.
 fn stored_sparse(data: &BlockData, width: usize) -> BlockData {
     let BlockData::Dense(d) = data else { panic!("not dense: {data:?}") };
