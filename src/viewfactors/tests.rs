@@ -315,7 +315,8 @@ fn occluders_found_once_per_face_give_each_pair_s_entry() {
 
 /// city:4x4 at loose tolerances: every entry within the tolerance of a run at 1e-8, and the
 /// work falling with the tolerance. At 1e-3 it took 60 % of the evaluations at 1e-6 while the
-/// collapsed rule at buildings' corners kept at least 6 orders at every tolerance; now 36 %.
+/// collapsed rule at buildings' corners kept at least 6 orders at every tolerance, 36 % while
+/// every patch took two Gauss orders of at least 2 points a side; now 27 %.
 #[test]
 fn city_entries_meet_loose_tolerances_with_less_work() {
     let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
@@ -324,7 +325,7 @@ fn city_entries_meet_loose_tolerances_with_less_work() {
     };
     let converged = at(1e-8).to_dense();
     let mut evaluations = Vec::new();
-    for tolerance in [1e-3, 1e-4, 1e-5, 1e-6] {
+    for tolerance in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
         let f = at(tolerance);
         let off =
             f.to_dense().iter().zip(&converged).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -332,7 +333,42 @@ fn city_entries_meet_loose_tolerances_with_less_work() {
         evaluations.push(f.evaluations);
     }
     assert!(evaluations.windows(2).all(|w| w[0] < w[1]), "{evaluations:?}");
-    assert!(10 * evaluations[0] <= 4 * evaluations[3], "{evaluations:?}");
+    assert!(10 * evaluations[1] <= 3 * evaluations[4], "{evaluations:?}");
+}
+
+/// The bound that settles small patches ([`Context::bounded_cell`]) holds: from every point of
+/// T_i the factor of the whole T_j, which no occluder can raise, is at most 1 and at most
+/// A_j / (π d²), d the point's distance from T_j; on the pairs of city:4x4 and the louvre room
+/// that face each other, neighbours included.
+#[test]
+fn a_point_sees_no_more_of_an_element_than_its_bound() {
+    let rules = GaussRules::new(4);
+    for fixture in
+        [Fixture::new(crate::scene::city(4, 4).unwrap()), Fixture::example("louvre-room.toml")]
+    {
+        let options = ViewFactorOptions::default();
+        let context = fixture.context(&options);
+        let (elements, faces) = (fixture.mesh.elements(), &fixture.scene.faces);
+        let (mut near, mut far) = (0, 0);
+        for (i, ei) in elements.iter().enumerate() {
+            for (j, ej) in elements.iter().enumerate() {
+                let in_front = |t: &[DVec3; 3], face: usize| {
+                    t.iter().all(|&v| faces[face].frame.height(v) >= 0.0)
+                };
+                if i == j || !in_front(&ej.vertices, ei.face) || !in_front(&ei.vertices, ej.face) {
+                    continue;
+                }
+                for (p, _) in Patch::Triangle(ei.vertices).gauss_points(&rules, 4) {
+                    let d = crate::geometry::convex_polygons_distance(&[p], &ej.vertices);
+                    let seen = context.point_to_element(i, j, p, Sight::Whole);
+                    let bound = super::pair::integrand_bound(d, ej.area());
+                    assert!(seen <= bound * (1.0 + 1e-12), "({i}, {j}) at {p}: {seen} > {bound}");
+                    if bound < 1.0 { far += 1 } else { near += 1 }
+                }
+            }
+        }
+        assert!(near > 100 && far > 100, "{near} points bounded by 1, {far} by A_j / (π d²)");
+    }
 }
 
 /// A pair of city:4x4 (a ground triangle and a wall across a street) with a patch that an
