@@ -960,25 +960,21 @@ impl Part<'_> {
     }
 
     /// The most that `∫ g dA` over `patch` can be: its area times the integrand's bound from
-    /// its distance to T_j ([`integrand_bound`]).
+    /// its box's distance to T_j's ([`integrand_bound`]), which is no further than T_j.
     fn most(&self, patch: &Patch) -> f64 {
-        integrand_bound(self.to_target(patch.corners()), self.target_area) * patch.area()
-    }
-
-    /// A lower bound of the distance from the convex polygon `corners` to T_j. Boxes apart bound
-    /// it from below; where they overlap, the polygons' own distance tells touching from near.
-    fn to_target(&self, corners: &[DVec3]) -> f64 {
-        match box_distance(bounding_box_3d(corners), self.target_box) {
-            0.0 => convex_polygons_distance(corners, &self.target),
-            d => d,
-        }
+        let apart = box_distance(bounding_box_3d(patch.corners()), self.target_box);
+        integrand_bound(apart, self.target_area) * patch.area()
     }
 
     /// Lower bounds of the distance from the outer patch with corners `corners` (longest side
-    /// `size`) to T_j ([`Part::to_target`]), and to the points where the integrand is not
-    /// analytic besides the obstacles ([`Part::distance`]), as the Gauss order needs.
+    /// `size`) to T_j, and to the points where the integrand is not analytic besides the
+    /// obstacles ([`Part::distance`]). Boxes apart bound the distance from below, as the Gauss
+    /// order needs; where they overlap, the polygons' own distance tells touching from near.
     fn reach(&self, corners: &[DVec3], size: f64) -> (f64, f64) {
-        let to_target = self.to_target(corners);
+        let to_target = match box_distance(bounding_box_3d(corners), self.target_box) {
+            0.0 => convex_polygons_distance(corners, &self.target),
+            d => d,
+        };
         (to_target, self.distance(corners, size, to_target))
     }
 
