@@ -73,14 +73,13 @@ impl OuterRules {
     }
 
     /// The Gauss order whose error, falling like rho^-2q, meets the target, where the integrand
-    /// is analytic inside the Bernstein ellipse of parameter `rho`, from 1 (one point, checked
-    /// against order 2 where occluders shadow T_j); `None` where even the highest order but one
-    /// does not. Orders from 2 took city:4x4 at --tolerance 1e-3 0.62 M evaluations instead
-    /// of 0.52 M, the tessellated city 3 x 3 3.31 M instead of 2.59 M, with every entry within
-    /// the tolerance of a run at 1e-10 either way (2.7e-5 off at most).
+    /// is analytic inside the Bernstein ellipse of parameter `rho`, from 2; `None` where even
+    /// the highest order but one does not. From 1 (one point, checked against 2), city:4x4 at
+    /// --tolerance 1e-3 took 0.52 M evaluations instead of 0.62 M, but on the 12 x 12
+    /// tessellated city at 1e-6 a pair reached the split limit at 1.3e-6.
     fn order_for(&self, rho: f64, target: f64) -> Option<usize> {
         let q = ((1.0 / target).ln() / (2.0 * rho.ln())).ceil();
-        (q < GAUSS_MAX as f64).then(|| (q as usize).max(1))
+        (q < GAUSS_MAX as f64).then(|| (q as usize).max(2))
     }
 }
 
@@ -206,6 +205,10 @@ impl Context<'_> {
             let Some(cell) = cells.open.pop() else { break };
             cells.open_error -= cell.error;
             let part = &parts[cell.part];
+            if cell.bounded {
+                cells.place(self.cell(i, j, cell.patch, part, cell.part, 0, rules, tally));
+                continue;
+            }
             for child in cell.patch.quarters() {
                 cells.place(self.cell(i, j, child, part, cell.part, cell.depth + 1, rules, tally));
             }
@@ -390,7 +393,15 @@ impl Context<'_> {
         tally: &mut Tally,
     ) -> Cell {
         let area = patch.area();
-        let mut cell = Cell { patch, part: index, depth, value: 0.0, error: 0.0, refinable: false };
+        let mut cell = Cell {
+            patch,
+            part: index,
+            depth,
+            value: 0.0,
+            error: 0.0,
+            refinable: false,
+            bounded: false,
+        };
         if area == 0.0 {
             return cell;
         }
@@ -563,8 +574,10 @@ impl Context<'_> {
 
     /// `∫ g dA` over a patch that can hold at most `most` of it (`0 <= g <= most / area`), by
     /// its value at the centre: the integral lies between 0 and `most`, so the one-point rule
-    /// is off by at most the larger of its value and `most` less it. A bound, not an estimate:
-    /// the cell is settled.
+    /// is off by at most the larger of its value and `most` less it. A bound, not an estimate;
+    /// where the pair's budget needs it, the rules take the patch after all ([`Cell::bounded`]):
+    /// settled for good, such cells on the 12 x 12 tessellated city at --tolerance 1e-6 left a
+    /// pair whose other cells reached the split limit at 1.3e-6.
     fn bounded_cell(
         &self,
         (i, j): (usize, usize),
@@ -579,7 +592,7 @@ impl Context<'_> {
         tally.evaluations += 1;
         let (value, _) = self.weighted_sum(i, j, part.sight, &[(centre, patch.area())]);
         let error = value.max(most - value);
-        Cell { patch, part: index, depth: 0, value, error, refinable: false }
+        Cell { patch, part: index, depth: 0, value, error, refinable: true, bounded: true }
     }
 
     /// Whether the triangle `t` touches T_j, an obstacle or a pole line beside it, as
@@ -850,6 +863,9 @@ struct Cell {
     error: f64,
     /// Whether splitting it may reduce the error.
     refinable: bool,
+    /// Whether its value is its centre's, with a bound for its error
+    /// ([`Context::bounded_cell`]): refined by the rules over it, not by its quarters.
+    bounded: bool,
 }
 
 impl PartialEq for Cell {

@@ -315,8 +315,8 @@ fn occluders_found_once_per_face_give_each_pair_s_entry() {
 
 /// city:4x4 at loose tolerances: every entry within the tolerance of a run at 1e-8, and the
 /// work falling with the tolerance. At 1e-3 it took 60 % of the evaluations at 1e-6 while the
-/// collapsed rule at buildings' corners kept at least 6 orders at every tolerance, 36 % while
-/// every patch took two Gauss orders of at least 2 points a side; now 27 %.
+/// collapsed rule at buildings' corners kept at least 6 orders at every tolerance, 37 % while
+/// every patch took two Gauss orders, however little of F_ij it could hold; now 32 %.
 #[test]
 fn city_entries_meet_loose_tolerances_with_less_work() {
     let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
@@ -333,7 +333,7 @@ fn city_entries_meet_loose_tolerances_with_less_work() {
         evaluations.push(f.evaluations);
     }
     assert!(evaluations.windows(2).all(|w| w[0] < w[1]), "{evaluations:?}");
-    assert!(10 * evaluations[1] <= 3 * evaluations[4], "{evaluations:?}");
+    assert!(100 * evaluations[1] <= 34 * evaluations[4], "{evaluations:?}");
 }
 
 /// The bound that settles small patches ([`Context::bounded_cell`]) holds: from every point of
