@@ -30,7 +30,7 @@ pub(super) struct OuterRules {
 /// Highest order of the Gauss rules on a patch (GAUSS_MAX² points).
 const GAUSS_MAX: usize = 16;
 
-/// The share of a pair's error budget that patches settled by their bounds may take
+/// The share of a pair's error budget that patches taken by their bounds may take at first
 /// ([`Context::bounded_cell`]), the patches that can hold the least first.
 const BOUNDED_SHARE: f64 = 0.5;
 
@@ -575,9 +575,10 @@ impl Context<'_> {
     /// `∫ g dA` over a patch that can hold at most `most` of it (`0 <= g <= most / area`), by
     /// its value at the centre: the integral lies between 0 and `most`, so the one-point rule
     /// is off by at most the larger of its value and `most` less it. A bound, not an estimate;
-    /// where the pair's budget needs it, the rules take the patch after all ([`Cell::bounded`]):
-    /// settled for good, such cells on the 12 x 12 tessellated city at --tolerance 1e-6 left a
-    /// pair whose other cells reached the split limit at 1.3e-6.
+    /// where the pair's budget needs it, the rules take the patch after all ([`Cell::bounded`]).
+    /// Settled for good, such cells left the others half the budget: the louvre room and the
+    /// furnished room at --tolerance 1e-8 took 9.36 M and 5.29 M evaluations instead of 9.31 M
+    /// and 5.25 M (measured with a lowest Gauss order of 1).
     fn bounded_cell(
         &self,
         (i, j): (usize, usize),
