@@ -8,7 +8,7 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use super::Between;
-use super::events::{clip_polygon_3d, contact_cuts, event_planes, split};
+use super::events::{centroid, clip_polygon_3d, contact_cuts, event_planes, split};
 use super::opening::Opening;
 use super::outer::Outer;
 use super::patch::{GaussRules, Patch};
@@ -588,8 +588,7 @@ impl Context<'_> {
         most: f64,
         tally: &mut Tally,
     ) -> Cell {
-        let corners = patch.corners();
-        let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+        let centre = centroid(patch.corners());
         tally.evaluations += 1;
         let (value, _) = self.weighted_sum(i, j, part.sight, &[(centre, patch.area())]);
         let error = value.max(most - value);
