@@ -205,7 +205,7 @@ impl Context<'_> {
             let Some(cell) = cells.open.pop() else { break };
             cells.open_error -= cell.error;
             let part = &parts[cell.part];
-            if cell.bounded {
+            if cell.refine == Refine::ByRules {
                 cells.place(self.cell(i, j, cell.patch, part, cell.part, 0, rules, tally));
                 continue;
             }
@@ -393,15 +393,8 @@ impl Context<'_> {
         tally: &mut Tally,
     ) -> Cell {
         let area = patch.area();
-        let mut cell = Cell {
-            patch,
-            part: index,
-            depth,
-            value: 0.0,
-            error: 0.0,
-            refinable: false,
-            bounded: false,
-        };
+        let mut cell =
+            Cell { patch, part: index, depth, value: 0.0, error: 0.0, refine: Refine::Settled };
         if area == 0.0 {
             return cell;
         }
@@ -480,7 +473,7 @@ impl Context<'_> {
                 cell.value += value;
                 cell.error += error;
             }
-            cell.refinable = depth < MAX_SPLITS;
+            cell.refine = Refine::by_quarters_below_the_limit(depth);
             return cell;
         }
         let certified = matches!(part.sight, Sight::Whole);
@@ -506,7 +499,7 @@ impl Context<'_> {
             }
         }
         (cell.value, cell.error) = self.two_orders((i, j), &cell.patch, part, order, rules, tally);
-        cell.refinable = depth < MAX_SPLITS;
+        cell.refine = Refine::by_quarters_below_the_limit(depth);
         cell
     }
 
@@ -575,7 +568,7 @@ impl Context<'_> {
     /// `∫ g dA` over a patch that can hold at most `most` of it (`0 <= g <= most / area`), by
     /// its value at the centre: the integral lies between 0 and `most`, so the one-point rule
     /// is off by at most the larger of its value and `most` less it. A bound, not an estimate;
-    /// where the pair's budget needs it, the rules take the patch after all ([`Cell::bounded`]).
+    /// where the pair's budget needs it, the rules take the patch after all ([`Refine::ByRules`]).
     /// Settled for good, such cells left the others half the budget: the louvre room and the
     /// furnished room at --tolerance 1e-8 took 9.36 M and 5.29 M evaluations instead of 9.31 M
     /// and 5.25 M (measured with a lowest Gauss order of 1).
@@ -592,7 +585,7 @@ impl Context<'_> {
         tally.evaluations += 1;
         let (value, _) = self.weighted_sum(i, j, part.sight, &[(centre, patch.area())]);
         let error = value.max(most - value);
-        Cell { patch, part: index, depth: 0, value, error, refinable: true, bounded: true }
+        Cell { patch, part: index, depth: 0, value, error, refine: Refine::ByRules }
     }
 
     /// Whether the triangle `t` touches T_j, an obstacle or a pole line beside it, as
@@ -833,7 +826,7 @@ struct Cells {
 
 impl Cells {
     fn place(&mut self, cell: Cell) {
-        if cell.refinable {
+        if cell.refine != Refine::Settled {
             self.open_error += cell.error;
             self.open.push(cell);
         } else {
@@ -861,11 +854,27 @@ struct Cell {
     value: f64,
     /// Estimated |error| of `value`.
     error: f64,
-    /// Whether splitting it may reduce the error.
-    refinable: bool,
-    /// Whether its value is its centre's, with a bound for its error
-    /// ([`Context::bounded_cell`]): refined by the rules over it, not by its quarters.
-    bounded: bool,
+    /// How it may be refined, if at all.
+    refine: Refine,
+}
+
+/// How a [`Cell`] may be refined.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Refine {
+    /// Not at all: certified, or at the split limit.
+    Settled,
+    /// By its quarters.
+    ByQuarters,
+    /// By the rules over it: its value is its centre's, with a bound for its error
+    /// ([`Context::bounded_cell`]).
+    ByRules,
+}
+
+impl Refine {
+    /// By its quarters, where a cell made by `depth` rounds of splitting is below the limit.
+    fn by_quarters_below_the_limit(depth: u32) -> Self {
+        if depth < MAX_SPLITS { Refine::ByQuarters } else { Refine::Settled }
+    }
 }
 
 impl PartialEq for Cell {
