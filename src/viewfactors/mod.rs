@@ -56,6 +56,7 @@ use crate::progress::Progress;
 use crate::scene::Scene;
 use crate::visibility::{OccluderUnit, PairPlanner};
 
+mod check;
 mod events;
 mod opening;
 mod outer;
@@ -63,6 +64,7 @@ mod pair;
 mod patch;
 mod poles;
 mod sight;
+pub use check::EstimateCheck;
 use pair::OuterRules;
 
 /// Accuracy settings.
@@ -134,6 +136,8 @@ pub struct ViewFactors {
     /// Whether F_ij and F_ji were integrated each ([`ViewFactorOptions::each_direction`]);
     /// otherwise reciprocity holds by construction, to rounding.
     pub each_direction: bool,
+    /// Entries whose integral came out below zero by rounding, stored as zero.
+    pub clamped: usize,
 }
 
 /// Summary of a view factor computation, for reports.
@@ -158,6 +162,8 @@ pub struct ViewFactorSummary {
     pub each_direction: bool,
     /// Entries F_ij that are not zero (what a sparse output stores).
     pub nonzeros: usize,
+    /// Entries that came out below zero by rounding and were stored as zero.
+    pub clamped_negative: usize,
     /// Wall time.
     pub seconds: f64,
 }
@@ -181,6 +187,7 @@ impl ViewFactors {
             evaluations: self.evaluations,
             each_direction: self.each_direction,
             nonzeros: self.nonzeros(),
+            clamped_negative: self.clamped,
             seconds,
         }
     }
@@ -292,7 +299,11 @@ pub fn view_factors(
             for j in (0..n).filter(|&j| integrated(i, j)) {
                 let other = &mut between[mesh.elements()[j].face];
                 let value = context.pair(i, j, other, &rules, &mut tally);
-                if value != 0.0 {
+                // A view factor is not negative: where rounding of the signed pieces leaves
+                // one below 0 (a pair seen through a hair's width), it is 0, and counted.
+                if value < 0.0 {
+                    tally.clamped += 1;
+                } else if value != 0.0 {
                     row.push((j as u32, value));
                 }
             }
@@ -326,7 +337,7 @@ pub fn view_factors(
         values[next[i]] = v;
         next[i] += 1;
     };
-    let (mut error_estimate, mut evaluations) = (0.0f64, 0);
+    let (mut error_estimate, mut evaluations, mut clamped) = (0.0f64, 0, 0);
     for (i, (row, tally)) in rows.into_iter().enumerate() {
         for (j, v) in row {
             put(i, j, v);
@@ -336,6 +347,7 @@ pub fn view_factors(
         }
         error_estimate = error_estimate.max(tally.error);
         evaluations += tally.evaluations;
+        clamped += tally.clamped;
     }
     let mut entries = Vec::new();
     for i in 0..n {
@@ -359,6 +371,7 @@ pub fn view_factors(
         error_estimate,
         evaluations,
         each_direction,
+        clamped,
     })
 }
 
@@ -412,11 +425,13 @@ impl Context<'_> {
     }
 }
 
-/// Point-to-element integrals evaluated and the largest error estimate of a row.
+/// Point-to-element integrals evaluated, the largest error estimate and the entries clamped at
+/// zero of a row.
 #[derive(Default)]
 struct Tally {
     evaluations: u64,
     error: f64,
+    clamped: usize,
 }
 
 #[cfg(test)]
