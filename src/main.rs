@@ -42,6 +42,7 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn main() -> ExitCode {
+    quiet_vulkan_device_select();
     #[cfg(feature = "mpi")]
     let _mpi = start_mpi();
     match run(Cli::parse()) {
@@ -54,6 +55,21 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+    }
+}
+
+/// Mesa's implicit Vulkan layer `VK_LAYER_MESA_device_select` orders the GPUs for a display
+/// server: it connects to Wayland, and where there is none (a headless machine without
+/// `XDG_RUNTIME_DIR`) libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the
+/// environment." on every adapter search, an error that is none. The adapter is chosen here by
+/// kind and name (`gpu::GpuContext`), so the layer is switched off by its own variable, unless
+/// the user set it.
+fn quiet_vulkan_device_select() {
+    const SWITCH: &str = "NODEVICE_SELECT";
+    if std::env::var_os(SWITCH).is_none() {
+        // SAFETY: the first thing `main` does, before any other thread exists to read the
+        // environment.
+        unsafe { std::env::set_var(SWITCH, "1") };
     }
 }
 
