@@ -91,8 +91,7 @@ impl PairIntegrator {
     /// ([`crate::kernels::far_field::CONSTANT_WEIGHT_BANDS`]) keeps the last digits of f64
     /// beyond 100 radii, where the closed form loses about 1e-12 of its value (at 2e4 radii),
     /// which an f32 value does not hold, and its 25-point rule is evaluated pair by pair, not
-    /// in lanes (compressed, alternately on a 2-core EPYC: the louvre window at refine 6 86.3
-    /// and 78.4 s against 92.0 and 88.2 s, five-piece at refine 8 76.4 s against 87.3 s). The
+    /// in lanes, so the closed form in lanes is both accurate enough and faster there. The
     /// linear method keeps its bands, which are also its fast path.
     pub fn for_single_precision(method: Method, options: &AssemblyOptions) -> Self {
         let mut integrator = Self::new(method, options);
@@ -536,8 +535,8 @@ fn fill_row(
 ) {
     let per = disc.method.nodes_per_element();
     // The lanes add into the entries: written first, since a fresh matrix's untouched page read
-    // maps the zero page, and the write after it faults again and flushes every core's TLB
-    // (five-piece refine 4 took 2.4 times as long).
+    // maps the zero page, and the write after it faults again and flushes every core's TLB,
+    // which would cost more than the assembly's arithmetic.
     row[range.start * per..range.end * per].fill(0.0);
     match part {
         None => {

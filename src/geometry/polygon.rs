@@ -10,9 +10,8 @@ use smallvec::SmallVec;
 
 /// Vertices a clipped polygon holds without a heap allocation (clipping runs for every candidate
 /// occluder of every view). Fewer make the polygons cheaper to move, which they are more often
-/// than they grow past it: on a 2-core EPYC (2026-11-25) the occluded box's view factors took
-/// 4.78 s with 12, 4.62 s with 8, 4.36 s with 6 and 4.48 s with 4; the city:20x20 plan 2.64,
-/// 2.53, 2.52 and 2.62 s.
+/// than they grow past it; with fewer still, more of them spill to the heap. Six was the
+/// fastest of 4, 6, 8 and 12 on the occluded box's view factors and the city's pair plan.
 const INLINE_VERTICES: usize = 6;
 
 /// A polygon as clipping returns it.
@@ -339,8 +338,7 @@ pub fn subtract_convex(piece: &[DVec2], hole: &[DVec2]) -> Vec<Vec<DVec2>> {
         // leaves all of what is left inside, its values there as well, and changes nothing.
         // Most of a hole's lines do (an element that a shadow's side crosses is cut by that
         // side alone), and this test of `piece`'s corners costs less than taking the values of
-        // what is left with their tolerance (louvre room refine 5, `--shadowed-blocks`:
-        // 22.7-24.1 -> 19.9-20.5 s, the same operator).
+        // what is left with their tolerance.
         if piece.iter().all(|&p| inside.eval(p) >= 0.0) {
             continue;
         }

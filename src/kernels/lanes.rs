@@ -16,8 +16,8 @@ use super::Observer;
 use super::lane_math::atan2_positive_y;
 
 /// Pairs evaluated together: two AVX2 registers per step, whose independent chains overlap
-/// (`bench --scene five-piece --refine 4` setup 0.124 s against 0.131 s with four; compiled for
-/// AVX-512 instead, eight in one register, it took 0.155 s on the same Xeon).
+/// (faster than four lanes, and than eight in one AVX-512 register; docs/performance.md,
+/// "What was tried and did not pay").
 pub const LANES: usize = 8;
 
 /// `∫_T G(P, Q) dS_Q` for each lane's observer and triangle (counter-clockwise, the observer's
@@ -33,7 +33,7 @@ pub fn constant_weight(obs: &[Observer; LANES], tris: &[[DVec2; 3]; LANES]) -> [
 /// [`LANES`] (node, triangle) pairs as structure of arrays: what the kernel reads, written one
 /// scalar at a time as the pairs come (a pair's observer, just computed, is read back field by
 /// field, which the store buffer forwards; a 16-byte read of two 8-byte writes it cannot, and
-/// that stall was 10% of the centroid assembly).
+/// would stall every batch).
 #[derive(Clone, Copy, Debug, Default)]
 struct PairLanes {
     /// The observers' positions (x, y, z) and normals (i, j, k).

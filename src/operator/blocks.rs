@@ -367,8 +367,8 @@ impl Walk<'_> {
         }
         // Smooth neighbours gain nothing from small leaves; where visibility varies they do,
         // down to the mixed leaf size, also where a cluster spans several faces (a city's
-        // faces hold two elements each: split to single faces, city:35x36 made 36 million
-        // empty blocks and took 255 s instead of 38 s).
+        // faces hold two elements each: split to single faces, a city makes tens of millions
+        // of empty blocks, each classified on its own).
         let leaf = if class == PairClass::Smooth {
             self.options.leaf_size
         } else {
@@ -480,8 +480,8 @@ const FRONTIER_PER_RANK: usize = 64;
 
 /// The leaves of a shadowed block are this many times the mixed leaf size: a row of a leaf
 /// costs the factors' rank for each run of columns it sees whole, so wide leaves spread that
-/// over more entries (furnished room refine 5, against the mixed leaf size: GMRES 10.4 -> 7.3
-/// s, stored 857 -> 827 MB, setup within the noise).
+/// over more entries, which makes the products faster at no cost in storage or setup
+/// (docs/performance.md, "What was tried and did not pay").
 const SHADOWED_LEAF: usize = 4;
 
 /// Blocks of at least this many pairs have their subtrees walked in parallel.

@@ -206,23 +206,22 @@ impl From<bool> for ShadowedBlocks {
     }
 }
 
-/// Mean elements per face from which [`ShadowedBlocks::Auto`] makes shadowed blocks. Measured
-/// on the EPYC (`solve --operator compressed`, whole run, with them and without): the lit
-/// city:4x4 at refine 3 (128 per face) 3.0 s against 2.4 s, at refine 4 (512) the same time
-/// and memory; the staircase hall at refine 5 (2 048) 24.4 s and 0.94 GB against 31.1 s and
-/// 1.10 GB; five-piece refine 7 (32 768) 11.5 s against 14.4 s; the louvre window at refine 6
-/// (8 192) about 95 s and 3.7 GB against 157 s and 6.4 GB (docs/performance.md).
+/// Mean elements per face from which [`ShadowedBlocks::Auto`] makes shadowed blocks. On large
+/// faces a shadowed block's one factorisation stands for the many small blocks its shadows
+/// would split it into, and saves time and memory; on faces of a few leaves it is one more
+/// cross approximation, at a tighter tolerance, over blocks that end mostly exact, and costs
+/// time. The two break even at about this size (docs/performance.md, "The compressed
+/// operator", measured per scene with them and without).
 pub const SHADOWED_FROM_ELEMENTS_PER_FACE: f64 = 512.0;
 
 impl Default for CompressionOptions {
     fn default() -> Self {
-        // eta 2: at n = 163 840 the setup took 17.4 s and 1.69 GB instead of 23.5 s and 2.46 GB
-        // with eta 1 (docs/performance.md); eta 3 made no difference. Mixed leaves of 32, since
-        // exact blocks store only what is seen: against 16, five-piece refine 7 solves in 9.2 s
-        // and 0.74 GB instead of 10.5 s and 0.76 GB, the furnished room (refine 5) in 22.7 s
-        // and 1.40 GB instead of 25.2 s and 1.52 GB, the louvre room (refine 5) in 21.9 s
-        // instead of 29.1 s, the lit city:35x36 (refine 1) in 186 s instead of 207 s (EPYC,
-        // 2026-11-26); 64 was faster on the cities but stored more on the rooms.
+        // eta 2: more blocks are admissible than with eta 1, which saves setup time and memory,
+        // while eta 3 gains nothing more and raises the ranks. Mixed leaves of 32: exact blocks
+        // store only what is seen, so larger leaves cost little memory and save the
+        // classification of many small blocks (faster than 16 on the paper's surface, the rooms
+        // and the cities; 64 was faster on the cities but stored more on the rooms). Measured
+        // in docs/performance.md, "The compressed operator".
         Self {
             tolerance: DEFAULT_TOLERANCE,
             eta: 2.0,
@@ -468,9 +467,9 @@ impl CompressedOperator {
             (nodes, elements, plan)
         });
         // What the exact blocks store for certain must fit before any is computed (counting
-        // every exact block in full refused runs that fit: the lit city:35x36 at refine 1 with
-        // mixed leaves of 32 "needed" 17.3 GiB and stored 0.62 GB); then every block built
-        // counts, and the build stops where it would pass the allowance.
+        // every exact block in full would refuse runs that fit: a partly visible block stores
+        // anything from none to all of its entries, and on a city most store few); then every
+        // block built counts, and the build stops where it would pass the allowance.
         let guard = MemoryGuard::new(disc.dof());
         let precision = Precision::for_tolerance(options.tolerance);
         let reflects = |i: usize| disc.nodes[i].rho != 0.0;
