@@ -1,25 +1,30 @@
 //! Collocation assembler and solver for the occluded radiosity equation on polyhedral surfaces.
 //!
-//! The modules are listed in the order data flows through them, lowest layer first; a module
-//! uses only those above it in this list (ARCHITECTURE.md; `tests/module_graph.rs` checks it).
+//! The modules are listed by layer, lowest first, as ARCHITECTURE.md's table has them: a module
+//! uses only modules of lower layers, listed above it (`tests/module_graph.rs` checks both).
+//! Each layer is a group of its own, since rustfmt sorts the modules within a group.
 #![warn(missing_docs)]
 
-// Foundations: errors, progress, plane geometry and quadrature rules.
+// Foundations: errors, progress, the collectives of a run over several processes (MPI),
+// plane geometry and quadrature rules.
+pub mod distributed;
 pub mod error;
 pub mod geometry;
 pub mod progress;
 pub mod quadrature;
 
-// The scene and the collocation integrals' closed forms.
+// The collocation integrals' closed forms, and the scene.
 pub mod kernels;
 pub mod scene;
 
 // The pair plan: what each point sees of each face, exactly.
 pub mod visibility;
 
-// The mesh and the collocation scheme on it.
-pub mod discretization;
+// The mesh.
 pub mod mesh;
+
+// The collocation scheme on the mesh.
+pub mod discretization;
 
 // The collocation matrix, and what evaluates its entries.
 pub mod assembly;
@@ -36,8 +41,7 @@ pub mod solution;
 pub mod solve;
 pub mod surface_error;
 
-// Runs over several processes (MPI), and one run from a configuration, end to end.
-pub mod distributed;
+// One run from a configuration, end to end.
 pub mod pipeline;
 
 // Whole-run benchmarks and the paper's studies.
