@@ -318,3 +318,12 @@ fn small_cities_of_rotated_buildings_keep_their_estimates() {
         assert_estimates_hold(&city(seed), 0, &[1e-4, 1e-6]);
     }
 }
+
+#[test]
+fn the_generated_city_keeps_its_estimates() {
+    // Facing walls across a street, 6 m apart with elements 35 m across: the certified rule's
+    // order from the ellipse through a point beyond a side's end left an entry 2.1e-6 off at
+    // 1e-6 with each direction integrated. At 1e-8 entries of walls touching ground triangles
+    // at a corner are still up to 15 times their estimate: not yet held.
+    assert_estimates_hold(&radiosity::scene::city(4, 4).unwrap(), 0, &[1e-4, 1e-6]);
+}

@@ -35,16 +35,15 @@ const GAUSS_MAX: usize = 16;
 const BOUNDED_SHARE: f64 = 0.5;
 
 /// The outer rule's target error where T_j is seen whole, relative to the integrand's size near
-/// the element: a ten-thousandth of the tolerance, and no less than 1e-13. The Gauss order is
-/// chosen from the separation so that the Bernstein-ellipse bound meets it; the integrand is
-/// analytic away from T_j and the bound is trusted (one rule, no estimate), as it has been
-/// since the first exact rule. The bound's constant is not 1: aiming at a hundredth of the
-/// default tolerance (1e-12), neighbouring walls of city:4x4 with F near 0.2 came out 3.5e-10
-/// off, 1 700 times the target, with no estimate to say so. Five-piece refine 3 at --tolerance
-/// 1e-6 (2-core EPYC): 2.23 M evaluations with 1e-13 at every tolerance, 1.45 M with this,
-/// every entry as far from a run at 1e-12; at the default the same order as before.
+/// the element: a tenth of the tolerance, and no less than 1e-13. The Gauss order is chosen from
+/// the separation so that the Bernstein-ellipse bound meets it ([`OuterRules::bound_order`]);
+/// the integrand is analytic away from T_j and the bound is trusted (one rule, no estimate). A
+/// tenth leaves the bound's constant (the rule's, and the integrand's growth off the real
+/// patch) a factor of ten within the tolerance. Aimed at a ten-thousandth with the ellipse of a
+/// point beyond a side's end instead, two facing walls of city:4x4 6 m apart (elements 35 m
+/// across) came out 2.1e-6 off at --tolerance 1e-6, with an estimate of 1e-6.
 fn certified_target(tolerance: f64) -> f64 {
-    (1e-4 * tolerance).max(1e-13)
+    (0.1 * tolerance).max(1e-13)
 }
 
 impl OuterRules {
@@ -62,13 +61,26 @@ impl OuterRules {
     }
 
     /// The Gauss order for a patch of size `size` at distance `distance` from the nearest
-    /// point where the integrand is not analytic (the other element, an occluder): the
-    /// integrand is analytic in an ellipse with foci at a side's ends and semi-axis sum
-    /// rho = a + sqrt(a² - 1), a = 1 + 2 distance / size, and the q-point rule's error falls
-    /// like rho^-2q. `None` when even the highest order but one does not reach the target (the
-    /// cell then takes that order and the highest, and its estimate decides whether to split).
-    fn gauss_order(&self, size: f64, distance: f64, target: f64) -> Option<usize> {
+    /// point where the integrand is not analytic (the other element, an occluder), as a first
+    /// guess that the cell's estimate checks: the integrand is analytic in an ellipse with foci
+    /// at a side's ends, and where the point lies beyond a side's end, its semi-axis sum is
+    /// rho = a + sqrt(a² - 1), a = 1 + 2 distance / size; the q-point rule's error falls like
+    /// rho^-2q. `None` when even the highest order but one does not reach the target (the cell
+    /// then takes that order and the highest, and its estimate decides whether to split).
+    fn guessed_order(&self, size: f64, distance: f64, target: f64) -> Option<usize> {
         let a = 1.0 + 2.0 * distance / size;
+        self.order_for(a + (a * a - 1.0).sqrt(), target)
+    }
+
+    /// The Gauss order whose a priori bound meets the target wherever the point at `distance`
+    /// lies: the smallest ellipse is that through a point at that distance from a side's
+    /// middle, a = sqrt(1 + (2 distance / size)²). Where the distance is small against the
+    /// patch (two facing walls across a street) it is far smaller than beyond a side's end,
+    /// whose order missed the target by 2e4 there. `None` where no order up to the highest but
+    /// one meets it.
+    fn bound_order(&self, size: f64, distance: f64, target: f64) -> Option<usize> {
+        let across = 2.0 * distance / size;
+        let a = (1.0 + across * across).sqrt();
         self.order_for(a + (a * a - 1.0).sqrt(), target)
     }
 
@@ -467,8 +479,11 @@ impl Context<'_> {
                 }
                 let at_corner = match self.at_obstacle_corner(t, part) {
                     Some((t, distance)) => {
-                        let q =
-                            rules.gauss_order(Patch::Triangle(t).size(), distance, shadowed_target);
+                        let q = rules.guessed_order(
+                            Patch::Triangle(t).size(),
+                            distance,
+                            shadowed_target,
+                        );
                         Some((t, q.unwrap_or(GAUSS_MAX - 1)))
                     }
                     None => self.at_target_corner(t, part, rules, shadowed_target),
@@ -499,7 +514,11 @@ impl Context<'_> {
         let certified = matches!(part.sight, Sight::Whole);
         let target =
             if certified { certified_target(self.options.tolerance) } else { shadowed_target };
-        let order = rules.gauss_order(size, distance, target);
+        let order = if certified {
+            rules.bound_order(size, distance, target)
+        } else {
+            rules.guessed_order(size, distance, target)
+        };
         if certified {
             match order {
                 Some(q) => {
@@ -694,7 +713,7 @@ impl Context<'_> {
         if apart <= near {
             return None;
         }
-        let mut q = rules.gauss_order(size, apart, target)?;
+        let mut q = rules.guessed_order(size, apart, target)?;
         // The rule's rays from the contact run along w(y) = (b - a) + y (c - b), y in [0, 1];
         // w is parallel to the unit edge e where |w|² - (w·e)² = α y² + β y + γ vanishes.
         let (along, across) = (t[1] - t[0], t[2] - t[1]);
