@@ -80,8 +80,7 @@ pub(super) fn event_planes(
             // point of an edge of the other lies in a face's plane (that face's own event) or
             // passes through the solid, where neither is on its outline from the viewer. The
             // solids' faces make most of a city's pairs of occluders (tessellated city 5 x 5
-            // without its sky at --tolerance 1e-6: the same .npz to the byte, 14.26 -> 13.52 s
-            // on average over three alternate runs).
+            // without its sky at --tolerance 1e-6: the same .npz to the byte, for fewer cuts).
             if solids[k].is_some() && solids[k] == solids[l] {
                 continue;
             }
@@ -96,8 +95,8 @@ pub(super) fn event_planes(
 /// segment is taken to reach. Where a segment ends (the vertex lines up with an end of the
 /// edge) the integrand is not smooth in any direction, so every piece around that point must
 /// have it as a corner, also where rounding puts the end on a piece's side: occluded box at the
-/// default tolerance (2-core EPYC) with the bare segments 2.9 s, reciprocity 2.5e-9; with 0.02
-/// 3.2 s, 1.0e-9, as with whole planes (4.5 s).
+/// default tolerance, reciprocity 2.5e-9 with the bare segments; with 0.02, 1.0e-9, as with
+/// whole planes, which cut far more.
 const END_MARGIN: f64 = 0.02;
 
 /// A plane across which the integrand stops being smooth, and where on the viewing element it

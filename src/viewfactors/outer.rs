@@ -105,8 +105,8 @@ impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
                 // ground triangle at a wall's foot had levels 0 and 1 (5 and 11 points a side)
                 // agree to 6.5e-6 and miss by 2.9e-5. A value is taken on the estimate of
                 // three levels, whose digits double per level once the rule converges: that
-                // may already meet the tolerance (louvre room at 1e-6: 41.0 M -> 20.9 M
-                // evaluations, 31.7 -> 22.5 s, no entry further from a 1e-10 reference; level
+                // may already meet the tolerance (louvre room at 1e-6: 20.9 M evaluations
+                // instead of 41.0 M, no entry further from a 1e-10 reference; level
                 // 2 to 3 differed by 1e-10 where level 1 to 2 by 3e-6).
                 let kept = kept_error(value, before, diff) + truncated;
                 if early && before.is_some() && kept <= self.options.tolerance {

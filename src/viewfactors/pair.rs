@@ -51,7 +51,7 @@ impl OuterRules {
     /// hundredth of the tolerance (the integrand, a point-to-element factor, is at most 1).
     /// Truncated at 1e-20 instead, city:4x4 and the louvre room at --tolerance 1e-6 took
     /// 4.54 M and 7.17 M evaluations in touching triangles instead of 2.41 M and 3.79 M, with
-    /// every entry the same to 1e-10 (2-core EPYC, 2.5 s against 1.9 s and 7.5 s against 6.4 s).
+    /// every entry the same to 1e-10.
     pub(super) fn new(options: &ViewFactorOptions) -> Self {
         let tail = 1e-2 * options.tolerance;
         Self {
@@ -441,10 +441,9 @@ impl Context<'_> {
         let checked = part.clipped && distance <= TOUCHING * size;
         let distance = distance.min(part.obstacle_distance(patch.corners()));
         // Where occluders shadow T_j the order is only a first guess, since the estimate with
-        // one order more decides: it aims at the tolerance itself. On the occluded box at
-        // --tolerance 1e-10 (2-core EPYC, 2026-11-24) aiming at 3e-11 took 11.3 s, 1e-10
-        // 11.7 s and 1e-9 13.7 s (more splits); at --tolerance 1e-9, aiming at 1e-10 took
-        // 8.35 s and at 1e-9 7.6 s, to a reciprocity of 8.4e-9 and 3.0e-9.
+        // one order more decides: it aims at the tolerance itself. Aiming lower costs higher
+        // first orders, aiming higher costs more splits (on the occluded box either was
+        // slower, for the same reciprocity).
         // The Bernstein bound is relative to the integrand's size, which from a patch at
         // distance d from T_j is at most A_j / (π d²) (cosines at most 1): the tolerance on
         // F_ij asks for that much less relative accuracy of a patch far from a small T_j.
@@ -1091,7 +1090,7 @@ impl Part<'_> {
 /// Lowest order of the collapsed Gauss rule on a triangle at the point where an occluder's edge
 /// meets T_i ([`Context::at_obstacle_corner`]): as many as the tolerance has digits, and at
 /// least 3. The order from the patch's distance to the poles does not see the event planes
-/// through that point outside the triangle: on city:4x4 at --tolerance 1e-6 (2-core EPYC), from
+/// through that point outside the triangle: on city:4x4 at --tolerance 1e-6, from
 /// order 2 a ground triangle at a building's corner had orders 3 and 4 agree while missing by
 /// 1.6e-6, from 6 every entry was within 6.4e-7 of a run at 1e-12; at the default 1e-10, from 6
 /// an entry of the louvre room was 2.2e-9 off, from 10 none more than with tanh-sinh there.

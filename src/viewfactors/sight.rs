@@ -227,6 +227,6 @@ fn inclusion_exclusion(window: Vec<DVec2>, shadows: Shadows) -> (Vec<Vec<DVec2>>
 
 /// Up to this many shadows on T_j, a point's view is integrated by inclusion and exclusion of the
 /// shadows' intersections (at most 2^k - 1 convex polygons, fewer where shadows are apart)
-/// instead of over the pieces left by subtracting them. On the occluded box (2-core EPYC,
-/// 2026-11-25) 3 took 4.85 s, 4 took 4.75 s, 6 took 4.83 s.
+/// instead of over the pieces left by subtracting them. On the occluded box 3, 4 and 6 took
+/// about the same time, 4 the least.
 pub(super) const INCLUSION_EXCLUSION: usize = 4;

@@ -42,8 +42,8 @@ pub enum Views<'a> {
 
 /// One viewer's views of the faces met so far, and its recent hiders. A node of a city meets
 /// thousands of faces over its cluster's blocks: looked up by face, not searched in a list
-/// (the search took 63 % of `city:20x20`'s compressed setup), by a fast hash of the face's
-/// number (the default SipHash took 7 % of `city:35x36`'s).
+/// (a search would dominate a large city's compressed setup), by a fast hash of the face's
+/// number (SipHash's resistance to chosen keys buys nothing for face numbers).
 #[derive(Debug, Default)]
 pub struct KeptViews {
     views: FxHashMap<usize, FaceView>,
@@ -53,7 +53,7 @@ pub struct KeptViews {
 impl KeptViews {
     fn view(&mut self, planner: &PairPlanner, viewer: &Viewer, face: usize) -> &FaceView {
         // Faces in the viewer's plane or behind it are told by the planes: not kept (most of
-        // a node's faces in a city; their insertions took 5 % of its exact blocks' time).
+        // a node's faces in a city, whose insertions would cost more than the test).
         const SAME_PLANE: FaceView = FaceView::Skip(SkipReason::SamePlane);
         const FACING_AWAY: FaceView = FaceView::Skip(SkipReason::FacingAway);
         match planner.plane_skip_of(viewer.position, viewer.face, face) {
