@@ -327,3 +327,19 @@ fn the_generated_city_keeps_its_estimates() {
     // at a corner are still up to 15 times their estimate: not yet held.
     assert_estimates_hold(&radiosity::scene::city(4, 4).unwrap(), 0, &[1e-4, 1e-6]);
 }
+
+#[test]
+fn a_wall_touching_a_small_ground_triangle_at_a_corner_keeps_its_estimate() {
+    // Integrated over the wall (each direction), its triangles' tanh-sinh levels met 1e-8 while
+    // 1.5e-7 off: the integrand changes its scale at the ground triangle's size, far inside.
+    let v = |x, y, z| DVec3::new(x, y, z);
+    let wall =
+        vec![v(38.0, 64.0, 0.0), v(38.0, 54.0, 0.0), v(38.0, 54.0, 33.0), v(38.0, 64.0, 33.0)];
+    let ground = vec![v(32.0, 64.0, 0.0), v(38.0, 64.0, 0.0), v(38.0, 70.0, 0.0)];
+    let scene = Scene::new(
+        "wall-and-ground",
+        vec![face("wall".into(), wall), face("ground".into(), ground)],
+    )
+    .unwrap();
+    assert_estimates_hold(&scene, 0, &[1e-6, 1e-8]);
+}
