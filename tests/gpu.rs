@@ -616,3 +616,31 @@ fn the_compressed_operator_on_the_device_gives_the_host_product() {
     assert!(kinds.iter().all(|&k| k > 0), "dense, sparse and low-rank blocks met: {kinds:?}");
     assert!(most_parts >= 3, "operators split in at most {most_parts} parts");
 }
+
+#[test]
+fn generated_scenes_assemble_on_the_gpu_as_on_the_cpu() {
+    // Closed rooms with floating boxes, louvres, cities of rotated buildings far from the origin
+    // and slivers touching walls (tests/common/generated.rs), both methods.
+    use common::generated::{city, louvre, room_with_boxes, slivers_touching_walls};
+    let Some(ctx) = gpu() else { return };
+    let scenes = [room_with_boxes(0), louvre(1), city(0), slivers_touching_walls(2)];
+    for scene in scenes {
+        for (method, refine) in [(Method::Centroid, 2), (Method::linear(1.0 / 6.0).unwrap(), 1)] {
+            let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
+            let disc = Discretization::new(&scene, &mesh, method).unwrap();
+            let problem = Problem::new(scene.clone(), mesh, disc);
+            let opts = AssemblyOptions::default();
+            let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
+            let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, method).unwrap();
+            let gpu = assembler.assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
+            let (d, i, j) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
+            assert!(
+                d <= 1e-12,
+                "{} {method}: entry ({i}, {j}): cpu {} gpu {} (row-relative diff {d:e})",
+                scene.name,
+                cpu.matrix.get(i, j),
+                gpu.matrix.get(i, j)
+            );
+        }
+    }
+}
