@@ -4,14 +4,15 @@
 //! within the areas times the estimate when both directions are integrated, and no entry is
 //! negative.
 
+mod common;
+
+use common::generated::{city, face, louvre, room_with_boxes, slivers_touching_walls};
 use glam::DVec3;
 use radiosity::mesh::{Mesh, MeshKind};
 use radiosity::progress::Silent;
 use radiosity::scene::Scene;
 use radiosity::viewfactors::{ViewFactorOptions, ViewFactors, view_factors};
 use radiosity::visibility::PairPlanner;
-use rand::rngs::StdRng;
-use rand::{Rng, SeedableRng};
 
 /// The reference's tolerance: far below every tolerance checked.
 const REFERENCE: f64 = 1e-11;

@@ -16,22 +16,37 @@ pub(super) struct Outer<'a, F: FnMut(&[DVec3], &mut [f64])> {
     pub(super) evaluations: u64,
 }
 
+/// How a touching triangle's rule is checked.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Check {
+    /// By its levels alone.
+    Levels,
+    /// By its four quarters' rules against the rule over the whole.
+    Quarters,
+    /// By its quarters, every level of each rule taken: where the integrand changes its scale
+    /// far from the contact the rule is collapsed at (a narrow contact, a triangle much larger
+    /// than T_j), the first three levels of the whole and of the quarters can agree by chance
+    /// at a loose tolerance (a ground sliver touching a wall at 1e-4: 9.7e-6 estimated, 2.1e-5
+    /// off).
+    QuartersEveryLevel,
+}
+
 impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
-    /// `(1/A) ∫_T g dA` for the triangle `t`, and the estimated error; where `checked`, the mean
-    /// of its four quarters' rules, checked against the rule over the whole. The levels of one
-    /// rule can agree to 5e-7 while missing the integral by 2.2e-6 (a partition's element
-    /// touching a floor element at one corner, the floor partly behind the partition's plane);
-    /// the quarters, collapsed at other corners, do not share that miss (they met the integral
-    /// to 1e-10 there).
-    pub(super) fn integrate(&mut self, t: [DVec3; 3], checked: bool) -> (f64, f64) {
-        let whole = self.levels(t, 0, !checked);
-        if !checked {
+    /// `(1/A) ∫_T g dA` for the triangle `t`, and the estimated error, checked as `check` says.
+    /// The levels of one rule can agree to 5e-7 while missing the integral by 2.2e-6 (a
+    /// partition's element touching a floor element at one corner, the floor partly behind the
+    /// partition's plane); the quarters, collapsed at other corners, do not share that miss
+    /// (they met the integral to 1e-10 there).
+    pub(super) fn integrate(&mut self, t: [DVec3; 3], check: Check) -> (f64, f64) {
+        let early = check != Check::QuartersEveryLevel;
+        let whole = self.levels(t, 0, early);
+        if check == Check::Levels {
             return whole;
         }
         let whole = whole.0;
         let (mut sum, mut error) = (0.0, 0.0);
         for child in triangle_quarters(t) {
-            let (v, e) = self.levels(child, 0, false);
+            let (v, e) = self.levels(child, 0, early);
             sum += 0.25 * v;
             error += 0.25 * e;
         }
@@ -40,10 +55,7 @@ impl<F: FnMut(&[DVec3], &mut [f64])> Outer<'_, F> {
 
     /// `(1/A) ∫_T g dA` by the rule's levels (split into quarters at most `max_depth - depth`
     /// times where the finest levels disagree), and the estimated error; where `early`, taken
-    /// from the first three levels whose estimate meets the tolerance. A triangle checked by
-    /// its quarters takes every level, whole and quartered: at a loose tolerance the first
-    /// three levels of each agreed by chance (a ground sliver touching a wall at 1e-4: 9.7e-6
-    /// estimated, 2.1e-5 off).
+    /// from the first three levels whose estimate meets the tolerance.
     fn levels(&mut self, t: [DVec3; 3], depth: u32, early: bool) -> (f64, f64) {
         let [a, b, c] = t;
         // P(u, v) = c + u (a - c) + u v (b - a); dA = 2 A u du dv. The integrand at the finest

@@ -10,7 +10,7 @@ use smallvec::SmallVec;
 use super::Between;
 use super::events::{centroid, clip_polygon_3d, contact_cuts, event_planes, split};
 use super::opening::Opening;
-use super::outer::Outer;
+use super::outer::{Check, Outer};
 use super::patch::{GaussRules, Patch};
 use super::poles::poles;
 use super::sight::{Among, PointView, Shapes, Sight};
@@ -502,8 +502,14 @@ impl Context<'_> {
                     _ => {
                         let outsized = Patch::Triangle(t).size()
                             > OUTSIZED * Patch::Triangle(part.target).size();
-                        let checked = checked || part.narrow_contact(&t) || outsized;
-                        self.touching_triangle(i, j, t, part, checked, rules, tally)
+                        let check = if part.narrow_contact(&t) || outsized {
+                            Check::QuartersEveryLevel
+                        } else if checked {
+                            Check::Quarters
+                        } else {
+                            Check::Levels
+                        };
+                        self.touching_triangle(i, j, t, part, check, rules, tally)
                     }
                 };
                 cell.value += value;
@@ -803,8 +809,8 @@ impl Context<'_> {
     /// singularity (an integrand whose limit depends on the direction, as at a corner of T_j on
     /// T_i, or where an occluder's edge meets T_i) costs nothing: the corner nearest a corner
     /// of T_j or such a point is put there. Where it touches T_j and T_j reaches behind its
-    /// plane (`checked`), or where the views from a few points differ in shape, its quarters
-    /// check the rule ([`Outer::integrate`]).
+    /// plane, or where the views from a few points differ in shape, its quarters check the rule
+    /// (`check`, [`Outer::integrate`]).
     #[allow(clippy::too_many_arguments)]
     fn touching_triangle(
         &self,
@@ -812,7 +818,7 @@ impl Context<'_> {
         j: usize,
         t: [DVec3; 3],
         part: &Part,
-        checked: bool,
+        check: Check,
         rules: &OuterRules,
         tally: &mut Tally,
     ) -> (f64, f64) {
@@ -833,12 +839,19 @@ impl Context<'_> {
         // against an estimate of 7e-11, a ground triangle at a building's corner on city:4x4):
         // its quarters check it. The rule's own points, crowded at the sides, would see
         // shapes that differ only by rounding there. Where T_j is seen whole there is one shape.
-        let checked = checked
-            || matches!(part.sight, Sight::PerPoint(_)) && {
-                let probe = Patch::Triangle(t).gauss_points(&rules.gauss, PROBE_ORDER);
-                tally.evaluations += probe.len() as u64;
-                matches!(self.shapes_at(i, j, part.sight, &probe), Shapes::Many)
-            };
+        let views_differ = |tally: &mut Tally| {
+            let probe = Patch::Triangle(t).gauss_points(&rules.gauss, PROBE_ORDER);
+            tally.evaluations += probe.len() as u64;
+            matches!(self.shapes_at(i, j, part.sight, &probe), Shapes::Many)
+        };
+        let check = if check == Check::Levels
+            && matches!(part.sight, Sight::PerPoint(_))
+            && views_differ(tally)
+        {
+            Check::Quarters
+        } else {
+            check
+        };
         let mut outer = Outer {
             rule: &rules.tanh_sinh,
             options: self.options,
@@ -847,7 +860,7 @@ impl Context<'_> {
             },
             evaluations: 0,
         };
-        let (value, error) = outer.integrate(t, checked);
+        let (value, error) = outer.integrate(t, check);
         tally.evaluations += outer.evaluations;
         (area * value, area * error)
     }
