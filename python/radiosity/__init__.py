@@ -16,7 +16,10 @@ Options take the command line's names and defaults (``--compression-tolerance`` 
 message.
 """
 
+from __future__ import annotations
+
 import json
+from typing import TYPE_CHECKING, Any, Callable, Optional
 
 import numpy as np
 import scipy.sparse
@@ -24,6 +27,14 @@ import scipy.sparse.linalg
 
 from . import _native
 from ._native import RadiosityError, Scene
+
+if TYPE_CHECKING:
+    import os
+
+    import numpy.typing as npt
+    from typing_extensions import Unpack
+
+    from ._native import _Coplanar, _Path, _Progress, _RunKwargs, _RunOptions, _RunResult
 
 __all__ = [
     "RadiosityError",
@@ -39,7 +50,7 @@ __all__ = [
 ]
 
 # The command line's defaults (radiosity solve --help).
-_DEFAULTS = dict(
+_DEFAULTS: dict[str, Any] = dict(
     refine=2,
     method="centroid",
     alpha=None,
@@ -59,16 +70,23 @@ _DEFAULTS = dict(
 )
 
 
-def _options(given):
+def _options(given: dict[str, Any]) -> _RunOptions:
     unknown = sorted(set(given) - set(_DEFAULTS))
     if unknown:
         raise TypeError(f"unknown options {unknown}; known: {sorted(_DEFAULTS)}")
     options = dict(_DEFAULTS)
     options.update(given)
-    return options
+    return options  # type: ignore[return-value]
 
 
-def from_arrays(vertices, triangles, rho, emission=0.0, name="mesh", coplanar=None):
+def from_arrays(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    rho: npt.ArrayLike,
+    emission: npt.ArrayLike = 0.0,
+    name: str = "mesh",
+    coplanar: Optional[_Coplanar] = None,
+) -> Scene:
     """A scene from a triangle mesh: ``vertices`` (m x 3), ``triangles`` (t x 3 indices into
     them), ``rho`` and ``emission`` per triangle or one value for all. Read as an STL file is:
     coplanar triangles that share edges and properties are merged into faces for visibility
@@ -90,7 +108,15 @@ class Solution:
     emission cases, ``cases_u`` holds one column of u per case and ``u`` is their mean; with
     colour bands (``bands="rgb"``), ``bands_u`` one column per band."""
 
-    def __init__(self, raw):
+    u: npt.NDArray[np.float64]
+    nodes: npt.NDArray[np.float64]
+    faces: npt.NDArray[np.uintp]
+    emission: npt.NDArray[np.float64]
+    cases_u: Optional[npt.NDArray[np.float64]]
+    bands_u: Optional[npt.NDArray[np.float64]]
+    report: dict[str, Any]
+
+    def __init__(self, raw: _RunResult) -> None:
         self.u = raw["u"]
         self.nodes = raw["nodes"]
         self.faces = raw["faces"]
@@ -99,18 +125,23 @@ class Solution:
         self.bands_u = raw.get("bands_u")
         self.report = json.loads(raw["report"])
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         report = self.__dict__.get("report", {})
         if name in report:
             return report[name]
         raise AttributeError(f"a solution has no '{name}'; its report has {sorted(report)}")
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         r = self.report
         return f"Solution({r['surface']!r}, n={r['n']}, dof={r['dof']}, error={r['error']})"
 
 
-def solve(scene, emission=None, progress=None, **options):
+def solve(
+    scene: Scene,
+    emission: Optional[npt.ArrayLike] = None,
+    progress: Optional[_Progress] = None,
+    **options: Unpack[_RunKwargs],
+) -> Solution:
     """Solves the radiosity equation on ``scene`` as ``radiosity solve`` does, with its
     options (``refine``, ``method``, ``operator``, ``solver``, ``solution``, ``backend``, ...).
     ``emission`` replaces the scene's emission: per face (``scene.face_names`` order) or per
@@ -118,7 +149,7 @@ def solve(scene, emission=None, progress=None, **options):
     ``progress(stage, done, total)`` (see :func:`tqdm_progress`)."""
     if emission is not None:
         emission = np.ascontiguousarray(emission, dtype=np.float64)
-    raw = _native.solve(scene, _options(options), emission, progress)
+    raw = _native.solve(scene, _options(dict(options)), emission, progress)
     return Solution(raw)
 
 
@@ -131,22 +162,28 @@ class Operator(scipy.sparse.linalg.LinearOperator):
     ``faces`` and ``rho`` describe the unknowns; ``report`` the operator (as in
     ``solve --json``)."""
 
-    def __init__(self, native):
+    nodes: npt.NDArray[np.float64]
+    faces: npt.NDArray[np.uintp]
+    rho: npt.NDArray[np.float64]
+    report: dict[str, Any]
+    last_reports: list[dict[str, Any]]
+
+    def __init__(self, native: _native.NativeOperator) -> None:
         self._native = native
         self.report = json.loads(native.report)
         self.nodes, self.faces, self.rho = native.nodes()
         super().__init__(dtype=np.float64, shape=(native.dof, native.dof))
 
-    def _matvec(self, x):
+    def _matvec(self, x: npt.ArrayLike) -> npt.NDArray[np.float64]:
         x = np.ascontiguousarray(np.ravel(x), dtype=np.float64)
         return self._native.matvec(x)
 
-    def save(self, path):
+    def save(self, path: _Path) -> None:
         """Saves the operator for ``operator(scene, operator_file=path, ...)`` (the same
         scene and options) and ``radiosity solve --operator-file``."""
         self._native.save(str(path))
 
-    def solve(self, emission):
+    def solve(self, emission: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """u with ``(I - K) u = E`` for each column of ``emission``; ``self.last_reports``
         then holds each case's solver report (solver, iterations, residual)."""
         emission = np.ascontiguousarray(emission, dtype=np.float64)
@@ -155,12 +192,14 @@ class Operator(scipy.sparse.linalg.LinearOperator):
         return u
 
 
-def operator(scene, progress=None, **options):
+def operator(
+    scene: Scene, progress: Optional[_Progress] = None, **options: Unpack[_RunKwargs]
+) -> Operator:
     """The operator of ``scene`` for the run ``options`` describe (as :func:`solve` takes
     them), built once for products and many solves; or read from ``operator_file`` (saved by
     :meth:`Operator.save` or ``radiosity assemble --save``), which must have been built for the
     same scene, mesh, method and tolerance."""
-    return Operator(_native.operator(scene, _options(options), progress))
+    return Operator(_native.operator(scene, _options(dict(options)), progress))
 
 
 class ViewFactors(scipy.sparse.csr_matrix):
@@ -168,10 +207,18 @@ class ViewFactors(scipy.sparse.csr_matrix):
     with the element ``areas`` and the ``summary`` of ``radiosity viewfactors --json``
     (reciprocity, row sums, error estimate)."""
 
+    areas: npt.NDArray[np.float64]
+    summary: dict[str, Any]
+
 
 def view_factors(
-    scene, refine=0, tolerance=1e-10, max_depth=0, each_direction=False, progress=None
-):
+    scene: Scene,
+    refine: int = 0,
+    tolerance: float = 1e-10,
+    max_depth: int = 0,
+    each_direction: bool = False,
+    progress: Optional[_Progress] = None,
+) -> ViewFactors:
     """View factors between the elements of the scene's uniform mesh at ``refine``, each to
     the absolute ``tolerance``, as ``radiosity viewfactors`` computes them: each pair
     integrated once, over the smaller element (F_ji = A_i F_ij / A_j), or with
@@ -185,13 +232,13 @@ def view_factors(
     return f
 
 
-def tqdm_progress():
+def tqdm_progress() -> Callable[[str, int, int], None]:
     """A progress callable that draws one tqdm bar per stage (``pip install tqdm``)."""
     from tqdm import tqdm
 
-    bars = {}
+    bars: dict[str, Any] = {}
 
-    def progress(stage, done, total):
+    def progress(stage: str, done: int, total: int) -> None:
         if stage.startswith("note: "):
             tqdm.write(stage)
             return

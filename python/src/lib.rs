@@ -47,6 +47,97 @@ fn unknown(option: &'static str, value: &str, expected: &str) -> PyErr {
     RadiosityError::new_err(format!("{option} '{value}' is not known: expected {expected}"))
 }
 
+/// An option's fixed vocabulary: each name it accepts and what that name means. These tables
+/// are the one place the names are spelled: the options are parsed through them ([`pick`]) and
+/// `option_values()` lists them (the package's type stubs are tested against that list).
+type Vocabulary<T> = &'static [(&'static str, T)];
+
+/// `nonplanar=` of `Scene.load`.
+const NONPLANAR: Vocabulary<NonPlanar> =
+    &[("split", NonPlanar::Split), ("refuse", NonPlanar::Refuse)];
+/// `duplicates=` of `Scene.load`.
+const DUPLICATES: Vocabulary<Duplicates> =
+    &[("drop", Duplicates::Drop), ("refuse", Duplicates::Refuse)];
+/// `coplanar=` of `Scene.load` and `Scene.from_arrays`.
+const COPLANAR: Vocabulary<Coplanar> = &[("merge", Coplanar::Merge), ("keep", Coplanar::Keep)];
+
+/// The discretization methods (`linear` takes `alpha`).
+#[derive(Clone, Copy)]
+enum MethodName {
+    Centroid,
+    Linear,
+}
+const METHOD: Vocabulary<MethodName> =
+    &[("centroid", MethodName::Centroid), ("linear", MethodName::Linear)];
+/// `mesh=`, given the shadow lines' extent (which only `auto-discontinuity` uses).
+const MESH: Vocabulary<fn(LineExtent) -> MeshChoice> = &[
+    ("uniform", |_| MeshChoice::Uniform),
+    ("discontinuity", |_| MeshChoice::Discontinuity(S5Diagonals::Paper)),
+    ("discontinuity-uniform-diagonals", |_| MeshChoice::Discontinuity(S5Diagonals::AsUniform)),
+    ("auto-discontinuity", MeshChoice::AutoDiscontinuity),
+];
+const SHADOW_LINES: Vocabulary<LineExtent> =
+    &[("segments", LineExtent::Segments), ("chords", LineExtent::Chords)];
+/// `solution=`: `none`, or a true solution by `TrueSolution::parse`'s names.
+const SOLUTION: Vocabulary<bool> =
+    &[("none", false), ("x2y2", true), ("shadow", true), ("edge", true)];
+/// `backend=`, given `precision=` (which only the GPU uses).
+const BACKEND: Vocabulary<fn(Precision) -> Backend> =
+    &[("cpu", |_| Backend::Cpu), ("gpu", Backend::Gpu)];
+const PRECISION: Vocabulary<Precision> = &[("f64", Precision::F64), ("f32", Precision::F32)];
+const OPERATOR: Vocabulary<OperatorChoice> = &[
+    ("auto", OperatorChoice::Auto),
+    ("dense", OperatorChoice::Dense),
+    ("compressed", OperatorChoice::Compressed),
+];
+const SOLVER: Vocabulary<SolverChoice> = &[
+    ("auto", SolverChoice::Auto),
+    ("lu", SolverChoice::Lu),
+    ("iterative", SolverChoice::Iterative),
+];
+
+/// The names of a vocabulary.
+fn names<T>(vocabulary: Vocabulary<T>) -> Vec<&'static str> {
+    vocabulary.iter().map(|(name, _)| *name).collect()
+}
+
+/// What `value` means in `option`'s vocabulary, or an error naming the names it accepts.
+fn pick<T: Copy>(option: &'static str, value: &str, vocabulary: Vocabulary<T>) -> PyResult<T> {
+    match vocabulary.iter().find(|(name, _)| *name == value) {
+        Some((_, meaning)) => Ok(*meaning),
+        None => {
+            let names = names(vocabulary);
+            let expected = match names.split_last() {
+                Some((last, [])) => last.to_string(),
+                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                None => String::new(),
+            };
+            Err(unknown(option, value, &expected))
+        }
+    }
+}
+
+/// Every option with a fixed vocabulary and the names it accepts, from the tables the options
+/// are parsed through (for the package's tests and tools).
+#[pyfunction]
+fn option_values() -> std::collections::BTreeMap<&'static str, Vec<&'static str>> {
+    [
+        ("nonplanar", names(NONPLANAR)),
+        ("duplicates", names(DUPLICATES)),
+        ("coplanar", names(COPLANAR)),
+        ("method", names(METHOD)),
+        ("mesh", names(MESH)),
+        ("shadow_lines", names(SHADOW_LINES)),
+        ("solution", names(SOLUTION)),
+        ("backend", names(BACKEND)),
+        ("precision", names(PRECISION)),
+        ("operator", names(OPERATOR)),
+        ("solver", names(SOLVER)),
+    ]
+    .into_iter()
+    .collect()
+}
+
 /// A scene, from a file, a built-in name or arrays.
 #[pyclass(name = "Scene", module = "radiosity", frozen)]
 struct PyScene {
@@ -167,24 +258,9 @@ fn import_options(
     coplanar: Option<&str>,
 ) -> PyResult<ImportOptions> {
     Ok(ImportOptions {
-        nonplanar: match nonplanar {
-            None => None,
-            Some("split") => Some(NonPlanar::Split),
-            Some("refuse") => Some(NonPlanar::Refuse),
-            Some(other) => return Err(unknown("nonplanar", other, "split or refuse")),
-        },
-        duplicates: match duplicates {
-            None => None,
-            Some("drop") => Some(Duplicates::Drop),
-            Some("refuse") => Some(Duplicates::Refuse),
-            Some(other) => return Err(unknown("duplicates", other, "drop or refuse")),
-        },
-        coplanar: match coplanar {
-            None => None,
-            Some("merge") => Some(Coplanar::Merge),
-            Some("keep") => Some(Coplanar::Keep),
-            Some(other) => return Err(unknown("coplanar", other, "merge or keep")),
-        },
+        nonplanar: nonplanar.map(|v| pick("nonplanar", v, NONPLANAR)).transpose()?,
+        duplicates: duplicates.map(|v| pick("duplicates", v, DUPLICATES)).transpose()?,
+        coplanar: coplanar.map(|v| pick("coplanar", v, COPLANAR)).transpose()?,
     })
 }
 
@@ -215,63 +291,31 @@ impl RunOptions {
     fn config(&self, scene: &PyScene, progress: ProgressSink) -> PyResult<RunConfig> {
         let mut config = RunConfig::paper(BuiltinScene::Cube, self.refine);
         config.params = scene.params;
-        config.method = match (self.method.as_str(), self.alpha) {
-            ("centroid", None) => Method::Centroid,
-            ("centroid", Some(_)) => {
+        config.method = match (pick("method", &self.method, METHOD)?, self.alpha) {
+            (MethodName::Centroid, None) => Method::Centroid,
+            (MethodName::Centroid, Some(_)) => {
                 return Err(RadiosityError::new_err("alpha belongs to method='linear'"));
             }
-            ("linear", alpha) => {
+            (MethodName::Linear, alpha) => {
                 Method::linear(alpha.unwrap_or(Method::PAPER_ALPHA)).map_err(raised)?
             }
-            (other, _) => return Err(unknown("method", other, "centroid or linear")),
         };
-        let extent = match self.shadow_lines.as_str() {
-            "segments" => LineExtent::Segments,
-            "chords" => LineExtent::Chords,
-            other => return Err(unknown("shadow_lines", other, "segments or chords")),
-        };
-        config.mesh = match self.mesh.as_str() {
-            "uniform" => MeshChoice::Uniform,
-            "discontinuity" => MeshChoice::Discontinuity(S5Diagonals::Paper),
-            "discontinuity-uniform-diagonals" => MeshChoice::Discontinuity(S5Diagonals::AsUniform),
-            "auto-discontinuity" => MeshChoice::AutoDiscontinuity(extent),
-            other => {
-                return Err(unknown(
-                    "mesh",
-                    other,
-                    "uniform, discontinuity, discontinuity-uniform-diagonals or auto-discontinuity",
-                ));
-            }
-        };
+        let extent = pick("shadow_lines", &self.shadow_lines, SHADOW_LINES)?;
+        config.mesh = pick("mesh", &self.mesh, MESH)?(extent);
         config.solution = match self.solution.as_deref() {
             None if scene.paper_surface => Some(TrueSolution::X2Y2),
-            None | Some("none") => None,
-            Some(name) => Some(TrueSolution::parse(name, self.beta, self.gamma).map_err(raised)?),
+            None => None,
+            Some(name) => match pick("solution", name, SOLUTION)? {
+                false => None,
+                true => Some(TrueSolution::parse(name, self.beta, self.gamma).map_err(raised)?),
+            },
         };
-        let precision = match self.precision.as_str() {
-            "f64" => Precision::F64,
-            "f32" => Precision::F32,
-            other => return Err(unknown("precision", other, "f64 or f32")),
-        };
-        config.backend = match self.backend.as_str() {
-            "cpu" => Backend::Cpu,
-            "gpu" => Backend::Gpu(precision),
-            other => return Err(unknown("backend", other, "cpu or gpu")),
-        };
-        config.operator = match self.operator.as_str() {
-            "auto" => OperatorChoice::Auto,
-            "dense" => OperatorChoice::Dense,
-            "compressed" => OperatorChoice::Compressed,
-            other => return Err(unknown("operator", other, "auto, dense or compressed")),
-        };
+        let precision = pick("precision", &self.precision, PRECISION)?;
+        config.backend = pick("backend", &self.backend, BACKEND)?(precision);
+        config.operator = pick("operator", &self.operator, OPERATOR)?;
         config.compression.tolerance = self.compression_tolerance;
         config.compression.validate().map_err(raised)?;
-        let choice = match self.solver.as_str() {
-            "auto" => SolverChoice::Auto,
-            "lu" => SolverChoice::Lu,
-            "iterative" => SolverChoice::Iterative,
-            other => return Err(unknown("solver", other, "auto, lu or iterative")),
-        };
+        let choice = pick("solver", &self.solver, SOLVER)?;
         config.solver = SolverOptions { choice, tolerance: self.tolerance };
         config.operator_file = self.operator_file.clone();
         config.bands = radiosity::scene::parse_bands(&self.bands).map_err(raised)?;
@@ -600,6 +644,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(operator, m)?)?;
     m.add_function(wrap_pyfunction!(view_factors, m)?)?;
+    m.add_function(wrap_pyfunction!(option_values, m)?)?;
     m.add("RadiosityError", m.py().get_type::<RadiosityError>())?;
     // The command line's defaults that the package's options take.
     m.add("DEFAULT_COMPRESSION_TOLERANCE", radiosity::operator::DEFAULT_TOLERANCE)?;
