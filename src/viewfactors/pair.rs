@@ -225,23 +225,6 @@ impl Context<'_> {
                 cells.place(self.cell(i, j, child, part, cell.part, cell.depth + 1, rules, tally));
             }
         }
-        if std::env::var("DBG_PAIR").is_ok() {
-            for c in cells.open.iter() {
-                eprintln!(
-                    "open d{} v{:.9e} e{:.3e} {:?}",
-                    c.depth,
-                    c.value,
-                    c.error,
-                    c.patch.corners()
-                );
-            }
-            eprintln!(
-                "settled v{:.9e} e{:.3e} pieces {}",
-                cells.settled,
-                cells.settled_error,
-                shafts.len()
-            );
-        }
         let (value, error) = cells.total();
         tally.error = tally.error.max(error / ei.area());
         value / ei.area()
