@@ -224,21 +224,21 @@ pub enum Error {
         /// Memory allowed.
         available_gib: f64,
     },
-    /// A compressed operator that cannot fit in memory.
-    #[error(
-        "the compressed operator of {dof} unknowns needs at least {} but only {} may be used \
-         (--memory-limit, or 80 % of the available memory); raise --compression-tolerance, use a coarser mesh \
-         (each refinement level multiplies the memory by about 5) or a machine with more memory",
-        memory_text(*.needed_gib),
-        memory_text(*.available_gib)
-    )]
+    /// A compressed operator that cannot fit in memory: refused before its build, where the
+    /// estimate of what the build holds exceeds what may be used, or stopped during it.
+    #[error("{what}; {advice}")]
     OperatorTooLarge {
         /// Unknowns.
         dof: usize,
-        /// Memory of the blocks built (or counted) when it was stopped: a lower bound.
+        /// Memory needed: the estimate (above `available_gib`), or what the build had taken
+        /// when it was stopped (a lower bound, above the share of `available_gib` it may take).
         needed_gib: f64,
-        /// Memory allowed.
+        /// Memory that may be used.
         available_gib: f64,
+        /// What was needed against what may be used, and where that came from.
+        what: String,
+        /// What would fit instead.
+        advice: String,
     },
     /// The linear system is singular or too ill-conditioned to solve.
     #[error(
@@ -316,9 +316,3 @@ impl std::fmt::Display for IterationFailure {
 
 /// Result alias of the library.
 pub type Result<T> = std::result::Result<T, Error>;
-
-/// A memory size given in GiB, written in GiB from 1 GiB up and in MiB below (a small
-/// `--memory-limit` would read "0.00 GiB").
-fn memory_text(gib: f64) -> String {
-    if gib >= 1.0 { format!("{gib:.2} GiB") } else { format!("{:.1} MiB", gib * 1024.0) }
-}

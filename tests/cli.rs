@@ -700,6 +700,60 @@ fn a_memory_limit_refuses_before_it_is_passed_and_lets_through_what_fits() {
     }
 }
 
+/// The size after `after` in `text` ("12.3 MiB", "1.50 GiB", "800.0 KiB"), in bytes.
+fn size_after(text: &str, after: &str) -> f64 {
+    let at = text.find(after).unwrap_or_else(|| panic!("'{after}' not in: {text}")) + after.len();
+    let mut words = text[at..].split_whitespace();
+    let number: f64 = words.next().unwrap().parse().unwrap();
+    let unit = match words.next().unwrap().trim_end_matches([',', ')', ';', ':']) {
+        "KiB" => 1u64 << 10,
+        "MiB" => 1 << 20,
+        "GiB" => 1 << 30,
+        other => panic!("unit '{other}' in: {text}"),
+    };
+    number * unit as f64
+}
+
+#[test]
+fn a_compressed_build_is_estimated_first_and_refused_when_the_estimate_cannot_fit() {
+    // The five-piece surface at refine 3 (n = 640): the estimate is a note and a JSON key.
+    let args = ["inspect", "--scene", "five-piece", "--refine", "3", "--operator", "compressed"];
+    let (ok, out, err) = radiosity(&[&args[..], &["--json", "-"]].concat());
+    assert!(ok && err.contains("memory estimate: about"), "{err}");
+    let report: Value = serde_json::from_str(&out).unwrap();
+    let estimate = report["memory_estimate_bytes"].as_f64().unwrap();
+    let stored = report["operator_bytes"].as_f64().unwrap();
+    assert!(estimate >= 0.5 * stored, "estimate {estimate}, stored {stored}");
+    // A limit below the estimate: refused before the plan is walked, naming what it needs
+    // above what may be used, and what would fit.
+    let started = std::time::Instant::now();
+    let (ok, out, err) = radiosity(&[&args[..], &["--memory-limit", "1M", "--json", "-"]].concat());
+    assert!(!ok && out.is_empty(), "{out}");
+    let (needed, available) = (size_after(&err, "would need about "), size_after(&err, "but "));
+    assert!(needed > available, "{err}");
+    for needle in
+        ["640 unknowns", "may be used (--memory-limit 1.0 MiB less the", "it would fit with"]
+    {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert!(started.elapsed().as_secs_f64() < 30.0);
+    let solved = json(&[
+        "solve",
+        "--scene",
+        "five-piece",
+        "--refine",
+        "3",
+        "--operator",
+        "compressed",
+        "--json",
+        "-",
+    ]);
+    assert!(solved["memory_estimate_bytes"].as_f64().unwrap() > 0.0, "{solved}");
+    // The dense matrix reports none.
+    let v = json(&["inspect", "--scene", "five-piece", "--refine", "2", "--json", "-"]);
+    assert!(v["memory_estimate_bytes"].is_null() && v["operator"] == "dense", "{v}");
+}
+
 #[test]
 fn a_saved_operator_reloads_to_the_same_solution_and_only_for_its_problem() {
     let dir = std::env::temp_dir().join(format!("radiosity-saved-{}", std::process::id()));

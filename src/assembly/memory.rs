@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use crate::error::{Error, Result};
 
 /// Fraction of the available memory one large allocation may take when no limit is set.
-const MEMORY_SHARE: f64 = 0.8;
+pub const MEMORY_SHARE: f64 = 0.8;
 
 /// The process's limit in bytes (0: none set).
 static LIMIT: AtomicU64 = AtomicU64::new(0);
@@ -32,6 +32,38 @@ pub fn memory_allowance() -> Option<f64> {
     match memory_limit() {
         Some(limit) => Some(limit.saturating_sub(resident_bytes().unwrap_or(0)) as f64),
         None => available_memory().map(|avail| MEMORY_SHARE * avail as f64),
+    }
+}
+
+/// Where [`memory_allowance`] comes from, in words: the limit less what the process holds,
+/// or the share of the available memory.
+pub fn allowance_source() -> String {
+    match memory_limit() {
+        Some(limit) => format!(
+            "--memory-limit {} less the {} this process holds",
+            size_text(limit as f64),
+            size_text(resident_bytes().unwrap_or(0) as f64)
+        ),
+        None => match available_memory() {
+            Some(avail) => format!(
+                "{:.0} % of the {} the system has available",
+                100.0 * MEMORY_SHARE,
+                size_text(avail as f64)
+            ),
+            None => "no limit known".into(),
+        },
+    }
+}
+
+/// `bytes` in GiB from one GiB on, else in MiB, else in KiB.
+pub fn size_text(bytes: f64) -> String {
+    const GIB: f64 = (1u64 << 30) as f64;
+    if bytes >= GIB {
+        format!("{:.2} GiB", bytes / GIB)
+    } else if bytes >= (1u64 << 20) as f64 {
+        format!("{:.1} MiB", bytes / (1u64 << 20) as f64)
+    } else {
+        format!("{:.1} KiB", bytes / 1024.0)
     }
 }
 

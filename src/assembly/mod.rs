@@ -12,7 +12,8 @@ mod problem;
 
 pub use matrix::CollocationMatrix;
 pub use memory::{
-    available_memory, check_fits, memory_allowance, memory_limit, resident_bytes, set_memory_limit,
+    MEMORY_SHARE, allowance_source, available_memory, check_fits, memory_allowance, memory_limit,
+    resident_bytes, set_memory_limit, size_text,
 };
 pub use options::{AssemblyOptions, Quadrature};
 pub use pairs::{CpuPairs, PairEvaluation, PairTask};

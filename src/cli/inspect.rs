@@ -33,6 +33,7 @@ pub(crate) struct Inspection {
     operator: &'static str,
     compression_tolerance: Option<f64>,
     operator_bytes: u64,
+    memory_estimate_bytes: Option<u64>,
     #[serde(flatten)]
     blocks: Option<radiosity::operator::OperatorStats>,
     peak_rss_bytes: Option<u64>,
@@ -86,6 +87,8 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         (sums, assembled.stats, None, None)
     };
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
+    let memory_estimate_bytes =
+        op.as_ref().and_then(|op| op.memory_estimate.as_ref()).map(|e| e.peak_bytes());
     let distributed = op.and_then(|op| pipeline::distributed_report(&op, setup_seconds));
     // Every rank of a distributed run holds the row sums; rank 0 prints them.
     if !super::is_root() {
@@ -121,6 +124,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         operator: if blocks.is_some() { "compressed" } else { "dense" },
         compression_tolerance: blocks.is_some().then_some(config.compression.tolerance),
         operator_bytes: blocks.map_or(8 * (dof as u64) * (dof as u64), |b| b.operator_bytes),
+        memory_estimate_bytes,
         blocks,
         peak_rss_bytes: pipeline::peak_rss_bytes(),
         distributed,

@@ -261,8 +261,9 @@ pub(crate) struct OperatorArgs {
     pub(crate) no_shadowed_blocks: bool,
     /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
     /// matrix that would pass it is refused before it is built, a compressed operator before
-    /// it is built if what it surely stores would, or else where its build reaches it
-    /// [default: 80 % of the available memory for each large structure]
+    /// its build where the estimate of its peak (from a sample of its blocks) cannot fit, or
+    /// else where its build reaches it [default: 80 % of the available memory for each large
+    /// structure]
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
     pub(crate) memory_limit: Option<u64>,
 }

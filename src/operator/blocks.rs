@@ -2,6 +2,7 @@
 //! far enough apart to be compressed, and which are leaves computed exactly.
 
 use std::cell::OnceCell;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -201,18 +202,35 @@ pub(super) struct BlockPlan {
 }
 
 impl BlockPlan {
+    /// The plan of the blocks of `nodes` × `elements`; with `budget`, unfinished where the
+    /// plan passes it ([`PlanBudget::is_over`] then tells).
     pub(super) fn new(
         nodes: &ClusterTree,
         elements: &ClusterTree,
         faces: &FacePairs,
         options: &CompressionOptions,
+        budget: Option<&PlanBudget>,
     ) -> Self {
         let mut plan = Self::default();
         if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
-            let walk = Walk { nodes, elements, faces, options };
+            let walk = Walk { nodes, elements, faces, options, budget };
             walk.visit(&mut plan, 0, 0, None);
         }
         plan
+    }
+
+    /// The block that [`BlockPlan::new`] would put the pair at `at` in (positions in the node
+    /// tree's order and the element tree's), found by descending from the root through the
+    /// blocks that hold it: the plan's decisions for one pair, without the plan.
+    pub(super) fn locate(
+        nodes: &ClusterTree,
+        elements: &ClusterTree,
+        faces: &FacePairs,
+        options: &CompressionOptions,
+        at: (usize, usize),
+    ) -> Located {
+        let walk = Walk { nodes, elements, faces, options, budget: None };
+        walk.locate(0, 0, None, at)
     }
 
     /// The plan [`BlockPlan::new`] makes, walked in parts by the ranks of `ranks` (every rank
@@ -224,11 +242,12 @@ impl BlockPlan {
         faces: &FacePairs,
         options: &CompressionOptions,
         ranks: &dyn Collective,
+        budget: Option<&PlanBudget>,
     ) -> Self {
         let mut plan = Self::default();
         let mut mine = Self::default();
         if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
-            let walk = Walk { nodes, elements, faces, options };
+            let walk = Walk { nodes, elements, faces, options, budget };
             let frontier = walk.frontier(&mut plan, FRONTIER_PER_RANK * ranks.size());
             let parts: Vec<BlockPlan> = frontier
                 .par_iter()
@@ -324,46 +343,109 @@ struct Walk<'a> {
     elements: &'a ClusterTree,
     faces: &'a FacePairs<'a>,
     options: &'a CompressionOptions,
+    /// What the plan may take; the walk stops where it passes it.
+    budget: Option<&'a PlanBudget>,
+}
+
+/// How the walk settles a block ([`Walk::settle`]).
+enum Settled<'b> {
+    /// It holds nothing.
+    Empty,
+    /// Smooth and admissible: compressed.
+    Far,
+    /// Admissible, occluders or tangent planes cut it: a shadowed block.
+    Shadowed(Between<'b>),
+    /// A leaf computed exactly.
+    Near { seen_whole: bool },
+    /// Split into these sub-blocks, which inherit its occluders.
+    Split(Vec<(usize, usize)>, Between<'b>),
+}
+
+/// The block of the plan that holds a pair ([`BlockPlan::locate`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum Located {
+    /// A block holding nothing.
+    Empty,
+    /// An exact block.
+    Near { t: usize, s: usize, seen_whole: bool },
+    /// A smooth admissible block.
+    Far { t: usize, s: usize },
+    /// Shadowed block (t, s), and which of its sub-blocks.
+    Shadowed { t: usize, s: usize, part: ShadowedPart },
+}
+
+/// Where a pair lies in a shadowed block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum ShadowedPart {
+    /// A sub-block that holds nothing.
+    Empty,
+    /// A sub-block seen whole: the factors' product.
+    Seen(usize, usize),
+    /// A leaf where visibility varies.
+    Leaf(usize, usize),
+}
+
+/// Bytes a near block takes in the plan's list.
+pub(super) const PLAN_NEAR_BYTES: u64 = std::mem::size_of::<NearBlock>() as u64;
+/// Bytes a far block, or a sub-block of a shadowed block, takes in the plan's lists.
+pub(super) const PLAN_FAR_BYTES: u64 = std::mem::size_of::<(usize, usize)>() as u64;
+
+/// Bytes of a shadowed block in the plan, its sub-blocks' lists included.
+fn shadowed_plan_bytes(block: &ShadowedBlock) -> u64 {
+    std::mem::size_of::<ShadowedBlock>() as u64
+        + PLAN_FAR_BYTES * (block.seen.capacity() + block.leaves.capacity()) as u64
+}
+
+/// What the block plan may take while it is walked: every block settled counts its bytes in the
+/// plan's lists twice (the lists grow by doubling, and the parts walked in parallel are copied
+/// into the whole), and the walk stops where the count passes the limit.
+#[derive(Debug)]
+pub(super) struct PlanBudget {
+    limit: u64,
+    used: AtomicU64,
+}
+
+impl PlanBudget {
+    /// A budget of `limit` bytes.
+    pub(super) fn new(limit: u64) -> Self {
+        Self { limit, used: AtomicU64::new(0) }
+    }
+
+    fn add(&self, bytes: u64) {
+        self.used.fetch_add(2 * bytes, Ordering::Relaxed);
+    }
+
+    /// Bytes counted so far.
+    pub(super) fn used(&self) -> u64 {
+        self.used.load(Ordering::Relaxed)
+    }
+
+    /// Whether the count has passed the limit (the walk then stops, its plan unfinished).
+    pub(super) fn is_over(&self) -> bool {
+        self.used() > self.limit
+    }
 }
 
 impl Walk<'_> {
-    /// Settles block (t, s), whose occluders are among `within` (any when `None`), into `plan`,
-    /// or returns its sub-blocks and what they inherit of its occluders.
-    fn step<'b>(
-        &self,
-        plan: &mut BlockPlan,
-        t: usize,
-        s: usize,
-        within: Option<&'b [OccluderUnit]>,
-    ) -> Option<(Vec<(usize, usize)>, Between<'b>)> {
+    /// How block (t, s), whose occluders are among `within` (any when `None`), is settled: the
+    /// one decision that the walk ([`Walk::step`]) and the sampling descent ([`Walk::locate`])
+    /// both follow.
+    fn settle<'b>(&self, t: usize, s: usize, within: Option<&'b [OccluderUnit]>) -> Settled<'b> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let between = Between::new(within);
         let class = classify(self.faces, tc, sc, &between);
         if class == PairClass::Nothing {
-            plan.empty += 1;
-            return None;
+            return Settled::Empty;
         }
         let admissible = tc.diameter().min(sc.diameter()) <= self.options.eta * tc.distance(sc);
         if class == PairClass::Smooth && admissible {
-            plan.far.push((t, s));
-            return None;
+            return Settled::Far;
         }
         if class == PairClass::Shadowed
             && admissible
             && self.options.shadowed_blocks == ShadowedBlocks::On
         {
-            let mut block = ShadowedBlock { t, s, seen: Vec::new(), leaves: Vec::new() };
-            match self.children(t, s, SHADOWED_LEAF * self.options.mixed_leaf_size) {
-                None => block.leaves.push((t, s)),
-                Some(children) => {
-                    let within = between.for_children();
-                    for (a, b) in children {
-                        self.visit_shadowed(&mut block, &mut plan.empty, a, b, within);
-                    }
-                }
-            }
-            plan.shadowed.push(block);
-            return None;
+            return Settled::Shadowed(between);
         }
         // Smooth neighbours gain nothing from small leaves; where visibility varies they do,
         // down to the mixed leaf size, also where a cluster spans several faces (a city's
@@ -374,11 +456,122 @@ impl Walk<'_> {
         } else {
             self.options.mixed_leaf_size
         };
-        let Some(children) = self.children(t, s, leaf) else {
-            plan.near.push(NearBlock { t, s, seen_whole: class == PairClass::Smooth });
-            return None;
+        match self.children(t, s, leaf) {
+            None => Settled::Near { seen_whole: class == PairClass::Smooth },
+            Some(children) => Settled::Split(children, between),
+        }
+    }
+
+    /// Settles block (t, s), whose occluders are among `within` (any when `None`), into `plan`,
+    /// or returns its sub-blocks and what they inherit of its occluders.
+    fn step<'b>(
+        &self,
+        plan: &mut BlockPlan,
+        t: usize,
+        s: usize,
+        within: Option<&'b [OccluderUnit]>,
+    ) -> Option<(Vec<(usize, usize)>, Between<'b>)> {
+        let bytes = match self.settle(t, s, within) {
+            Settled::Empty => {
+                plan.empty += 1;
+                0
+            }
+            Settled::Far => {
+                plan.far.push((t, s));
+                PLAN_FAR_BYTES
+            }
+            Settled::Shadowed(between) => {
+                let mut block = ShadowedBlock { t, s, seen: Vec::new(), leaves: Vec::new() };
+                match self.children(t, s, SHADOWED_LEAF * self.options.mixed_leaf_size) {
+                    None => block.leaves.push((t, s)),
+                    Some(children) => {
+                        let within = between.for_children();
+                        for (a, b) in children {
+                            self.visit_shadowed(&mut block, &mut plan.empty, a, b, within);
+                        }
+                    }
+                }
+                let bytes = shadowed_plan_bytes(&block);
+                plan.shadowed.push(block);
+                bytes
+            }
+            Settled::Near { seen_whole } => {
+                plan.near.push(NearBlock { t, s, seen_whole });
+                PLAN_NEAR_BYTES
+            }
+            Settled::Split(children, between) => return Some((children, between)),
         };
-        Some((children, between))
+        if let Some(budget) = self.budget {
+            budget.add(bytes);
+        }
+        None
+    }
+
+    /// Where the pair at `at` (a position in the node tree's order, one in the element tree's)
+    /// lies in the plan: the block that holds it, found by the walk's own decisions from block
+    /// (t, s) down, without walking the blocks beside it.
+    pub(super) fn locate(
+        &self,
+        t: usize,
+        s: usize,
+        within: Option<&[OccluderUnit]>,
+        at: (usize, usize),
+    ) -> Located {
+        match self.settle(t, s, within) {
+            Settled::Empty => Located::Empty,
+            Settled::Far => Located::Far { t, s },
+            Settled::Near { seen_whole } => Located::Near { t, s, seen_whole },
+            Settled::Shadowed(between) => {
+                let part = match self.children(t, s, SHADOWED_LEAF * self.options.mixed_leaf_size) {
+                    None => ShadowedPart::Leaf(t, s),
+                    Some(children) => {
+                        let (a, b) = self.holding(&children, at);
+                        self.locate_shadowed(a, b, between.for_children(), at)
+                    }
+                };
+                Located::Shadowed { t, s, part }
+            }
+            Settled::Split(children, between) => {
+                let (a, b) = self.holding(&children, at);
+                self.locate(a, b, between.for_children(), at)
+            }
+        }
+    }
+
+    /// [`Walk::locate`] inside a shadowed block, as [`Walk::visit_shadowed`] plans it.
+    fn locate_shadowed(
+        &self,
+        t: usize,
+        s: usize,
+        within: Option<&[OccluderUnit]>,
+        at: (usize, usize),
+    ) -> ShadowedPart {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let between = Between::new(within);
+        match classify(self.faces, tc, sc, &between) {
+            PairClass::Nothing => ShadowedPart::Empty,
+            PairClass::Smooth => ShadowedPart::Seen(t, s),
+            PairClass::Shadowed | PairClass::Mixed => {
+                match self.children(t, s, SHADOWED_LEAF * self.options.mixed_leaf_size) {
+                    None => ShadowedPart::Leaf(t, s),
+                    Some(children) => {
+                        let (a, b) = self.holding(&children, at);
+                        self.locate_shadowed(a, b, between.for_children(), at)
+                    }
+                }
+            }
+        }
+    }
+
+    /// The sub-block of `children` that holds the pair at `at`.
+    fn holding(&self, children: &[(usize, usize)], (k, l): (usize, usize)) -> (usize, usize) {
+        let inside = |c: &Cluster, p: usize| (c.start..c.end).contains(&p);
+        *children
+            .iter()
+            .find(|&&(a, b)| {
+                inside(&self.nodes.clusters[a], k) && inside(&self.elements.clusters[b], l)
+            })
+            .expect("the sub-blocks cover their block")
     }
 
     /// The sub-blocks of block (t, s), splitting each cluster larger than `leaf`, or `None`
@@ -426,6 +619,9 @@ impl Walk<'_> {
 
     /// Plans block (t, s) and everything below it, its occluders among `within`.
     fn visit(&self, plan: &mut BlockPlan, t: usize, s: usize, within: Option<&[OccluderUnit]>) {
+        if self.budget.is_some_and(PlanBudget::is_over) {
+            return;
+        }
         let Some((children, between)) = self.step(plan, t, s, within) else {
             return;
         };

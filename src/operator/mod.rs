@@ -21,12 +21,14 @@ pub mod aca;
 mod batched;
 mod blocks;
 pub mod cluster;
+mod estimate;
 pub mod packed;
 mod saved;
 mod shadowed;
 mod share;
 mod stored;
 
+pub use estimate::MemoryEstimate;
 pub use saved::{BinaryReader, BinaryWriter};
 pub use stored::{F32_FROM_TOLERANCE, Precision};
 
@@ -38,7 +40,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::assembly::{
-    AssemblyOptions, PairEvaluation, PairIntegrator, Problem, memory_allowance, resident_bytes,
+    AssemblyOptions, PairEvaluation, PairIntegrator, Problem, allowance_source, memory_allowance,
+    resident_bytes,
 };
 use crate::discretization::Discretization;
 use crate::distributed::{Collective, Ranks};
@@ -47,10 +50,13 @@ use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::progress::{Progress, in_stage};
 use crate::visibility::{
-    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face,
+    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, RecentHiders, Views, Visibility,
+    by_face,
 };
 
-use blocks::{BlockPlan, FacePairs};
+use blocks::{
+    BlockPlan, FacePairs, Located, PLAN_FAR_BYTES, PLAN_NEAR_BYTES, PlanBudget, ShadowedPart,
+};
 use cluster::{ClusterTree, Item};
 use stored::BlockData;
 
@@ -159,6 +165,10 @@ pub struct CompressionOptions {
     /// (`operator/shadowed.rs`): compressed once without occlusion, exact only on their partly
     /// visible pairs.
     pub shadowed_blocks: ShadowedBlocks,
+    /// The mesh's refinement level, where known: a build refused for memory names the coarser
+    /// levels that would fit.
+    #[serde(skip)]
+    pub refine: Option<u32>,
 }
 
 /// Whether the compressed operator has shadowed blocks ([`CompressionOptions::shadowed_blocks`]).
@@ -228,6 +238,7 @@ impl Default for CompressionOptions {
             leaf_size: 32,
             mixed_leaf_size: 32,
             shadowed_blocks: ShadowedBlocks::Auto,
+            refine: None,
         }
     }
 }
@@ -389,6 +400,9 @@ pub struct CompressedOperator {
     /// In a distributed run, this rank's part: it holds only its blocks, and the products sum
     /// every rank's. `stats` and `pairs` are then the whole operator's.
     pub share: Option<RankShare>,
+    /// What its build was estimated to hold at its peak before it began (none for an operator
+    /// read from a file).
+    pub memory_estimate: Option<Box<MemoryEstimate>>,
 }
 
 /// A rank's part of a distributed compressed operator.
@@ -453,33 +467,16 @@ impl CompressedOperator {
         }
         let options = &CompressionOptions { shadowed_blocks: shadowed.into(), ..*options };
         let per = disc.method.nodes_per_element();
-        let faces = FacePairs::new(scene, planner, options);
-        let (nodes, elements, plan) = in_stage(progress, "blocks", || {
-            let (nodes, elements) = cluster_trees(mesh, disc, options);
-            let plan = match ranks {
-                Some(ranks) => {
-                    let whole = BlockPlan::new_shared(&nodes, &elements, &faces, options, &**ranks);
-                    let rank = (ranks.rank(), ranks.size());
-                    share::share_of(&whole, &nodes, &elements, per, rank)
-                }
-                None => BlockPlan::new(&nodes, &elements, &faces, options),
-            };
-            (nodes, elements, plan)
-        });
-        // What the exact blocks store for certain must fit before any is computed (counting
-        // every exact block in full would refuse runs that fit: a partly visible block stores
-        // anything from none to all of its entries, and on a city most store few); then every
-        // block built counts, and the build stops where it would pass the allowance.
-        let guard = MemoryGuard::new(disc.dof());
+        // Everything the build holds counts from here on (the guard's look at the resident
+        // memory): the cluster trees, the plan, the lists, the blocks.
+        let mut guard = MemoryGuard::new(disc.dof());
         let precision = Precision::for_tolerance(options.tolerance);
-        let reflects = |i: usize| disc.nodes[i].rho != 0.0;
-        let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
-        guard.check(precision.bytes() * certain)?;
-
         let integrator = match precision {
             Precision::F32 => PairIntegrator::for_single_precision(disc.method, assembly),
             Precision::F64 => PairIntegrator::new(disc.method, assembly),
         };
+        let faces = FacePairs::new(scene, planner, options);
+        let (nodes, elements) = in_stage(progress, "blocks", || cluster_trees(mesh, disc, options));
         let entries = Entries {
             mesh,
             disc,
@@ -490,6 +487,54 @@ impl CompressedOperator {
             per,
             precision,
         };
+        // Before the plan is walked and its blocks built, what they will hold is estimated from
+        // a sample of it, and a run that cannot fit is refused now rather than after minutes.
+        let size = ranks.map_or(1, |r| r.size());
+        let estimate = in_stage(progress, "memory estimate", || {
+            estimate_memory(&entries, &faces, options, scene.faces.len(), size)
+        });
+        progress.note(&estimate.note());
+        guard.estimate = Some(estimate);
+        let refusal = guard.refusal(&estimate, options.refine);
+        let mine = u64::from(refusal.is_some());
+        // Every rank refuses if one does (the others would wait for it in the collectives).
+        if ranks.map_or(mine == 1, |r| r.gather(&[mine]).iter().any(|v| v[0] == 1)) {
+            return Err(refusal.unwrap_or_else(|| guard.refused_elsewhere(&estimate)));
+        }
+        // The plan stops where its lists pass what the trees leave of the allowance.
+        let budget = guard.plan_budget(estimate.trees);
+        let plan = in_stage(progress, "blocks", || match ranks {
+            Some(ranks) => {
+                let whole = BlockPlan::new_shared(
+                    &nodes,
+                    &elements,
+                    &faces,
+                    options,
+                    &**ranks,
+                    budget.as_ref(),
+                );
+                let rank = (ranks.rank(), ranks.size());
+                share::share_of(&whole, &nodes, &elements, per, rank)
+            }
+            None => BlockPlan::new(&nodes, &elements, &faces, options, budget.as_ref()),
+        });
+        if let Some(budget) = &budget {
+            let over = budget.is_over();
+            let over =
+                ranks.map_or(over, |r| r.gather(&[u64::from(over)]).iter().any(|v| v[0] == 1));
+            if over {
+                return Err(guard.plan_too_large(budget, estimate.trees));
+            }
+        }
+        // What the exact blocks store for certain, with the build's lists and the blocks'
+        // slots, must fit before any is computed (counting every exact block in full would
+        // refuse runs that fit: a partly visible block stores anything from none to all of its
+        // entries, and on a city most store few); then every block built counts, and the build
+        // stops where it would pass the allowance.
+        let reflects = |i: usize| disc.nodes[i].rho != 0.0;
+        let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
+        guard.check(precision.bytes() * certain + build_list_bytes(&plan))?;
+
         let sub_blocks = shadowed::sub_blocks(&plan.shadowed);
         progress.start("compression", plan.near.len() + plan.far.len() + sub_blocks);
         let tolerance = options.tolerance;
@@ -521,6 +566,7 @@ impl CompressedOperator {
             zero_rows,
             device: None,
             share,
+            memory_estimate: Some(Box::new(estimate)),
         })
     }
 
@@ -657,14 +703,22 @@ impl Block {
     }
 }
 
-/// The memory of the blocks built so far against what may be used ([`memory_allowance`] when
-/// the build starts: what `--memory-limit` leaves, or a share of the available memory): a build
-/// that outgrows it stops with [`Error::OperatorTooLarge`] instead of ending in the
-/// out-of-memory killer. Besides the blocks it counts, it looks at the process's resident
-/// memory as they grow, so that the build's transient buffers count too.
+/// What the build of a compressed operator holds against what may be used
+/// ([`memory_allowance`] when the build starts: what `--memory-limit` leaves above what the
+/// process holds, or a share of the available memory): before the plan, the estimate of its
+/// peak ([`MemoryGuard::refusal`]); while the plan is walked, its lists ([`PlanBudget`]); while
+/// the blocks are built, the blocks stored and the growth of the process's resident memory, so
+/// that the build's transient buffers count too. A build that outgrows it stops with
+/// [`Error::OperatorTooLarge`] instead of ending in the out-of-memory killer.
 struct MemoryGuard {
     dof: usize,
     allowance: Option<f64>,
+    /// Where the allowance comes from, in words.
+    source: String,
+    /// What the process held when the build began.
+    resident: u64,
+    /// The estimate made before the plan.
+    estimate: Option<MemoryEstimate>,
     stored: AtomicU64,
     /// Resident memory when the build started.
     resident_at_start: Option<u64>,
@@ -677,23 +731,123 @@ struct MemoryGuard {
 /// The guard looks at the resident memory each time the stored blocks grow by this much.
 const LOOK_EVERY: u64 = 16 << 20;
 
-/// Share of the allowance the counted memory may reach (the rest is left to what is not
-/// counted: the blocks in flight, the build's own buffers, the solver's vectors).
-const HEADROOM: f64 = 0.9;
+/// A size in words.
+fn size(bytes: f64) -> String {
+    crate::assembly::size_text(bytes)
+}
 
 impl MemoryGuard {
     fn new(dof: usize) -> Self {
-        Self::with_allowance(dof, memory_allowance())
+        Self { source: allowance_source(), ..Self::with_allowance(dof, memory_allowance()) }
     }
 
+    /// A guard of `allowance` bytes (tests give their own).
     fn with_allowance(dof: usize, allowance: Option<f64>) -> Self {
+        let resident_at_start = resident_bytes();
         Self {
             dof,
             allowance,
+            source: "the guard's allowance; see --memory-limit".into(),
+            resident: resident_at_start.unwrap_or(0),
+            estimate: None,
             stored: AtomicU64::new(0),
-            resident_at_start: resident_bytes(),
+            resident_at_start,
             grown: AtomicU64::new(0),
             looked_at: AtomicU64::new(0),
+        }
+    }
+
+    /// The error refusing the build before it begins, where even the low end of `estimate`
+    /// (two standard errors below it) exceeds the allowance; `refine`, the mesh's level where
+    /// known, for the advice.
+    fn refusal(&self, estimate: &MemoryEstimate, refine: Option<u32>) -> Option<Error> {
+        let available = self.allowance?;
+        if estimate.low_bytes() as f64 <= available {
+            return None;
+        }
+        let peak = estimate.peak_bytes() as f64;
+        Some(Error::OperatorTooLarge {
+            dof: self.dof,
+            needed_gib: gib(peak),
+            available_gib: gib(available),
+            what: format!(
+                "the compressed operator of {} unknowns would need about {} at the peak of its \
+                 build (at least {}: the estimate less two standard errors; stored operator \
+                 about {}{}), but {} may be used ({})",
+                self.dof,
+                size(peak),
+                size(estimate.low_bytes() as f64),
+                size(estimate.operator_bytes() as f64),
+                estimate.mostly_blocks().map_or(String::new(), |why| format!("; {why}")),
+                size(available),
+                self.source
+            ),
+            advice: estimate.advice(available, self.resident, refine),
+        })
+    }
+
+    /// The error of a rank whose estimate fits where another rank's does not.
+    fn refused_elsewhere(&self, estimate: &MemoryEstimate) -> Error {
+        let available = self.allowance.unwrap_or(0.0);
+        let peak = estimate.peak_bytes() as f64;
+        Error::OperatorTooLarge {
+            dof: self.dof,
+            needed_gib: gib(peak),
+            available_gib: gib(available),
+            what: format!(
+                "the compressed operator of {} unknowns was refused: another rank may use less \
+                 than its estimate of about {} at the peak (this one may use {})",
+                self.dof,
+                size(peak),
+                size(available)
+            ),
+            advice: "give every rank the same --memory-limit, or use machines with more memory"
+                .into(),
+        }
+    }
+
+    /// The plan's budget: what the allowance leaves beside the cluster trees (`trees` bytes);
+    /// `None` without an allowance.
+    fn plan_budget(&self, trees: u64) -> Option<PlanBudget> {
+        self.allowance.map(|a| PlanBudget::new((a - trees as f64).max(0.0) as u64))
+    }
+
+    /// The error of a plan whose walk passed `budget` (beside the trees' `trees` bytes).
+    fn plan_too_large(&self, budget: &PlanBudget, trees: u64) -> Error {
+        let available = self.allowance.unwrap_or(0.0);
+        let taken = (budget.used() + trees) as f64;
+        Error::OperatorTooLarge {
+            dof: self.dof,
+            needed_gib: gib(taken),
+            available_gib: gib(available),
+            what: format!(
+                "the compressed operator of {} unknowns was stopped while its block plan was \
+                 walked: the plan's lists (counted twice: they grow by doubling) and the cluster \
+                 trees had reached {}, more than the {} that may be used ({}){}",
+                self.dof,
+                size(taken),
+                size(available),
+                self.source,
+                self.estimate_was(taken)
+            ),
+            advice: format!(
+                "{BUILD_ADVICE}; the plan grows with the square of the unknowns where faces hold \
+                 few elements (a city at refine 0)"
+            ),
+        }
+    }
+
+    /// What the estimate made before said, for a build stopped at `taken` bytes.
+    fn estimate_was(&self, taken: f64) -> String {
+        match &self.estimate {
+            Some(e) if (e.peak_bytes() as f64) < taken => {
+                format!(
+                    "; the estimate made before, about {}, was low",
+                    size(e.peak_bytes() as f64)
+                )
+            }
+            Some(e) => format!("; estimated before at about {}", size(e.peak_bytes() as f64)),
+            None => String::new(),
         }
     }
 
@@ -707,9 +861,14 @@ impl MemoryGuard {
                 .compare_exchange(last, stored, Ordering::Relaxed, Ordering::Relaxed)
                 .is_ok()
         {
-            if let (Some(start), Some(now)) = (self.resident_at_start, resident_bytes()) {
-                self.grown.fetch_max(now.saturating_sub(start), Ordering::Relaxed);
-            }
+            self.look();
+        }
+    }
+
+    /// Takes the growth of the resident memory since the build began into account.
+    fn look(&self) {
+        if let (Some(start), Some(now)) = (self.resident_at_start, resident_bytes()) {
+            self.grown.fetch_max(now.saturating_sub(start), Ordering::Relaxed);
         }
     }
 
@@ -719,28 +878,449 @@ impl MemoryGuard {
         self.stored.load(Ordering::Relaxed).max(self.grown.load(Ordering::Relaxed))
     }
 
-    /// Whether what is used exceeds the allowance.
+    /// Bytes kept aside from the allowance for what the guard does not see at once: the growth
+    /// between two of its looks at the memory, and the cross approximations in flight (as
+    /// estimated).
+    fn aside(&self) -> f64 {
+        (LOOK_EVERY + self.estimate.map_or(0, |e| e.crossing)) as f64
+    }
+
+    /// Bytes the blocks and the build's buffers may take while the blocks are built: the
+    /// allowance less what is kept aside.
+    fn cap(&self) -> Option<f64> {
+        self.allowance.map(|a| a - self.aside())
+    }
+
+    /// Whether what is used exceeds the cap.
     fn is_over(&self) -> bool {
         self.over_by(0)
     }
 
-    /// Whether what is used, with `more`, comes within the headroom of the allowance: the
-    /// blocks other threads are building and the growth since the last look are not seen yet.
+    /// Whether what is used, with `more`, exceeds the cap: the blocks other threads are
+    /// building and the growth since the last look are not seen yet.
     fn over_by(&self, more: u64) -> bool {
-        self.allowance.is_some_and(|a| (self.used() + more + LOOK_EVERY) as f64 > HEADROOM * a)
+        self.cap().is_some_and(|cap| (self.used() + more) as f64 > cap)
     }
 
-    /// The error when what is used, with `more` bytes, exceeds the allowance.
+    /// The error when what is used, with `more` bytes, exceeds the cap.
     fn check(&self, more: u64) -> Result<()> {
+        self.look();
         if !self.over_by(more) {
             return Ok(());
         }
-        let gib = |b: f64| b / (1u64 << 30) as f64;
+        let available = self.allowance.unwrap_or(0.0);
+        let cap = self.cap().unwrap_or(0.0);
+        let taken = (self.used() + more) as f64;
+        let stopped = if cap > 0.0 {
+            format!(
+                "it had taken {} with what it was about to allocate, more than the {} it may \
+                 take: the {} that may be used ({}) less {} kept aside for what the guard does \
+                 not see at once (the growth between two of its looks at the memory, the cross \
+                 approximations in flight)",
+                size(taken),
+                size(cap),
+                size(available),
+                self.source,
+                size(self.aside())
+            )
+        } else {
+            format!(
+                "the {} that may be used ({}) leaves nothing once {} are kept aside for what the \
+                 guard does not see at once",
+                size(available),
+                self.source,
+                size(self.aside())
+            )
+        };
         Err(Error::OperatorTooLarge {
             dof: self.dof,
-            needed_gib: gib((self.used() + more) as f64),
-            available_gib: gib(self.allowance.unwrap_or(0.0)),
+            needed_gib: gib(taken),
+            available_gib: gib(available),
+            what: format!(
+                "the build of the compressed operator of {} unknowns was stopped: {stopped}{}",
+                self.dof,
+                self.estimate_was(taken)
+            ),
+            advice: BUILD_ADVICE.into(),
         })
+    }
+}
+
+/// What a build stopped for memory may try.
+const BUILD_ADVICE: &str = "raise --memory-limit or --compression-tolerance, use a coarser mesh \
+     (each refinement level multiplies the memory by about 5) or a machine with more memory";
+
+/// Bytes in GiB.
+fn gib(bytes: f64) -> f64 {
+    bytes / (1u64 << 30) as f64
+}
+
+/// Bytes of a block's entry in the build's lists of exact blocks: the list, its copy sorted by
+/// node cluster, and the groups ([`build_block_by_block`]).
+const LIST_NEAR_BYTES: u64 = 3 * std::mem::size_of::<(usize, usize, bool)>() as u64;
+/// Bytes of a far block's entry in the build's lists.
+const LIST_FAR_BYTES: u64 = std::mem::size_of::<&(usize, usize)>() as u64;
+/// Bytes of a shadowed block's leaf in the build's lists ([`shadowed::build`]).
+const LIST_LEAF_BYTES: u64 =
+    3 * std::mem::size_of::<(usize, usize, usize)>() as u64 + shadowed::LEAF_PARTS_BYTES;
+/// Bytes of a block's slot, which the operator keeps as its index.
+const SLOT_BYTES: u64 = std::mem::size_of::<Block>() as u64;
+
+/// Bytes of the build's working lists and of the blocks' slots for `plan`: what
+/// [`build_block_by_block`] and [`shadowed::build`] allocate beside the blocks' values.
+fn build_list_bytes(plan: &BlockPlan) -> u64 {
+    let leaves: usize = plan.shadowed.iter().map(|b| b.leaves.len()).sum();
+    let slots = plan.near.len() + plan.far.len() + shadowed::sub_blocks(&plan.shadowed);
+    LIST_NEAR_BYTES * plan.near.len() as u64
+        + LIST_FAR_BYTES * plan.far.len() as u64
+        + LIST_LEAF_BYTES * leaves as u64
+        + SLOT_BYTES * slots as u64
+}
+
+/// Pairs sampled for the memory estimate: a standard error of a few per cent where the stored
+/// entries are a per cent of the pairs or more, in about a second on most scenes.
+const ESTIMATE_SAMPLES: usize = 4096;
+
+/// Further pairs whose sight is looked at in the exact block (or shadowed leaf) of each sampled
+/// pair: how full the block is decides how it is stored (dense, sparse rows with their masks, or
+/// dropped when nothing in it is seen).
+const SIGHTS_PER_BLOCK: usize = 8;
+
+/// Entry evaluations that the estimate's cross approximations of the sampled low-rank and
+/// shadowed blocks may take together (a second or two of one core); the sampled blocks beyond
+/// are given the mean rank of those of their kind nearest in shape.
+const ESTIMATE_EVALUATIONS: usize = 1 << 23;
+
+/// Rank assumed where no sampled block of a kind was cross-approximated, and when choosing
+/// which ones to approximate within [`ESTIMATE_EVALUATIONS`].
+const ASSUMED_RANK: usize = 16;
+
+/// Bytes a cross approximation holds per cross and per row or column of its block while it
+/// runs: the crosses, their copies as matrices, the QR factors and the recompressed factors, in
+/// f64 (`aca::aca`).
+const CROSSING_BYTES: u64 = 32;
+
+/// Vectors of n values that GMRES keeps for one right-hand side: `solve::RESTART` + 2 (the
+/// solver's layer is above the operator's, which cannot name it).
+const GMRES_VECTORS: u64 = 32;
+
+/// How a node sees an element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Sight {
+    /// Not at all (or its row is zero: rho = 0): no entry.
+    Hidden,
+    /// Whole.
+    Whole,
+    /// In part: an exact entry even in a shadowed block.
+    Part,
+}
+
+/// The sights of the pairs looked at in one block: how many were seen at all, and in part.
+#[derive(Clone, Copy, Debug, Default)]
+struct Fill {
+    looked: u32,
+    seen: u32,
+    part: u32,
+}
+
+impl Fill {
+    fn add(&mut self, sight: Sight) {
+        self.looked += 1;
+        self.seen += u32::from(sight != Sight::Hidden);
+        self.part += u32::from(sight == Sight::Part);
+    }
+
+    /// Share of the pairs seen, and seen in part.
+    fn shares(&self) -> (f64, f64) {
+        let n = f64::from(self.looked.max(1));
+        (f64::from(self.seen) / n, f64::from(self.part) / n)
+    }
+}
+
+/// The sampled parts of the memory, per pair (bytes, and blocks) or summed.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sampled {
+    plan: f64,
+    lists: f64,
+    index: f64,
+    exact: f64,
+    factors: f64,
+    blocks: f64,
+    /// Pairs in exact blocks or shadowed leaves (the row walks' views follow them).
+    walked: f64,
+}
+
+impl Sampled {
+    /// What the sampled parts add to the peak (the kept blocks' slots are among the lists').
+    fn bytes(&self) -> f64 {
+        self.plan + self.lists + self.exact + self.factors
+    }
+
+    fn add(&mut self, o: &Sampled) {
+        self.plan += o.plan;
+        self.lists += o.lists;
+        self.index += o.index;
+        self.exact += o.exact;
+        self.factors += o.factors;
+        self.blocks += o.blocks;
+        self.walked += o.walked;
+    }
+}
+
+/// Bytes of a cluster tree's clusters (its order counts with the operator's).
+fn tree_bytes(tree: &ClusterTree) -> u64 {
+    let faces: usize = tree.clusters.iter().map(|c| c.faces.capacity()).sum();
+    (tree.clusters.capacity() * std::mem::size_of::<cluster::Cluster>()
+        + faces * std::mem::size_of::<usize>()) as u64
+}
+
+/// What the build of the operator of `entries` will hold at its peak ([`MemoryEstimate`]), over
+/// `ranks` processes: the cluster trees counted; the plan, the lists, the blocks' slots and
+/// their values from [`ESTIMATE_SAMPLES`] pairs drawn uniformly (seeded: the same estimate on
+/// every run and rank). Each pair is followed down the block tree by the plan's own decisions
+/// to the block that holds it ([`BlockPlan::locate`]), and stands for its block's bytes over
+/// the block's pairs: the plan's and the lists' entries and the slot of its block; for an exact
+/// block or a shadowed leaf, its values as the build stores them, from the sights of the pair
+/// and of [`SIGHTS_PER_BLOCK`] more in the block (dense, sparse rows with their masks, nothing
+/// where none is seen); for a low-rank or shadowed block, its factors (cross-approximated for
+/// the sampled blocks while [`ESTIMATE_EVALUATIONS`] last). The sums, times the pairs over the
+/// samples, estimate the totals; the row walks' views, the cross approximations in flight and
+/// the solver's vectors follow from them and from n.
+fn estimate_memory(
+    entries: &Entries,
+    faces: &FacePairs,
+    options: &CompressionOptions,
+    scene_faces: usize,
+    ranks: usize,
+) -> MemoryEstimate {
+    use rand::{Rng, SeedableRng};
+
+    let (nodes, elements, per) = (entries.nodes, entries.elements, entries.per);
+    let (n_nodes, n_elements) = (nodes.order.len(), elements.order.len());
+    let dof = entries.disc.dof();
+    let value = entries.precision.bytes() as f64;
+    let threads = rayon::current_num_threads() as u64;
+    let estimate = MemoryEstimate {
+        dof,
+        trees: tree_bytes(nodes) + tree_bytes(elements),
+        orders: order_bytes(dof, per),
+        solver: 8 * dof as u64 * (GMRES_VECTORS + 2 * threads),
+        ranks,
+        single: entries.precision == Precision::F32,
+        ..Default::default()
+    };
+    if n_nodes == 0 || n_elements == 0 {
+        return estimate;
+    }
+    let samples: Vec<(Located, Fill)> = (0..ESTIMATE_SAMPLES)
+        .into_par_iter()
+        .map_init(RecentHiders::default, |hiders, k| {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(0x5eed_0000 + k as u64);
+            let at = (rng.random_range(0..n_nodes), rng.random_range(0..n_elements));
+            let located = BlockPlan::locate(nodes, elements, faces, options, at);
+            let walked = match located {
+                Located::Near { t, s, .. } => Some((t, s)),
+                Located::Far { t, s } => entries.useful_rank(t, s).is_none().then_some((t, s)),
+                Located::Shadowed { part: ShadowedPart::Leaf(t, s), .. } => Some((t, s)),
+                Located::Shadowed { .. } | Located::Empty => None,
+            };
+            let mut fill = Fill::default();
+            if let Some((t, s)) = walked {
+                let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
+                let others = (0..SIGHTS_PER_BLOCK).map(|_| {
+                    (rng.random_range(tc.start..tc.end), rng.random_range(sc.start..sc.end))
+                });
+                for (k, l) in std::iter::once(at).chain(others) {
+                    fill.add(entries.pair_sight(nodes.order[k], elements.order[l], hiders));
+                }
+            }
+            (located, fill)
+        })
+        .collect();
+
+    // The ranks of the low-rank and shadowed blocks met, in the order met (at random), while
+    // the evaluations last.
+    let mut chosen = Vec::new();
+    let mut left = ESTIMATE_EVALUATIONS;
+    let mut widths = Vec::new();
+    let mut kinds = std::collections::HashMap::new();
+    for (located, _) in &samples {
+        let (t, s, continued) = match *located {
+            Located::Far { t, s } if entries.useful_rank(t, s).is_some() => (t, s, false),
+            Located::Shadowed { t, s, .. } => (t, s, true),
+            _ => continue,
+        };
+        if kinds.insert((t, s), continued).is_none() {
+            let (m, c) = entries.block_size(t, s);
+            widths.push(m + c);
+            let cost = ASSUMED_RANK * (m + c);
+            if cost <= left {
+                left -= cost;
+                chosen.push((t, s, continued));
+            }
+        }
+    }
+    let tolerance = options.tolerance;
+    let ranks_found: std::collections::HashMap<(usize, usize), Option<usize>> = chosen
+        .par_iter()
+        .map(|&(t, s, continued)| {
+            let rank = entries.low_rank(t, s, faces, tolerance, continued).map(|lr| lr.k);
+            ((t, s), rank)
+        })
+        .collect();
+    // A block not approximated is given the mean rank of those of its kind (far or shadowed)
+    // nearest in shape (log2 of its rows and of its columns): the budget leaves out the largest
+    // ones met late, and those met first are the ones of most pairs, of higher ranks than
+    // narrower blocks of as many rows and columns (an incompressible far block counts as its
+    // break-even rank; an incompressible shadowed block has no factors).
+    let shape = |t: usize, s: usize| {
+        let (m, c) = entries.block_size(t, s);
+        let log = |v: usize| i64::from(usize::BITS - v.leading_zeros());
+        (log(m), log(c))
+    };
+    let mut by_shape: std::collections::HashMap<(bool, (i64, i64)), (f64, f64)> =
+        Default::default();
+    for &(t, s, continued) in &chosen {
+        let rank = match ranks_found[&(t, s)] {
+            Some(k) => k as f64,
+            None if continued => 0.0,
+            None => entries.useful_rank(t, s).unwrap_or(0) as f64,
+        };
+        let (sum, count) = by_shape.entry((continued, shape(t, s))).or_default();
+        *sum += rank;
+        *count += 1.0;
+    }
+    let imputed = |continued: bool, at: (i64, i64)| {
+        by_shape
+            .iter()
+            .filter(|((kind, _), _)| *kind == continued)
+            .min_by_key(|((_, b), _)| ((b.0 - at.0).abs() + (b.1 - at.1).abs(), *b))
+            .map_or(ASSUMED_RANK as f64, |(_, (sum, count))| sum / count)
+    };
+    // A block's factors, or its entries where its rank did not pay.
+    let factor_bytes = |t: usize, s: usize, continued: bool| -> f64 {
+        let (m, c) = entries.block_size(t, s);
+        match ranks_found.get(&(t, s)) {
+            Some(Some(k)) => (k * (m + c)) as f64 * value,
+            Some(None) if continued => 0.0,
+            Some(None) => (m * c) as f64 * value,
+            None => {
+                let most = entries.useful_rank(t, s).unwrap_or(0) as f64;
+                imputed(continued, shape(t, s)).min(most) * (m + c) as f64 * value
+            }
+        }
+    };
+    // The largest cross approximation met: its crosses, as many as its rank (an incompressible
+    // far block's reach its break-even rank before it is refused).
+    let crossing = kinds
+        .iter()
+        .map(|(&(t, s), &continued)| {
+            let (m, c) = entries.block_size(t, s);
+            let rank = match ranks_found.get(&(t, s)) {
+                Some(Some(k)) => *k as f64,
+                Some(None) => entries.useful_rank(t, s).unwrap_or(0) as f64,
+                None => imputed(continued, shape(t, s)),
+            };
+            rank * (m + c) as f64
+        })
+        .fold(0.0, f64::max);
+
+    let pairs = |t: usize, s: usize| (nodes.clusters[t].len() * elements.clusters[s].len()) as f64;
+    let masks = |t: usize, s: usize| {
+        let (m, width) = entries.block_size(t, s);
+        8.0 * (m * stored::mask_words(width)) as f64
+    };
+    // An exact block as `Block::compact` stores it: nothing where nothing is seen, else its
+    // values dense or, where fewer bytes, its non-zero ones with the rows' masks.
+    let exact_block = |x: &mut Sampled, t: usize, s: usize, fill: Fill, list: u64| {
+        let p = pairs(t, s);
+        let (seen, _) = fill.shares();
+        let dense = p * per as f64 * value;
+        x.plan += PLAN_NEAR_BYTES as f64 / p;
+        x.lists += (list + SLOT_BYTES) as f64 / p;
+        x.blocks += 1.0 / p;
+        x.walked += 1.0;
+        if fill.seen > 0 {
+            x.index += SLOT_BYTES as f64 / p;
+            x.exact += dense.min(masks(t, s) + seen * dense) / p;
+        }
+    };
+    let (mut sum, mut sum_squares) = (Sampled::default(), 0.0);
+    for &(located, fill) in &samples {
+        let mut x = Sampled::default();
+        match located {
+            Located::Empty => {}
+            Located::Near { t, s, .. } => exact_block(&mut x, t, s, fill, LIST_NEAR_BYTES),
+            Located::Far { t, s } if entries.useful_rank(t, s).is_none() => {
+                exact_block(&mut x, t, s, fill, LIST_NEAR_BYTES + LIST_FAR_BYTES);
+            }
+            Located::Far { t, s } => {
+                let p = pairs(t, s);
+                x.plan += PLAN_FAR_BYTES as f64 / p;
+                x.lists += (LIST_FAR_BYTES + SLOT_BYTES) as f64 / p;
+                x.index += SLOT_BYTES as f64 / p;
+                x.factors += factor_bytes(t, s, false) / p;
+                x.blocks += 1.0 / p;
+            }
+            Located::Shadowed { t, s, part } => {
+                let p = pairs(t, s);
+                x.plan += std::mem::size_of::<blocks::ShadowedBlock>() as f64 / p;
+                x.factors += factor_bytes(t, s, true) / p;
+                if let ShadowedPart::Seen(a, b) = part {
+                    let p = pairs(a, b);
+                    x.plan += PLAN_FAR_BYTES as f64 / p;
+                    x.lists += SLOT_BYTES as f64 / p;
+                    x.index += SLOT_BYTES as f64 / p;
+                    x.blocks += 1.0 / p;
+                }
+                if let ShadowedPart::Leaf(a, b) = part {
+                    // The mask of the elements seen whole and the partly seen ones' entries,
+                    // with their own masks; dropped where nothing is seen.
+                    let p = pairs(a, b);
+                    x.plan += PLAN_FAR_BYTES as f64 / p;
+                    x.lists += (LIST_LEAF_BYTES + SLOT_BYTES) as f64 / p;
+                    x.blocks += 1.0 / p;
+                    x.walked += 1.0;
+                    if fill.seen > 0 {
+                        let (_, part) = fill.shares();
+                        x.index += SLOT_BYTES as f64 / p;
+                        x.exact += (2.0 * masks(a, b) + part * p * per as f64 * value) / p;
+                    }
+                }
+            }
+        }
+        sum_squares += x.bytes() * x.bytes();
+        sum.add(&x);
+    }
+    let count = samples.len() as f64;
+    let scale = n_nodes as f64 * n_elements as f64 / count;
+    let variance = (sum_squares / count - (sum.bytes() / count).powi(2)).max(0.0);
+    let total = |v: f64| (v * scale).round() as u64;
+    // Each thread keeps the views of the faces its node cluster's exact blocks meet, for each
+    // of the cluster's nodes: at most every face, at most as many as the elements walked per
+    // node over the elements of a face (a face's elements share its view).
+    let walked_per_node = sum.walked * scale / n_nodes as f64;
+    let per_face = n_elements as f64 / scene_faces.max(1) as f64;
+    let faces_met = (walked_per_node / per_face.max(1.0)).min(scene_faces as f64);
+    let view_bytes = 2.0 * std::mem::size_of::<(usize, crate::visibility::FaceView)>() as f64;
+    let cluster = options.leaf_size.max(options.mixed_leaf_size) as f64;
+    // Each thread may be approximating one of the widest blocks at once (those at least half as
+    // wide as the widest met).
+    let widest = widths.iter().copied().max().unwrap_or(0);
+    let wide = widths.iter().filter(|&&w| 2 * w >= widest).count() as u64;
+    let in_flight = threads.min(wide).max(1) as f64;
+    MemoryEstimate {
+        plan: total(sum.plan),
+        lists: total(sum.lists),
+        index: total(sum.index),
+        exact: total(sum.exact),
+        factors: total(sum.factors),
+        blocks: total(sum.blocks),
+        views: (threads as f64 * cluster * faces_met * view_bytes) as u64,
+        crossing: (in_flight * CROSSING_BYTES as f64 * crossing) as u64,
+        error: (scale * (count * variance).sqrt()).round() as u64,
+        samples: samples.len(),
+        ..estimate
     }
 }
 
@@ -1050,6 +1630,25 @@ impl Entries<'_> {
             });
         }
         stats
+    }
+
+    /// How node i sees element j, by the row walk of the dense path's pair plan.
+    fn pair_sight(&self, i: usize, j: usize, hiders: &mut RecentHiders) -> Sight {
+        let (node, el) = (&self.disc.nodes[i], &self.disc.elements[j]);
+        let mut sight = Sight::Hidden;
+        let faces = [(el.face, std::iter::once(()))];
+        self.planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, _, seen| {
+            sight = match seen {
+                FaceSight::Hidden(_) => Sight::Hidden,
+                FaceSight::Whole => Sight::Whole,
+                FaceSight::Part(mut part) => match part.element(&el.in_face()) {
+                    Visibility::Skip(_) => Sight::Hidden,
+                    Visibility::Full => Sight::Whole,
+                    Visibility::Partial(_) => Sight::Part,
+                },
+            };
+        });
+        sight
     }
 
     /// Every entry of the block, by the dense path's pair plan and kernels, stored by what it

@@ -426,6 +426,7 @@ impl CompressedOperator {
             zero_rows,
             device: None,
             share: None,
+            memory_estimate: None,
         })
     }
 }

@@ -27,6 +27,11 @@ struct LeafParts {
     stats: PairStats,
 }
 
+/// Bytes a leaf's parts take in the build's lists besides their values (the list of parts and
+/// the list they are found in).
+pub(super) const LEAF_PARTS_BYTES: u64 =
+    (std::mem::size_of::<Option<LeafParts>>() + std::mem::size_of::<(usize, LeafParts)>()) as u64;
+
 /// Sub-blocks of the plan's shadowed blocks, as many as slots [`build`] fills.
 pub(super) fn sub_blocks(blocks: &[ShadowedBlock]) -> usize {
     blocks.iter().map(|b| b.seen.len() + b.leaves.len()).sum()

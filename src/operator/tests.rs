@@ -189,7 +189,7 @@ fn bad_tolerances_are_refused_with_the_limit() {
 }
 
 #[test]
-fn an_operator_that_outgrows_the_memory_allowance_is_refused_with_the_limit_named() {
+fn an_operator_that_outgrows_the_memory_allowance_is_stopped_with_consistent_sizes() {
     let guard = MemoryGuard::with_allowance(491_520, Some(3.0 * (1u64 << 30) as f64));
     assert!(guard.check(2 << 30).is_ok());
     guard.add(2 << 30);
@@ -197,14 +197,165 @@ fn an_operator_that_outgrows_the_memory_allowance_is_refused_with_the_limit_name
     guard.add(2 << 30);
     assert!(guard.is_over());
     let message = guard.check(0).unwrap_err().to_string();
-    for needle in ["491520 unknowns", "at least 4.00 GiB", "only 3.00 GiB", "--memory-limit"] {
+    // What it had taken is above what it may take (the allowance less 16 MiB), and both are
+    // named with the allowance.
+    for needle in ["491520 unknowns", "taken 4.00 GiB", "than the 2.98 GiB", "take: the 3.00 GiB"] {
         assert!(message.contains(needle), "'{needle}' not in: {message}");
     }
-    // Below a GiB, sizes are written in MiB.
-    let small = MemoryGuard::with_allowance(100, Some(40.0 * (1u64 << 20) as f64));
-    let message = small.check(50 << 20).unwrap_err().to_string();
-    for needle in ["at least 50.0 MiB", "only 40.0 MiB"] {
+    assert!(message.contains("--memory-limit"), "{message}");
+    // Below a GiB, sizes are written in MiB; an allowance below the guard's margin says so.
+    let small = MemoryGuard::with_allowance(100, Some(400.0 * (1u64 << 20) as f64));
+    let message = small.check(500 << 20).unwrap_err().to_string();
+    for needle in ["taken 500.0 MiB", "than the 384.0 MiB", "take: the 400.0 MiB"] {
         assert!(message.contains(needle), "'{needle}' not in: {message}");
+    }
+    let tiny = MemoryGuard::with_allowance(100, Some(1.0 * (1u64 << 20) as f64));
+    let message = tiny.check(1).unwrap_err().to_string();
+    assert!(message.contains("leaves nothing") && message.contains("1.0 MiB"), "{message}");
+}
+
+#[test]
+fn a_build_whose_estimate_cannot_fit_is_refused_naming_both_sizes() {
+    let estimate = MemoryEstimate {
+        dof: 5_000,
+        trees: 1 << 20,
+        plan: 8 << 20,
+        lists: 24 << 20,
+        index: 16 << 20,
+        exact: 300 << 20,
+        factors: 100 << 20,
+        orders: 60_000,
+        views: 0,
+        crossing: 1 << 20,
+        solver: 1 << 20,
+        error: 2 << 20,
+        samples: 4096,
+        blocks: 10_000,
+        ranks: 1,
+        single: true,
+    };
+    let peak = estimate.peak_bytes() as f64;
+    // It fits where its low end does.
+    let roomy = MemoryGuard::with_allowance(5_000, Some(peak));
+    assert!(roomy.refusal(&estimate, Some(2)).is_none());
+    let tight = MemoryGuard::with_allowance(5_000, Some(100.0 * (1u64 << 20) as f64));
+    let Some(Error::OperatorTooLarge { needed_gib, available_gib, .. }) =
+        tight.refusal(&estimate, Some(2))
+    else {
+        panic!("not refused");
+    };
+    assert!(needed_gib > available_gib, "{needed_gib} <= {available_gib}");
+    let message = tight.refusal(&estimate, Some(2)).unwrap().to_string();
+    let needed = format!("would need about {}", crate::assembly::size_text(peak));
+    for needle in ["5000 unknowns", &needed, "but 100.0 MiB may be used", "--refine 0"] {
+        assert!(message.contains(needle), "'{needle}' not in: {message}");
+    }
+    // Without a limit known, nothing is refused.
+    assert!(MemoryGuard::with_allowance(5_000, None).refusal(&estimate, None).is_none());
+}
+
+#[test]
+fn a_plan_whose_lists_pass_its_budget_stops_its_walk() {
+    let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 3);
+    let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
+    let faces = FacePairs::new(&c.scene, &c.planner, &options);
+    let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
+    let whole = BlockPlan::new(&nodes, &elements, &faces, &options, None);
+    let roomy = blocks::PlanBudget::new(1 << 30);
+    let plan = BlockPlan::new(&nodes, &elements, &faces, &options, Some(&roomy));
+    assert!(!roomy.is_over() && plan.near.len() == whole.near.len() && roomy.used() > 0);
+    let tight = blocks::PlanBudget::new(1_000);
+    let cut = BlockPlan::new(&nodes, &elements, &faces, &options, Some(&tight));
+    assert!(tight.is_over() && cut.near.len() + cut.far.len() < whole.near.len() + whole.far.len());
+    // The guard's error names what the plan had reached above what may be used.
+    let guard = MemoryGuard::with_allowance(640, Some(1_000.0));
+    let message = guard.plan_too_large(&tight, 0).to_string();
+    assert!(
+        message.contains("block plan") && message.contains("more than the 1.0 KiB"),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_pair_is_located_in_the_block_of_the_plan_that_holds_it() {
+    // Every pair of a small scene: the descent finds the block the walk put it in.
+    let scenes = [(cube().unwrap(), 2), (five_piece(SurfaceParameters::default()).unwrap(), 2)];
+    for (scene, refine) in scenes {
+        let c = case(scene, Method::Centroid, refine);
+        for shadowed_blocks in [ShadowedBlocks::On, ShadowedBlocks::Off] {
+            let options = CompressionOptions {
+                leaf_size: 4,
+                mixed_leaf_size: 4,
+                shadowed_blocks,
+                ..Default::default()
+            };
+            let faces = FacePairs::new(&c.scene, &c.planner, &options);
+            let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
+            let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None);
+            let holds = |t: usize, s: usize, (k, l): (usize, usize)| {
+                let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
+                (tc.start..tc.end).contains(&k) && (sc.start..sc.end).contains(&l)
+            };
+            let mut kinds = [0; 4];
+            for k in 0..nodes.order.len() {
+                for l in 0..elements.order.len() {
+                    let at = (k, l);
+                    let found = match BlockPlan::locate(&nodes, &elements, &faces, &options, at) {
+                        Located::Empty => {
+                            kinds[0] += 1;
+                            !plan.near.iter().any(|b| holds(b.t, b.s, at))
+                                && !plan.far.iter().any(|&(t, s)| holds(t, s, at))
+                        }
+                        Located::Near { t, s, seen_whole } => {
+                            kinds[1] += 1;
+                            plan.near.contains(&blocks::NearBlock { t, s, seen_whole })
+                        }
+                        Located::Far { t, s } => {
+                            kinds[2] += 1;
+                            plan.far.contains(&(t, s))
+                        }
+                        Located::Shadowed { t, s, part } => {
+                            kinds[3] += 1;
+                            let b = plan.shadowed.iter().find(|b| (b.t, b.s) == (t, s));
+                            b.is_some_and(|b| match part {
+                                ShadowedPart::Seen(a, c) => b.seen.contains(&(a, c)),
+                                ShadowedPart::Leaf(a, c) => b.leaves.contains(&(a, c)),
+                                ShadowedPart::Empty => true,
+                            })
+                        }
+                    };
+                    assert!(found, "pair {at:?} on {}", c.scene.name);
+                }
+            }
+            assert!(kinds[1] > 0 && kinds[2] > 0, "{kinds:?}");
+        }
+    }
+}
+
+#[test]
+fn the_memory_estimate_comes_near_what_the_build_stores() {
+    // Scenes with exact blocks, low-rank ones and shadowed ones: the estimated stored operator
+    // within a third of what the build stores.
+    let scenes = [
+        (five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 4),
+        (baffled_box().unwrap(), Method::linear(1.0 / 6.0).unwrap(), 2),
+    ];
+    for (scene, method, refine) in scenes {
+        let c = case(scene, method, refine);
+        let options =
+            CompressionOptions { shadowed_blocks: ShadowedBlocks::On, ..Default::default() };
+        let assembly = AssemblyOptions::default();
+        let op = CompressedOperator::build(&c, &assembly, &options, None, &crate::progress::Silent)
+            .unwrap();
+        let estimate = *op.memory_estimate.unwrap();
+        let (estimated, stored) =
+            (estimate.operator_bytes() as f64, op.stats.operator_bytes as f64);
+        assert!(
+            (estimated / stored - 1.0).abs() < 0.33,
+            "{}: estimated {estimated}, stored {stored}: {estimate:?}",
+            c.scene.name
+        );
+        assert!(estimate.peak_bytes() >= estimate.operator_bytes());
     }
 }
 
@@ -253,7 +404,7 @@ fn far_blocks_whose_boxes_clear_the_planes_have_no_pair_that_gives_nothing() {
         let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
         let faces = FacePairs::new(&c.scene, &c.planner, &options);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
-        let plan = BlockPlan::new(&nodes, &elements, &faces, &options);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None);
         let (mut clear, mut not) = (0, 0);
         for &(t, s) in &plan.far {
             let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
@@ -478,7 +629,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
         };
         let faces = FacePairs::new(&c.scene, &c.planner, &options);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
-        let plan = BlockPlan::new(&nodes, &elements, &faces, &options);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None);
         let reflects = |i: usize| c.disc.nodes[i].rho != 0.0;
         let integrator = PairIntegrator::new(c.disc.method, &AssemblyOptions::default());
         let entries = Entries {

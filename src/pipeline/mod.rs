@@ -254,6 +254,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         operator: summary.operator,
         compression_tolerance: summary.compression_tolerance,
         operator_bytes: summary.operator_bytes,
+        memory_estimate_bytes: summary.memory_estimate_bytes,
         blocks: summary.blocks,
         transfers: summary.transfers.map(|t| t.over(summary.setup_seconds + solve_seconds)),
         peak_rss_bytes: peak_rss_bytes(),

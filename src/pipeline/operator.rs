@@ -10,7 +10,9 @@ use crate::assembly::{Assembly, PairEvaluation};
 use crate::distributed::{DistributedReport, RankReport};
 use crate::error::{Error, Result};
 use crate::gpu::{self, DeviceBlocks, DeviceOperator, GpuTimings};
-use crate::operator::{CompressedOperator, OperatorChoice, OperatorStats, ProblemShape};
+use crate::operator::{
+    CompressedOperator, CompressionOptions, OperatorChoice, OperatorStats, ProblemShape,
+};
 use crate::solve;
 use crate::visibility::PairStats;
 
@@ -112,6 +114,9 @@ pub struct OperatorSummary {
     pub compression_tolerance: Option<f64>,
     /// Memory of the stored operator, in bytes.
     pub operator_bytes: u64,
+    /// What the compressed operator's build was estimated to hold at its peak before it began
+    /// (none for the dense matrix, whose 8 n² bytes are known, or an operator read from a file).
+    pub memory_estimate_bytes: Option<u64>,
     /// Block statistics of the compressed operator.
     #[serde(flatten)]
     pub blocks: Option<OperatorStats>,
@@ -252,6 +257,7 @@ impl BuiltOperator {
                 pairs: t.assembled.stats,
                 compression_tolerance: None,
                 operator_bytes: 8 * (dof as u64) * (dof as u64),
+                memory_estimate_bytes: None,
                 blocks: None,
                 transfers: t.gpu.map(|g| DeviceTransfers::new(g.traffic(), None)),
             },
@@ -263,6 +269,7 @@ impl BuiltOperator {
                 pairs: op.stats,
                 compression_tolerance: None,
                 operator_bytes: op.device_bytes(),
+                memory_estimate_bytes: None,
                 blocks: None,
                 transfers: Some(DeviceTransfers::new(op.traffic(), Some(op.storage))),
             },
@@ -287,6 +294,7 @@ impl BuiltOperator {
                     pairs: op.pairs,
                     compression_tolerance: Some(config.compression.tolerance),
                     operator_bytes: op.stats.operator_bytes,
+                    memory_estimate_bytes: op.memory_estimate.as_ref().map(|e| e.peak_bytes()),
                     blocks: Some(op.stats),
                     transfers,
                 }
@@ -341,8 +349,9 @@ pub fn build_compressed(
         Assembler::Gpu(g) => Some(gpu::PairEvaluator::new(g, scene, disc, &config.assembly)?),
     };
     let batches = device.as_ref().map(|d| d as &dyn PairEvaluation);
-    let (assembly, compression, progress) =
-        (&config.assembly, &config.compression, &*config.progress);
+    // The mesh's level, for the advice of a refusal for memory.
+    let compression = &CompressionOptions { refine: Some(config.refine), ..config.compression };
+    let (assembly, progress) = (&config.assembly, &*config.progress);
     let mut op = match &config.ranks {
         Some(ranks) => CompressedOperator::build_shared(
             problem,

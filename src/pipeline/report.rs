@@ -107,6 +107,8 @@ pub struct RunReport {
     pub compression_tolerance: Option<f64>,
     /// Memory of the stored operator, in bytes.
     pub operator_bytes: u64,
+    /// What the compressed operator's build was estimated to hold at its peak before it began.
+    pub memory_estimate_bytes: Option<u64>,
     /// Block statistics of the compressed operator (`near_entries`, `far_blocks`, `max_rank`,
     /// ...).
     #[serde(flatten)]
