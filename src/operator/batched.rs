@@ -12,7 +12,12 @@ use rayon::prelude::*;
 
 use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
-use super::{Block, BlockData, Built, Entries, MemoryGuard, NodeViews, by_node_cluster, shadowed};
+use super::built::{Built, by_node_cluster};
+use super::compressed::Block;
+use super::entries::{Entries, NodeViews};
+use super::guard::MemoryGuard;
+use super::shadowed;
+use super::stored::BlockData;
 use crate::assembly::{PairEvaluation, PairTask};
 use crate::error::Result;
 use crate::progress::Progress;

@@ -8,7 +8,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::cluster::{Cluster, ClusterTree};
-use super::{CompressionOptions, ShadowedBlocks};
+use super::options::{CompressionOptions, ShadowedBlocks};
 use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
 use crate::geometry::box_corners;

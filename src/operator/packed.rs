@@ -1,7 +1,8 @@
 //! The compressed operator packed into flat arrays for a device to apply
 //! (`shaders/blocks.wgsl` reads this layout; the GPU's side is `gpu::DeviceBlocks`).
 
-use super::{Block, BlockData, CompressedOperator};
+use super::compressed::{Block, CompressedOperator};
+use super::stored::BlockData;
 
 /// Fields of a block's descriptor, in order.
 pub mod field {

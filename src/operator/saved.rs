@@ -6,8 +6,10 @@
 
 use std::io::{Read, Write};
 
+use super::compressed::{Block, CompressedOperator, block_stats};
+use super::stats::OperatorStats;
+use super::stored::BlockData;
 use super::stored::{Factors, SparseRows, Values};
-use super::{Block, BlockData, CompressedOperator, OperatorStats};
 use crate::error::{Error, Result};
 use crate::visibility::PairStats;
 
@@ -412,8 +414,8 @@ impl CompressedOperator {
             blocks.push(Block::new(rows, cols, data));
         }
         // The bytes of the blocks as read; the counts of entries and blocks stay the build's.
-        let counted = super::block_stats(&blocks, per);
-        stats.operator_bytes = counted.operator_bytes + super::order_bytes(dof, per);
+        let counted = block_stats(&blocks, per);
+        stats.operator_bytes = counted.operator_bytes + super::stats::order_bytes(dof, per);
         stats.low_rank_bytes = counted.low_rank_bytes;
         Ok(Self {
             dof,

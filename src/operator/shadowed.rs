@@ -14,8 +14,11 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::blocks::{FacePairs, ShadowedBlock};
+use super::built::{Built, by_node_cluster};
+use super::compressed::Block;
+use super::entries::{Entries, NodeViews};
+use super::guard::MemoryGuard;
 use super::stored::{BlockData, FactorSlice, Factors, ShadowedLeaf, SparseRows, mask_words};
-use super::{Block, Built, Entries, MemoryGuard, NodeViews, by_node_cluster};
 use crate::progress::Progress;
 use crate::visibility::PairStats;
 

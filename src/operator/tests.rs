@@ -3,11 +3,21 @@
 
 use glam::DVec3;
 
+use super::blocks::{BlockPlan, FacePairs, Located, ShadowedPart};
+use super::build::cluster_trees;
+use super::compressed::{Block, block_stats};
+use super::entries::{Entries, NodeViews};
+use super::guard::MemoryGuard;
+use super::stats::order_bytes;
+use super::stored::BlockData;
 use super::stored::{SparseRows, Values};
 use super::*;
-use crate::assembly::{AssemblyOptions, CollocationMatrix, assemble};
-use crate::discretization::Method;
-use crate::mesh::MeshKind;
+use crate::assembly::{
+    AssemblyOptions, CollocationMatrix, PairEvaluation, PairIntegrator, Problem, assemble,
+};
+use crate::discretization::{Discretization, Method};
+use crate::error::Error;
+use crate::mesh::{Mesh, MeshKind};
 use crate::scene::{Face, Scene, SurfaceParameters, baffled_box, cube, five_piece};
 
 type Case = Problem;

@@ -1,0 +1,244 @@
+//! The compressed operator as built: its blocks (exact, sparse, low-rank, shadowed) in the
+//! cluster trees' orders, and its products with vectors.
+
+use std::ops::Range;
+
+use rayon::prelude::*;
+
+use super::estimate::MemoryEstimate;
+use super::stats::OperatorStats;
+use super::stored::{self, BlockData, Precision};
+use crate::distributed::Ranks;
+use crate::visibility::PairStats;
+
+/// A block of K: rows `rows` of the node order, columns of the elements `cols` of the element
+/// order (each with its basis functions).
+#[derive(Clone, Debug)]
+pub(super) struct Block {
+    /// Rows and element columns as u32 (four bytes less each than usize: an operator keeps a
+    /// million blocks and more).
+    pub(super) rows: Range<u32>,
+    pub(super) cols: Range<u32>,
+    pub(super) data: BlockData,
+}
+
+/// K as exact near blocks and low-rank far blocks.
+#[derive(Clone, Debug)]
+pub struct CompressedOperator {
+    pub(super) dof: usize,
+    pub(super) per: usize,
+    /// `node_order[k]`: the node at row k of the blocks (the node cluster tree's order).
+    pub(super) node_order: Vec<usize>,
+    /// `element_order[k]`: the element at column group k (the element cluster tree's order).
+    pub(super) element_order: Vec<usize>,
+    pub(super) blocks: Vec<Block>,
+    /// Statistics of the blocks.
+    pub stats: OperatorStats,
+    /// Pair classes of the exact blocks.
+    pub pairs: PairStats,
+    /// Rows of nodes that reflect nothing (rho = 0): zero, u = E there.
+    pub zero_rows: usize,
+    /// The GPU that evaluated the entries (name and backend), if one did.
+    pub device: Option<String>,
+    /// In a distributed run, this rank's part: it holds only its blocks, and the products sum
+    /// every rank's. `stats` and `pairs` are then the whole operator's.
+    pub share: Option<RankShare>,
+    /// What its build was estimated to hold at its peak before it began (none for an operator
+    /// read from a file).
+    pub memory_estimate: Option<Box<MemoryEstimate>>,
+}
+
+/// A rank's part of a distributed compressed operator.
+#[derive(Clone, Debug)]
+pub struct RankShare {
+    /// The ranks the operator is spread over.
+    pub ranks: Ranks,
+    /// Bytes of this rank's blocks.
+    pub operator_bytes: u64,
+    /// Time of the build this rank spent waiting for the others in collectives.
+    pub waited_seconds: f64,
+}
+
+impl CompressedOperator {
+    /// Number of unknowns.
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+
+    /// `K x`: the blocks in parallel, each adding into its rows.
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = self.products(&[x], |data, x, y| data.apply_add(x, y));
+        y.pop().expect("one product")
+    }
+
+    /// `K x` for every `x` in `xs` together: each block is read once for all of them (many
+    /// right-hand sides cost the operator's memory traffic once per round, not once per
+    /// vector). Each product equals [`CompressedOperator::apply`]'s up to the order of sums.
+    pub fn apply_many(&self, xs: &[&[f64]]) -> Vec<Vec<f64>> {
+        let m = xs.len();
+        if m <= 1 {
+            return xs.iter().map(|x| self.apply(x)).collect();
+        }
+        self.products(xs, |data, x, y| data.apply_add_many(x, y, m))
+    }
+
+    /// `K x` for every `x` in `xs`, the vectors interleaved in the blocks' orders (`x[k * m +
+    /// v]`: vector v at column k, m vectors) and each block adding its part by `add(data, x, y)`
+    /// into its rows, the blocks in parallel.
+    pub(super) fn products(
+        &self,
+        xs: &[&[f64]],
+        add: impl Fn(&BlockData, &[f64], &mut [f64]) + Sync,
+    ) -> Vec<Vec<f64>> {
+        let (m, per, dof) = (xs.len(), self.per, self.dof);
+        let mut xp = vec![0.0; dof * m];
+        for (k, &e) in self.element_order.iter().enumerate() {
+            for q in 0..per {
+                let column = k * per + q;
+                for (v, x) in xs.iter().enumerate() {
+                    xp[column * m + v] = x[e * per + q];
+                }
+            }
+        }
+        let mut yp = self
+            .blocks
+            .par_iter()
+            .with_min_len(16)
+            .fold(
+                || vec![0.0; dof * m],
+                |mut y, b| {
+                    let xs = &xp[b.col_range().start * per * m..b.col_range().end * per * m];
+                    add(&b.data, xs, &mut y[b.row_range().start * m..b.row_range().end * m]);
+                    y
+                },
+            )
+            .reduce(
+                || vec![0.0; dof * m],
+                |mut a, b| {
+                    a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
+                    a
+                },
+            );
+        if let Some(share) = &self.share {
+            share.ranks.sum(&mut yp);
+        }
+        let mut ys = vec![vec![0.0; dof]; m];
+        for (k, &i) in self.node_order.iter().enumerate() {
+            for (v, y) in ys.iter_mut().enumerate() {
+                y[i] = yp[k * m + v];
+            }
+        }
+        ys
+    }
+
+    /// Largest `max_i |(K_c x - K x)_i| / max_i |(K x)_i|` against a reference product
+    /// `x -> K x` (the dense matrix's, or another compressed operator's) over three vectors:
+    /// ones (the row sums), one of one sign, one of both signs.
+    pub fn max_product_difference(&self, reference: &dyn Fn(&[f64]) -> Vec<f64>) -> f64 {
+        let n = self.dof;
+        let vectors: [Vec<f64>; 3] = [
+            vec![1.0; n],
+            (0..n).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect(),
+            (0..n).map(|i| (i as f64 * 1.3).cos()).collect(),
+        ];
+        vectors
+            .iter()
+            .map(|x| {
+                let (a, b) = (self.apply(x), reference(x));
+                let diff = a.iter().zip(&b).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                diff / b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE)
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+impl Block {
+    /// Block `rows` × `cols` holding `data`.
+    pub(super) fn new(rows: Range<usize>, cols: Range<usize>, data: BlockData) -> Self {
+        // An operator of 2^32 unknowns would take far more memory than any machine has.
+        let narrow = |r: Range<usize>| -> Range<u32> {
+            let fit = |v: usize| u32::try_from(v).expect("fewer than 2^32 rows and columns");
+            fit(r.start)..fit(r.end)
+        };
+        Block { rows: narrow(rows), cols: narrow(cols), data }
+    }
+
+    /// A block of no rows holding nothing (a slot before its block is built).
+    pub(super) fn nothing() -> Self {
+        Block::new(0..0, 0..0, BlockData::exact(Vec::new()))
+    }
+
+    /// Its rows, in the node order.
+    pub(super) fn row_range(&self) -> Range<usize> {
+        self.rows.start as usize..self.rows.end as usize
+    }
+
+    /// Its columns, in the element order (elements, each with its basis functions).
+    pub(super) fn col_range(&self) -> Range<usize> {
+        self.cols.start as usize..self.cols.end as usize
+    }
+
+    /// Stores an exact block by what it holds, as soon as it is built, in `precision`:
+    /// nothing where every pair is hidden (it is then counted empty and left out), its
+    /// non-zero entries alone where that takes fewer bytes (hidden pairs in a block seen
+    /// through slats or between buildings), so that memory follows the pairs that are seen.
+    pub(super) fn compact(&mut self, precision: Precision) {
+        let data = std::mem::replace(&mut self.data, BlockData::exact(Vec::new()));
+        self.data = data.compacted(self.row_range().len(), precision);
+    }
+
+    /// Bytes of its stored values (and of the column indices of a sparse block).
+    pub(super) fn bytes(&self) -> u64 {
+        self.data.bytes()
+    }
+}
+
+/// What `blocks` themselves tell of an operator: blocks and entries by kind, the largest rank,
+/// and the bytes they take with their index (a shadowed block's shared factors once).
+pub(super) fn block_stats(blocks: &[Block], per: usize) -> OperatorStats {
+    let mut stats = OperatorStats::default();
+    let index_bytes = std::mem::size_of::<Block>() as u64;
+    let mut shared = std::collections::HashSet::new();
+    let mut count_factors =
+        |stats: &mut OperatorStats, factors: &std::sync::Arc<stored::Factors>| {
+            if shared.insert(std::sync::Arc::as_ptr(factors)) {
+                let bytes = factors.u.bytes() + factors.v.bytes();
+                stats.operator_bytes += bytes;
+                stats.low_rank_bytes += bytes;
+                stats.max_rank = stats.max_rank.max(factors.rank());
+            }
+        };
+    for block in blocks {
+        match &block.data {
+            BlockData::Dense(d) => {
+                stats.near_blocks += 1;
+                stats.near_entries += d.len() as u64;
+            }
+            BlockData::Sparse(rows) => {
+                stats.near_blocks += 1;
+                stats.near_entries += rows.values.len() as u64;
+            }
+            BlockData::LowRank(f) => {
+                stats.far_blocks += 1;
+                stats.far_entries += (block.row_range().len() * f.columns()) as u64;
+                stats.max_rank = stats.max_rank.max(f.rank());
+                stats.low_rank_bytes += block.bytes();
+            }
+            BlockData::Seen(slice) => {
+                stats.far_blocks += 1;
+                stats.far_entries +=
+                    (block.row_range().len() * block.col_range().len() * per) as u64;
+                count_factors(&mut stats, &slice.factors);
+            }
+            BlockData::Leaf(leaf) => {
+                stats.near_blocks += 1;
+                stats.near_entries += leaf.partial.values.len() as u64;
+                stats.far_entries += leaf.whole_entries();
+                count_factors(&mut stats, &leaf.slice.factors);
+            }
+        }
+        stats.operator_bytes += block.bytes() + index_bytes;
+    }
+    stats.shadowed_blocks = shared.len() as u64;
+    stats
+}

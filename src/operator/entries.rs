@@ -1,0 +1,305 @@
+//! The entries of K for the blocks of a compressed operator: exact ones by the dense path's
+//! pair plan and kernels, smooth ones for the cross approximations.
+
+use std::f64::consts::PI;
+
+use super::aca;
+use super::blocks::FacePairs;
+use super::built::Built;
+use super::cluster::ClusterTree;
+use super::compressed::Block;
+use super::stored::{self, BlockData, Precision};
+use crate::assembly::PairIntegrator;
+use crate::discretization::Discretization;
+use crate::kernels::lanes;
+use crate::mesh::Mesh;
+use crate::visibility::{
+    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face,
+};
+
+/// Admissible blocks whose break-even rank is below this are stored exactly.
+pub(super) const MIN_USEFUL_RANK: usize = 4;
+
+/// The views of faces found so far from each node of one node cluster, kept while its blocks
+/// are computed one after another.
+#[derive(Default)]
+pub(super) struct NodeViews {
+    pub(super) cluster: Option<usize>,
+    pub(super) rows: Vec<KeptViews>,
+}
+
+impl NodeViews {
+    /// Ready for node cluster `t` of `m` nodes (cleared when it is another cluster).
+    pub(super) fn prepare(&mut self, t: usize, m: usize) {
+        if self.cluster != Some(t) {
+            self.cluster = Some(t);
+            self.rows.clear();
+            self.rows.resize_with(m, KeptViews::default);
+        }
+    }
+}
+
+/// Computes entries of K for blocks.
+pub(super) struct Entries<'a> {
+    pub(super) mesh: &'a Mesh,
+    pub(super) disc: &'a Discretization,
+    pub(super) planner: &'a PairPlanner,
+    pub(super) integrator: &'a PairIntegrator,
+    pub(super) nodes: &'a ClusterTree,
+    pub(super) elements: &'a ClusterTree,
+    pub(super) per: usize,
+    /// The precision the blocks store their values in (from the tolerance).
+    pub(super) precision: Precision,
+}
+
+impl Entries<'_> {
+    /// Walks the pairs of block (t, s) by the dense path's pair plan (the row walk of
+    /// [`PairPlanner::walk_row`]), calling `each(r, k, i, j, visibility)` for every pair that is
+    /// not skipped: row r of the block (node i), element k of the block (element j). `views`
+    /// keeps the nodes' views of faces between blocks of the same node cluster.
+    pub(super) fn visible_pairs(
+        &self,
+        t: usize,
+        s: usize,
+        views: &mut NodeViews,
+        mut each: impl FnMut(usize, usize, usize, usize, Visibility),
+    ) -> PairStats {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let element_ids = &self.elements.order[sc.start..sc.end];
+        // The block's elements face by face (positions k in the block), as the walk takes them.
+        let by_face =
+            by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face, k)));
+        // Each face's elements in the block with the boxes of their halves, for the nodes
+        // that see the face in part.
+        let boxes: Vec<ElementBoxes> = by_face
+            .iter()
+            .map(|(_, list)| {
+                let element = |&k: &usize| self.disc.elements[element_ids[k]].in_face();
+                ElementBoxes::new(list.iter().map(element).collect())
+            })
+            .collect();
+        let mut stats = PairStats::default();
+        views.prepare(t, tc.len());
+        for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
+            let viewer = self.disc.nodes[i].viewer();
+            let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
+            let kept = Views::Kept(&mut views.rows[r]);
+            stats += self.planner.walk_row(&viewer, faces, kept, |face, list, sight| match sight {
+                FaceSight::Hidden(_) => {}
+                FaceSight::Whole => {
+                    list.for_each(|k| each(r, k, i, element_ids[k], Visibility::Full))
+                }
+                FaceSight::Part(mut part) => {
+                    let g = by_face.iter().position(|(f, _)| *f == face).expect("a block's face");
+                    part.elements(&boxes[g], |at, vis| {
+                        if !matches!(vis, Visibility::Skip(_)) {
+                            let k = by_face[g].1[at];
+                            each(r, k, i, element_ids[k], vis)
+                        }
+                    });
+                }
+            });
+        }
+        stats
+    }
+
+    /// Every entry of the block, by the dense path's pair plan and kernels, stored by what it
+    /// holds ([`Block::compact`]).
+    pub(super) fn exact_block(
+        &self,
+        t: usize,
+        s: usize,
+        views: &mut NodeViews,
+    ) -> (Block, PairStats) {
+        let (data, stats) = self.exact_entries(t, s, views, None);
+        let mut block = self.block(t, s, BlockData::exact(data));
+        block.compact(self.precision);
+        (block, stats)
+    }
+
+    /// The entries of block (t, s), row-major. With `whole` (mask words of the block's columns
+    /// per row, as [`stored::SparseRows`] has them), an element the node sees whole is not
+    /// integrated but marked there, in the rows of nodes that reflect (a shadowed block's
+    /// factors give those entries).
+    pub(super) fn exact_entries(
+        &self,
+        t: usize,
+        s: usize,
+        views: &mut NodeViews,
+        mut whole: Option<&mut [u64]>,
+    ) -> (Vec<f64>, PairStats) {
+        let per = self.per;
+        let (m, width) = self.block_size(t, s);
+        let words = stored::mask_words(width);
+        // Zeros written, not mapped (`vec!` of zeros would leave a large block's pages to the
+        // zero page, which the lanes' additions read before they write).
+        let mut data = Vec::with_capacity(m * width);
+        data.resize(m * width, 0.0);
+        // The centroid method's closed forms wait in lanes, each with where its value goes and
+        // the node's rho / pi; a partly visible element's pieces add into its entry.
+        let mut batch = lanes::Batch::<(usize, f64)>::default();
+        let stats = self.visible_pairs(t, s, views, |r, k, i, j, vis| {
+            let node = &self.disc.nodes[i];
+            if let Some(mask) = whole.as_deref_mut() {
+                if matches!(vis, Visibility::Full) {
+                    if node.rho != 0.0 {
+                        for c in k * per..(k + 1) * per {
+                            mask[r * words + c / 64] |= 1 << (c % 64);
+                        }
+                    }
+                    return;
+                }
+            }
+            let el = &self.disc.elements[j];
+            let at = r * width + k * per;
+            let scale = node.rho / PI;
+            let sink = |(at, scale): (usize, f64), v: f64| data[at] += scale * v;
+            let Some(values) = self.integrator.integrate_or_batch(
+                el,
+                &self.disc.bases[j],
+                node.position,
+                node.normal,
+                &vis,
+                ((at, scale), &mut batch),
+                sink,
+            ) else {
+                return;
+            };
+            for (c, v) in values.iter().take(per).enumerate() {
+                data[at + c] = scale * v;
+            }
+        });
+        batch.flush(|(at, scale), v| data[at] += scale * v);
+        (data, stats)
+    }
+
+    /// Rows and columns (elements × basis functions) of block (t, s).
+    pub(super) fn block_size(&self, t: usize, s: usize) -> (usize, usize) {
+        (self.nodes.clusters[t].len(), self.elements.clusters[s].len() * self.per)
+    }
+
+    /// Block (t, s) holding `data`.
+    pub(super) fn block(&self, t: usize, s: usize, data: BlockData) -> Block {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        Block::new(tc.start..tc.end, sc.start..sc.end, data)
+    }
+
+    /// Whether node i (original index) gives element j anything, where the block's plan says
+    /// the element is wholly visible from the node unless their faces give nothing.
+    pub(super) fn smooth_sees(&self, i: usize, j: usize, faces: &FacePairs) -> bool {
+        let node = &self.disc.nodes[i];
+        let el = &self.disc.elements[j];
+        node.rho != 0.0
+            && !faces.nothing_between(
+                node.face,
+                node.position,
+                el,
+                &self.mesh.elements()[j].vertices,
+            )
+    }
+
+    /// The values of the pairs (node i, element j) of a smooth block, in order: all of each
+    /// element's basis functions, or only `basis`. The centroid method's closed forms are
+    /// evaluated in lanes. `continued`: the kernel over every element whole, without testing
+    /// each pair for planes that make it give nothing ([`FacePairs::nothing_between`]).
+    pub(super) fn smooth_values(
+        &self,
+        pairs: impl Iterator<Item = (usize, usize)>,
+        basis: Option<usize>,
+        faces: &FacePairs,
+        continued: bool,
+    ) -> Vec<f64> {
+        let take = if basis.is_some() { 1 } else { self.per };
+        let mut out = Vec::new();
+        let mut batch = lanes::Batch::<(usize, f64)>::default();
+        for (i, j) in pairs {
+            let at = out.len();
+            out.resize(at + take, 0.0);
+            let gives = if continued {
+                self.disc.nodes[i].rho != 0.0
+            } else {
+                self.smooth_sees(i, j, faces)
+            };
+            if !gives {
+                continue;
+            }
+            let node = &self.disc.nodes[i];
+            let scale = node.rho / PI;
+            let sink = |(at, scale): (usize, f64), v: f64| out[at] += scale * v;
+            let Some(values) = self.integrator.integrate_or_batch(
+                &self.disc.elements[j],
+                &self.disc.bases[j],
+                node.position,
+                node.normal,
+                &Visibility::Full,
+                ((at, scale), &mut batch),
+                sink,
+            ) else {
+                continue;
+            };
+            match basis {
+                Some(b) => out[at] = scale * values[b],
+                None => (0..take).for_each(|c| out[at + c] = scale * values[c]),
+            }
+        }
+        batch.flush(|(at, scale), v| out[at] += scale * v);
+        out
+    }
+
+    /// Rank beyond which block (t, s)'s factors take more memory than the block itself, or
+    /// `None` when that is below [`MIN_USEFUL_RANK`] (computed exactly without trying).
+    pub(super) fn useful_rank(&self, t: usize, s: usize) -> Option<usize> {
+        let (m, c) = self.block_size(t, s);
+        let max_rank = (m * c) / (m + c);
+        (max_rank >= MIN_USEFUL_RANK).then_some(max_rank)
+    }
+
+    /// The admissible block (t, s) as a low-rank product, or exact where its rank would not save
+    /// memory (counted in `met` as incompressible).
+    pub(super) fn compressed_or_exact(
+        &self,
+        t: usize,
+        s: usize,
+        faces: &FacePairs,
+        tolerance: f64,
+        met: &mut Built,
+    ) -> Block {
+        match self.low_rank(t, s, faces, tolerance, false) {
+            Some(lr) => self.block(t, s, BlockData::low_rank(lr, self.precision)),
+            None => {
+                let (block, stats) = self.exact_block(t, s, &mut NodeViews::default());
+                met.add(stats, true);
+                block
+            }
+        }
+    }
+
+    /// The factors of block (t, s) with every element seen whole (the kernel without
+    /// occlusion), to `tolerance`, or `None` when their rank would not save memory.
+    pub(super) fn low_rank(
+        &self,
+        t: usize,
+        s: usize,
+        faces: &FacePairs,
+        tolerance: f64,
+        continued: bool,
+    ) -> Option<aca::LowRank> {
+        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        let per = self.per;
+        let (m, c) = (tc.len(), sc.len() * per);
+        let node_ids = &self.nodes.order[tc.start..tc.end];
+        let element_ids = &self.elements.order[sc.start..sc.end];
+        // Where no pair can give nothing, every entry is the kernel over the whole element, as
+        // in a continued block.
+        let continued = continued || faces.every_pair_gives(tc, sc);
+        let row = |r: usize| {
+            let i = node_ids[r];
+            self.smooth_values(element_ids.iter().map(|&j| (i, j)), None, faces, continued)
+        };
+        let col = |q: usize| {
+            let (j, basis) = (element_ids[q / per], q % per);
+            self.smooth_values(node_ids.iter().map(|&i| (i, j)), Some(basis), faces, continued)
+        };
+        aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)
+    }
+}
