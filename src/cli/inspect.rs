@@ -159,7 +159,8 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
         println!(
             "compressed operator (tolerance {:.0e}, values in {}): {:.1} MB ({:.1} MB of low-rank \
              factors); {} exact blocks ({} entries), {} low-rank blocks (standing for {} entries, \
-             rank <= {}), {} empty blocks, {} admissible blocks kept exact{}",
+             rank <= {}), {} empty blocks, {} admissible blocks kept exact{}; the exact blocks' \
+             row walks viewed {:.0} faces per node",
             tolerance,
             radiosity::operator::Precision::for_tolerance(tolerance).name(),
             out.operator_bytes as f64 / 1e6,
@@ -174,7 +175,8 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
             match b.shadowed_blocks {
                 0 => String::new(),
                 k => format!(", {k} shadowed blocks"),
-            }
+            },
+            b.faces_viewed as f64 / out.dof.max(1) as f64
         );
     }
     println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);

@@ -14,7 +14,7 @@ use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
 use super::built::{Built, by_node_cluster};
 use super::compressed::Block;
-use super::entries::{Entries, NodeViews};
+use super::entries::Entries;
 use super::guard::MemoryGuard;
 use super::shadowed;
 use super::stored::BlockData;
@@ -144,7 +144,7 @@ fn exact_blocks(
         let mut planned: Vec<(Vec<PairTask>, Vec<usize>, PairStats)> = by_node_cluster(blocks)
             .into_par_iter()
             .flat_map_iter(|group| {
-                let mut views = NodeViews::default();
+                let mut views = entries.node_views();
                 group
                     .into_iter()
                     .map(|(t, s, _)| {

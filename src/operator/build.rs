@@ -7,7 +7,7 @@ use super::blocks::{BlockPlan, FacePairs};
 use super::built::{Built, by_node_cluster, kept_blocks};
 use super::cluster::{ClusterTree, Item};
 use super::compressed::{Block, CompressedOperator, RankShare};
-use super::entries::{Entries, NodeViews};
+use super::entries::{Entries, FaceTally};
 use super::guard::MemoryGuard;
 use super::options::{CompressionOptions, ProblemShape};
 use super::sampling::{build_list_bytes, estimate_memory};
@@ -88,6 +88,7 @@ impl CompressedOperator {
             elements: &elements,
             per,
             precision,
+            faces: FaceTally::default(),
         };
         // Before the plan is walked and its blocks built, what they will hold is estimated from
         // a sample of it, and a run that cannot fit is refused now rather than after minutes.
@@ -149,6 +150,7 @@ impl CompressedOperator {
         progress.finish();
 
         let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty, per);
+        stats.faces_viewed = entries.faces.viewed();
         stats.operator_bytes += order_bytes(disc.dof(), per);
         let share = ranks.map(|ranks| {
             let operator_bytes = stats.operator_bytes;
@@ -233,7 +235,7 @@ pub(super) fn build_block_by_block(
     // The exact blocks of one node cluster together: each node's views of the faces are found
     // once for all of them.
     let near = slots_of_groups.into_par_iter().map(|(group, slots)| {
-        let mut views = NodeViews::default();
+        let mut views = entries.node_views();
         let mut met = Built::default();
         for (&(t, s, incompressible), slot) in group.iter().zip(slots) {
             if guard.is_over() {

@@ -2,6 +2,7 @@
 //! pair plan and kernels, smooth ones for the cross approximations.
 
 use std::f64::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::aca;
 use super::blocks::FacePairs;
@@ -14,28 +15,61 @@ use crate::discretization::Discretization;
 use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::visibility::{
-    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, Views, Visibility, by_face,
+    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, RecentHiders, Views, Visibility,
+    by_face,
 };
 
 /// Admissible blocks whose break-even rank is below this are stored exactly.
 pub(super) const MIN_USEFUL_RANK: usize = 4;
 
 /// The views of faces found so far from each node of one node cluster, kept while its blocks
-/// are computed one after another.
+/// are computed one after another; what the views cost is added to `tally` as they are
+/// dropped.
 #[derive(Default)]
-pub(super) struct NodeViews {
+pub(super) struct NodeViews<'a> {
     pub(super) cluster: Option<usize>,
     pub(super) rows: Vec<KeptViews>,
+    /// The occluders that last hid a face from one of the cluster's nodes.
+    pub(super) hiders: RecentHiders,
+    tally: Option<&'a FaceTally>,
 }
 
-impl NodeViews {
+impl NodeViews<'_> {
     /// Ready for node cluster `t` of `m` nodes (cleared when it is another cluster).
     pub(super) fn prepare(&mut self, t: usize, m: usize) {
         if self.cluster != Some(t) {
             self.cluster = Some(t);
+            self.count();
             self.rows.clear();
             self.rows.resize_with(m, KeptViews::default);
         }
+    }
+
+    fn count(&self) {
+        if let Some(tally) = self.tally {
+            let viewed = self.rows.iter().map(KeptViews::faces_viewed).sum();
+            tally.viewed.fetch_add(viewed, Ordering::Relaxed);
+        }
+    }
+}
+
+impl Drop for NodeViews<'_> {
+    fn drop(&mut self) {
+        self.count();
+    }
+}
+
+/// The views of faces that the row walks of a build computed, over all nodes
+/// ([`crate::operator::OperatorStats::faces_viewed`]).
+#[derive(Debug, Default)]
+pub(super) struct FaceTally {
+    viewed: AtomicU64,
+}
+
+impl FaceTally {
+    /// Views computed.
+    pub(super) fn viewed(&self) -> u64 {
+        self.viewed.load(Ordering::Relaxed)
     }
 }
 
@@ -50,9 +84,18 @@ pub(super) struct Entries<'a> {
     pub(super) per: usize,
     /// The precision the blocks store their values in (from the tolerance).
     pub(super) precision: Precision,
+    /// What the row walks' views of faces cost.
+    pub(super) faces: FaceTally,
 }
 
 impl Entries<'_> {
+    /// Views for the row walks of one node cluster at a time, counted in this build's tally.
+    pub(super) fn node_views(&self) -> NodeViews<'_> {
+        let mut views = NodeViews::default();
+        views.tally = Some(&self.faces);
+        views
+    }
+
     /// Walks the pairs of block (t, s) by the dense path's pair plan (the row walk of
     /// [`PairPlanner::walk_row`]), calling `each(r, k, i, j, visibility)` for every pair that is
     /// not skipped: row r of the block (node i), element k of the block (element j). `views`
@@ -83,7 +126,7 @@ impl Entries<'_> {
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
             let viewer = self.disc.nodes[i].viewer();
             let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
-            let kept = Views::Kept(&mut views.rows[r]);
+            let kept = Views::Kept(&mut views.rows[r], &mut views.hiders);
             stats += self.planner.walk_row(&viewer, faces, kept, |face, list, sight| match sight {
                 FaceSight::Hidden(_) => {}
                 FaceSight::Whole => {
@@ -267,7 +310,7 @@ impl Entries<'_> {
         match self.low_rank(t, s, faces, tolerance, false) {
             Some(lr) => self.block(t, s, BlockData::low_rank(lr, self.precision)),
             None => {
-                let (block, stats) = self.exact_block(t, s, &mut NodeViews::default());
+                let (block, stats) = self.exact_block(t, s, &mut self.node_views());
                 met.add(stats, true);
                 block
             }

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use super::blocks::{FacePairs, ShadowedBlock};
 use super::built::{Built, by_node_cluster};
 use super::compressed::Block;
-use super::entries::{Entries, NodeViews};
+use super::entries::Entries;
 use super::guard::MemoryGuard;
 use super::stored::{BlockData, FactorSlice, Factors, ShadowedLeaf, SparseRows, mask_words};
 use crate::progress::Progress;
@@ -63,7 +63,7 @@ pub(super) fn build(
     let found: Vec<Vec<(usize, LeafParts)>> = by_node_cluster(&leaves)
         .into_par_iter()
         .map(|group| {
-            let mut views = NodeViews::default();
+            let mut views = entries.node_views();
             let mut out = Vec::with_capacity(group.len());
             for (t, s, at) in group {
                 if guard.is_over() {
@@ -153,7 +153,7 @@ pub(super) fn build(
                         *slot = entries.compressed_or_exact(t, s, faces, tolerance, &mut met);
                         guard.add(slot.bytes());
                     }
-                    let mut views = NodeViews::default();
+                    let mut views = entries.node_views();
                     for ((slot, &(t, s)), part) in
                         leaf_slots.iter_mut().zip(&block.leaves).zip(leaf_parts.iter_mut())
                     {

@@ -36,6 +36,11 @@ pub struct OperatorStats {
     /// whole among `far_blocks`, leaves among `near_blocks`. None in a loaded operator, whose
     /// file holds the parts as blocks of their own.
     pub shadowed_blocks: u64,
+    /// Views of faces that the exact blocks' row walks computed (a node views a face once for
+    /// the blocks of one of its clusters, and not where the planes tell: faces in its plane or
+    /// behind it): over the unknowns, the faces examined per node. Not among
+    /// [`OperatorStats::counts`] (none in a loaded operator).
+    pub faces_viewed: u64,
 }
 
 impl OperatorStats {
@@ -82,6 +87,7 @@ impl OperatorStats {
             incompressible_blocks,
             low_rank_bytes: 0,
             shadowed_blocks: 0,
+            faces_viewed: 0,
         }
     }
 }
@@ -100,6 +106,7 @@ impl std::ops::AddAssign for OperatorStats {
         self.incompressible_blocks += o.incompressible_blocks;
         self.low_rank_bytes += o.low_rank_bytes;
         self.shadowed_blocks += o.shadowed_blocks;
+        self.faces_viewed += o.faces_viewed;
     }
 }
 
@@ -114,15 +121,16 @@ pub(super) fn summed_over(
     stats: OperatorStats,
     pairs: PairStats,
 ) -> (OperatorStats, PairStats) {
-    let more = [stats.low_rank_bytes, stats.shadowed_blocks];
+    let more = [stats.low_rank_bytes, stats.shadowed_blocks, stats.faces_viewed];
     let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).chain(more).collect();
     let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
     for counts in ranks.gather(&mine) {
         let (s, rest) = counts.split_at(OperatorStats::COUNTS);
-        let (p, more) = rest.split_at(rest.len() - 2);
+        let (p, more) = rest.split_at(rest.len() - 3);
         stats += OperatorStats {
             low_rank_bytes: more[0],
             shadowed_blocks: more[1],
+            faces_viewed: more[2],
             ..OperatorStats::from_counts(s.try_into().expect("a rank's statistics"))
         };
         pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));

@@ -36,22 +36,30 @@ pub enum Views<'a> {
     /// Each face is viewed anew, trying the thread's recent hiders first.
     Fresh(&'a mut RecentHiders),
     /// Views are kept across walks of the same viewer (blocks of the compressed operator that
-    /// share faces): each face is viewed once.
-    Kept(&'a mut KeptViews),
+    /// share faces): each face is viewed once. The recent hiders are shared by the viewers
+    /// walked in turn (the nodes of one cluster, whose hiders are mostly the same).
+    Kept(&'a mut KeptViews, &'a mut RecentHiders),
 }
 
-/// One viewer's views of the faces met so far, and its recent hiders. A node of a city meets
+/// One viewer's views of the faces met so far. A node of a city meets
 /// thousands of faces over its cluster's blocks: looked up by face, not searched in a list
 /// (a search would dominate a large city's compressed setup), by a fast hash of the face's
 /// number (SipHash's resistance to chosen keys buys nothing for face numbers).
 #[derive(Debug, Default)]
 pub struct KeptViews {
     views: FxHashMap<usize, FaceView>,
-    hiders: RecentHiders,
+    /// Faces viewed, beside those that the planes tell.
+    viewed: u64,
 }
 
 impl KeptViews {
-    fn view(&mut self, planner: &PairPlanner, viewer: &Viewer, face: usize) -> &FaceView {
+    fn view(
+        &mut self,
+        planner: &PairPlanner,
+        viewer: &Viewer,
+        face: usize,
+        hiders: &mut RecentHiders,
+    ) -> &FaceView {
         // Faces in the viewer's plane or behind it are told by the planes: not kept (most of
         // a node's faces in a city, whose insertions would cost more than the test).
         const SAME_PLANE: FaceView = FaceView::Skip(SkipReason::SamePlane);
@@ -61,10 +69,17 @@ impl KeptViews {
             Some(_) => return &FACING_AWAY,
             None => {}
         }
+        let viewed = &mut self.viewed;
         self.views.entry(face).or_insert_with(|| {
+            *viewed += 1;
             let (p, n) = (viewer.position, viewer.normal);
-            planner.face_view_with(p, n, viewer.face, face, &mut self.hiders)
+            planner.face_view_with(p, n, viewer.face, face, hiders)
         })
+    }
+
+    /// Faces this viewer has viewed (each once), besides those that the planes told.
+    pub fn faces_viewed(&self) -> u64 {
+        self.viewed
     }
 }
 
@@ -209,7 +224,7 @@ impl PairPlanner {
                     fresh = self.face_view_with(p, n, viewer.face, face, hiders);
                     &fresh
                 }
-                Views::Kept(kept) => kept.view(self, viewer, face),
+                Views::Kept(kept, hiders) => kept.view(self, viewer, face, hiders),
             };
             let sight = match view {
                 FaceView::Skip(reason) => {
