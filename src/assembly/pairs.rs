@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use rayon::prelude::*;
 
-use super::PairIntegrator;
+use super::integrator::PairIntegrator;
 use crate::discretization::Discretization;
 use crate::error::Result;
 use crate::visibility::Visibility;

@@ -3,9 +3,10 @@
 //! linear basis functions of an element sum to 1).
 
 use super::*;
-use crate::discretization::Method;
-use crate::mesh::MeshKind;
+use crate::discretization::{Discretization, Method};
+use crate::mesh::{Mesh, MeshKind};
 use crate::scene::{Scene, baffled_box, cube};
+use crate::visibility::{PairPlanner, PairStats};
 
 fn row_sum_range(scene: &Scene, method: Method, refine: u32) -> (f64, f64, PairStats) {
     let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();

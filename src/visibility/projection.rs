@@ -4,8 +4,9 @@ use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use super::occluders::Occluder;
+use super::planner::PlannerFace;
 use super::solids::Solid;
-use super::{PlannerFace, Shadows};
+use super::view::Shadows;
 use crate::geometry::{
     HalfPlane, SmallPolygon, bounding_box, clip_polygon_3d, clip_to_convex, clip_to_half_planes,
     convex_contains, convex_hull, signed_area, wholly_inside_3d,

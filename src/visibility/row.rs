@@ -16,7 +16,10 @@ use std::ops::Range;
 use glam::{DVec2, DVec3};
 use rustc_hash::FxHashMap;
 
-use super::{FaceView, PairPlanner, PairStats, RecentHiders, SkipReason, Visibility};
+use super::hiders::RecentHiders;
+use super::planner::PairPlanner;
+use super::stats::PairStats;
+use super::view::{FaceView, SkipReason, Visibility};
 
 /// A point of S that looks at the scene: a collocation node, or any point of a face.
 #[derive(Clone, Copy, Debug, PartialEq)]

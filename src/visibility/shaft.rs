@@ -2,8 +2,8 @@
 
 use glam::DVec3;
 
-use super::PairPlanner;
 use super::occluders::{OccluderUnit, ViewVolume};
+use super::planner::PairPlanner;
 use crate::geometry::{bounding_box_3d, box_corners};
 
 impl PairPlanner {

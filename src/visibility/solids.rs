@@ -19,7 +19,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
-use super::Occluder;
+use super::occluders::Occluder;
 
 /// A convex polyhedron whose faces are occluder pieces, but for a cap that no segment of the
 /// scene crosses.

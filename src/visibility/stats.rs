@@ -4,7 +4,7 @@ use std::ops::AddAssign;
 
 use serde::Serialize;
 
-use super::{SkipReason, Visibility};
+use super::view::{SkipReason, Visibility};
 
 /// How many (node, element) pairs fell in each class.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]

@@ -3,6 +3,7 @@
 use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
+use super::projection::ShadowSet;
 use super::*;
 use crate::geometry::{PlaneFrame, SmallPolygon, signed_area, triangulate};
 use crate::mesh::{Mesh, MeshKind};
