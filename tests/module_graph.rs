@@ -722,7 +722,6 @@ fn describe(graph: &Graph, group: &BTreeSet<String>) -> String {
 /// three are cycles between files of one directory, one way through a name that mod.rs
 /// re-exports (`super::DeviceTraffic` is resident.rs's): they are what to untangle first.
 const ALLOWED_CYCLES: &[&[&str]] = &[
-    &["assembly/mod", "assembly/pairs"],
     &["cli/mod", "cli/solve"],
     &["distributed/mod", "distributed/mpi"],
     &["kernels/by_rule", "kernels/mod"],
@@ -736,13 +735,6 @@ const ALLOWED_CYCLES: &[&[&str]] = &[
         "viewfactors/outer",
         "viewfactors/pair",
         "viewfactors/sight",
-    ],
-    &[
-        "visibility/mod",
-        "visibility/projection",
-        "visibility/row",
-        "visibility/shaft",
-        "visibility/stats",
     ],
     // Between files: gpu/assembly.rs names resident.rs's `DeviceTraffic`, resident.rs
     // assembly.rs's `GpuAssembler`.
