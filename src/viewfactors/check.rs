@@ -4,7 +4,7 @@
 
 use serde::Serialize;
 
-use super::ViewFactors;
+use super::matrix::ViewFactors;
 
 /// How far a run of view factors is from a reference, in units of what its estimate promises.
 #[derive(Clone, Copy, Debug, Serialize)]

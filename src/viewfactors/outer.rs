@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use super::ViewFactorOptions;
+use super::options::ViewFactorOptions;
 use super::patch::triangle_quarters;
 use crate::quadrature::TanhSinh;
 

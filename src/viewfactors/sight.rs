@@ -5,7 +5,7 @@
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use super::Context;
+use super::context::Context;
 use super::opening::Opening;
 use crate::geometry::{self, SmallPolygon};
 use crate::visibility::{Caster, FaceView, Shadows, Visibility};

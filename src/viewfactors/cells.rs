@@ -1,0 +1,336 @@
+//! The cells of a pair's outer integral: a patch's `∫ g dA` and its estimated error
+//! ([`Context::cell`]: Gauss orders, a bound for small patches, tanh-sinh on touching
+//! triangles), and the cells kept open for refinement, worst first ([`Cells`]).
+
+use std::collections::BinaryHeap;
+
+use super::context::Context;
+use super::events::centroid;
+use super::options::MAX_SPLITS;
+use super::outer::Check;
+use super::outer_rules::{GAUSS_MAX, OuterRules, certified_target};
+use super::part::{Part, TOUCHING, integrand_bound};
+use super::patch::Patch;
+use super::row::Tally;
+use super::sight::{Shapes, Sight};
+use super::touching::{OUTSIZED, corner_order};
+
+impl Context<'_> {
+    /// `∫ g dA` over the patch `patch` of the piece with `part`, and its estimated error:
+    /// tanh-sinh on its triangles where it touches an obstacle (d log d behaviour at a common
+    /// edge; its error [`kept_error`](super::outer::kept_error) of its last levels, to be split
+    /// further if the pair needs it); where T_j is seen whole, Gauss of the order that the
+    /// patch's separation asks for (settled, as the bound is trusted); otherwise that order and
+    /// one more, the higher one's value with their difference as the error (which also catches
+    /// what the separation does not: the curved events of three skew edges), to be split
+    /// further if the pair needs it.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn cell(
+        &self,
+        i: usize,
+        j: usize,
+        patch: Patch,
+        part: &Part,
+        index: usize,
+        depth: u32,
+        rules: &OuterRules,
+        tally: &mut Tally,
+    ) -> Cell {
+        let area = patch.area();
+        let mut cell =
+            Cell { patch, part: index, depth, value: 0.0, error: 0.0, refine: Refine::Settled };
+        if area == 0.0 {
+            return cell;
+        }
+        let size = patch.size();
+        let (to_target, distance) = part.reach(patch.corners(), size);
+        // Where T_j reaches behind T_i's plane, the line where the planes meet bounds what the
+        // points see and the integrand is not analytic on it; where it touches T_i at a corner
+        // it runs just outside the triangle, and the tanh-sinh levels collapsed there can agree
+        // while missing (a partition's element under the louvre room's ceiling: estimate
+        // 1.4e-8, 2.1e-6 off). The triangle's quarters check it. Where occluders alone shadow
+        // T_j, the probe of views decides ([`Context::touching_triangle`]): checking all those
+        // too took 7.13 M evaluations instead of 6.19 M on the louvre room at --tolerance 1e-6,
+        // 16.6 M instead of 12.6 M at 1e-8, 11.3 M instead of 8.7 M on the furnished room at
+        // 1e-8, with the same largest difference from a run at 1e-10.
+        let checked = part.clipped && distance <= TOUCHING * size;
+        let distance = distance.min(part.obstacle_distance(patch.corners()));
+        // Where occluders shadow T_j the order is only a first guess, since the estimate with
+        // one order more decides: it aims at the tolerance itself. Aiming lower costs higher
+        // first orders, aiming higher costs more splits (on the occluded box either was
+        // slower, for the same reciprocity).
+        // The Bernstein bound is relative to the integrand's size, which from a patch at
+        // distance d from T_j is at most A_j / (π d²) (cosines at most 1): the tolerance on
+        // F_ij asks for that much less relative accuracy of a patch far from a small T_j.
+        // Relaxed at most tenfold instead (a cap that once kept low first orders from failing
+        // and splitting on five-piece, which no longer happens), the tessellated city 5 x 5
+        // without its sky at --tolerance 1e-6 took 36.7 M evaluations instead of 30.5 M, every
+        // entry within 8.4e-7 of a run at 1e-9 either way (6.1e-7 with the cap); five-piece
+        // refine 3 at the default 2.61 M instead of 2.57 M, within 4.6e-13 of a run at 1e-13.
+        let shadowed_target = self.options.tolerance / integrand_bound(to_target, part.target_area);
+        if distance <= TOUCHING * size {
+            for t in patch.triangles() {
+                // A quadrilateral's half that touches nothing itself is a cell of its own.
+                if matches!(patch, Patch::Quad(_)) && !self.touches(&t, part) {
+                    let half =
+                        self.cell(i, j, Patch::Triangle(t), part, index, depth, rules, tally);
+                    cell.value += half.value;
+                    cell.error += half.error;
+                    continue;
+                }
+                // Two corners where occluders' edges meet T_i (a wall's foot between two
+                // buildings' corners): its halves have one each.
+                if let Some(halves) = self.between_obstacles(t, part)
+                    && depth < MAX_SPLITS
+                {
+                    for half in halves {
+                        let half = Patch::Triangle(half);
+                        let half = self.cell(i, j, half, part, index, depth + 1, rules, tally);
+                        cell.value += half.value;
+                        cell.error += half.error;
+                    }
+                    continue;
+                }
+                let at_corner = match self.at_obstacle_corner(t, part) {
+                    Some((t, distance)) => {
+                        let q = rules.guessed_order(
+                            Patch::Triangle(t).size(),
+                            distance,
+                            shadowed_target,
+                        );
+                        Some((t, q.unwrap_or(GAUSS_MAX - 1)))
+                    }
+                    None => self.at_target_corner(t, part, rules, shadowed_target),
+                };
+                let by_gauss = at_corner.map(|(t, q)| {
+                    let t = Patch::Triangle(t);
+                    let q = q.max(corner_order(self.options.tolerance));
+                    (self.two_orders((i, j), &t, part, Some(q), rules, tally), t.area())
+                });
+                // Where the collapsed Gauss rule does not meet the tolerance on its own share,
+                // the integrand is not analytic about the corner after all (an event plane
+                // through it, outside the triangle but near): tanh-sinh takes it.
+                let (value, error) = match by_gauss {
+                    Some(((value, error), area)) if error <= self.options.tolerance * area => {
+                        (value, error)
+                    }
+                    _ => {
+                        let outsized = Patch::Triangle(t).size()
+                            > OUTSIZED * Patch::Triangle(part.target).size();
+                        let check = if part.narrow_contact(&t) || outsized {
+                            Check::QuartersEveryLevel
+                        } else if checked {
+                            Check::Quarters
+                        } else {
+                            Check::Levels
+                        };
+                        self.touching_triangle(i, j, t, part, check, rules, tally)
+                    }
+                };
+                cell.value += value;
+                cell.error += error;
+            }
+            cell.refine = Refine::by_quarters_below_the_limit(depth);
+            return cell;
+        }
+        let certified = matches!(part.sight, Sight::Whole);
+        let target =
+            if certified { certified_target(self.options.tolerance) } else { shadowed_target };
+        let order = if certified {
+            rules.bound_order(size, distance, target)
+        } else {
+            rules.guessed_order(size, distance, target)
+        };
+        if certified {
+            match order {
+                Some(q) => {
+                    cell.value = self.gauss_sum((i, j), &cell.patch, q, part, rules, tally).0;
+                    return cell;
+                }
+                // Too close to T_j for the bound: its quarters, settled together.
+                None if depth < MAX_SPLITS => {
+                    for child in patch.quarters() {
+                        let c = self.cell(i, j, child, part, index, depth + 1, rules, tally);
+                        cell.value += c.value;
+                        cell.error += c.error;
+                    }
+                    return cell;
+                }
+                None => {}
+            }
+        }
+        (cell.value, cell.error) = self.two_orders((i, j), &cell.patch, part, order, rules, tally);
+        cell.refine = Refine::by_quarters_below_the_limit(depth);
+        cell
+    }
+
+    /// `∫ g dA` over `patch` by the Gauss rule of order `q`, and the shapes of the views from
+    /// its points.
+    fn gauss_sum(
+        &self,
+        (i, j): (usize, usize),
+        patch: &Patch,
+        q: usize,
+        part: &Part,
+        rules: &OuterRules,
+        tally: &mut Tally,
+    ) -> (f64, Shapes) {
+        let points = patch.gauss_points(&rules.gauss, q);
+        tally.evaluations += points.len() as u64;
+        self.weighted_sum(i, j, part.sight, &points)
+    }
+
+    /// `∫ g dA` over `patch` by the Gauss rule of order q + 1, and its estimated error: the
+    /// difference from order q, and where the points see T_j in more than one shape, also the
+    /// difference from order q + 2; where no order meets the a priori bound (`order` `None`: q
+    /// is then the highest but one), the difference from the rule over its quarters.
+    fn two_orders(
+        &self,
+        (i, j): (usize, usize),
+        patch: &Patch,
+        part: &Part,
+        order: Option<usize>,
+        rules: &OuterRules,
+        tally: &mut Tally,
+    ) -> (f64, f64) {
+        let q = order.unwrap_or(GAUSS_MAX - 1);
+        let mut estimate_on =
+            |patch: &Patch, q: usize| self.gauss_sum((i, j), patch, q, part, rules, tally);
+        let ((low, low_shapes), (high, high_shapes)) =
+            (estimate_on(patch, q), estimate_on(patch, q + 1));
+        let mut error = (high - low).abs();
+        // Across an event that was not cut along (where three mutually skew edges line up, or
+        // two parallel ones and a third), the points see T_j in more than one shape and the
+        // two rules' difference can miss by far more than it says (an entry of city:4x4 was
+        // 1.4e-9 off at the default tolerance). Across such a kink the rules' errors scatter
+        // with the order instead of falling: order q + 2 is a third sample of that scatter,
+        // and its difference from order q + 1 counts too. It took the place of the rule over
+        // the patch's quarters of half the order (about as many points), which agreed by chance
+        // with the two orders where the third order did not: on a patch of city:4x4 (pair
+        // (244, 61), --tolerance 1e-8) orders 4 and 5 and the quarters agreed to 2.7e-9 of F
+        // and missed it by 1.7e-8, and order 6 differed by 2.3e-8; city:4x4 at 1e-8 had 7
+        // entries off by more than the tolerance (up to 2.0e-8) and now has one (1.4e-8),
+        // for the same evaluations.
+        // Where no order meets the a priori bound (a patch too near a point where the
+        // integrand is not analytic: a chair's backrest whose corner stands 0.014 from the
+        // seat, furnished room at --tolerance 1e-6, had orders 15 and 16 differ by 7.1e-7 and
+        // miss by 1.2e-6), the quarters, which meet the singularity elsewhere, check it.
+        let kinked = matches!(low_shapes.and(high_shapes), Shapes::Many);
+        if kinked && q + 2 <= GAUSS_MAX {
+            error = error.max((high - estimate_on(patch, q + 2).0).abs());
+        } else if kinked || order.is_none() {
+            let half = (q + 2) / 2;
+            let quarters: f64 = patch.quarters().iter().map(|c| estimate_on(c, half).0).sum();
+            error = error.max((high - quarters).abs());
+        }
+        (high, error)
+    }
+
+    /// `∫ g dA` over a patch that can hold at most `most` of it (`0 <= g <= most / area`), by
+    /// its value at the centre: the integral lies between 0 and `most`, so the one-point rule
+    /// is off by at most the larger of its value and `most` less it. A bound, not an estimate;
+    /// where the pair's budget needs it, the rules take the patch after all ([`Refine::ByRules`]).
+    /// Settled for good, such cells left the others half the budget: the louvre room and the
+    /// furnished room at --tolerance 1e-8 took 9.36 M and 5.29 M evaluations instead of 9.31 M
+    /// and 5.25 M (measured with a lowest Gauss order of 1).
+    pub(super) fn bounded_cell(
+        &self,
+        (i, j): (usize, usize),
+        patch: Patch,
+        part: &Part,
+        index: usize,
+        most: f64,
+        tally: &mut Tally,
+    ) -> Cell {
+        let centre = centroid(patch.corners());
+        tally.evaluations += 1;
+        let (value, _) = self.weighted_sum(i, j, part.sight, &[(centre, patch.area())]);
+        let error = value.max(most - value);
+        Cell { patch, part: index, depth: 0, value, error, refine: Refine::ByRules }
+    }
+}
+
+/// The cells of a pair's outer integral: those that may still be split, worst first, and the
+/// sum of those that are settled.
+#[derive(Default)]
+pub(super) struct Cells {
+    pub(super) open: BinaryHeap<Cell>,
+    /// Sum of the open cells' estimated errors.
+    pub(super) open_error: f64,
+    pub(super) settled: f64,
+    pub(super) settled_error: f64,
+}
+
+impl Cells {
+    pub(super) fn place(&mut self, cell: Cell) {
+        if cell.refine != Refine::Settled {
+            self.open_error += cell.error;
+            self.open.push(cell);
+        } else {
+            self.settled += cell.value;
+            self.settled_error += cell.error;
+        }
+    }
+
+    /// `∫ g dA` over all cells and its estimated error.
+    pub(super) fn total(&self) -> (f64, f64) {
+        let open: f64 = self.open.iter().map(|c| c.value).sum();
+        let open_error: f64 = self.open.iter().map(|c| c.error).sum();
+        (self.settled + open, self.settled_error + open_error)
+    }
+}
+
+/// A patch of a pair's outer integral, with its estimate.
+pub(super) struct Cell {
+    pub(super) patch: Patch,
+    /// Index of its piece's [`Part`].
+    pub(super) part: usize,
+    /// Rounds of splitting that made it.
+    pub(super) depth: u32,
+    /// `∫ g dA` over it.
+    pub(super) value: f64,
+    /// Estimated |error| of `value`.
+    pub(super) error: f64,
+    /// How it may be refined, if at all.
+    pub(super) refine: Refine,
+}
+
+/// How a [`Cell`] may be refined.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Refine {
+    /// Not at all: certified, or at the split limit.
+    Settled,
+    /// By its quarters.
+    ByQuarters,
+    /// By the rules over it: its value is its centre's, with a bound for its error
+    /// ([`Context::bounded_cell`]).
+    ByRules,
+}
+
+impl Refine {
+    /// By its quarters, where a cell made by `depth` rounds of splitting is below the limit.
+    fn by_quarters_below_the_limit(depth: u32) -> Self {
+        if depth < MAX_SPLITS { Refine::ByQuarters } else { Refine::Settled }
+    }
+}
+
+impl PartialEq for Cell {
+    fn eq(&self, other: &Self) -> bool {
+        self.error.total_cmp(&other.error).is_eq()
+    }
+}
+
+impl Eq for Cell {}
+
+impl PartialOrd for Cell {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Cell {
+    /// By estimated error, so that the heap yields the worst cell.
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.error.total_cmp(&other.error)
+    }
+}
