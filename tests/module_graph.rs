@@ -729,13 +729,6 @@ const ALLOWED_CYCLES: &[&[&str]] = &[
     &["scene/builtin", "scene/city", "scene/file", "scene/mod"],
     &["scene/file/builder", "scene/file/import", "scene/file/mod", "scene/file/schema"],
     &["solve/lu", "solve/mod", "solve/products"],
-    &[
-        "viewfactors/check",
-        "viewfactors/mod",
-        "viewfactors/outer",
-        "viewfactors/pair",
-        "viewfactors/sight",
-    ],
     // Between files: gpu/assembly.rs names resident.rs's `DeviceTraffic`, resident.rs
     // assembly.rs's `GpuAssembler`.
     &["gpu/assembly", "gpu/resident"],
