@@ -16,7 +16,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Study(args) => args.id == "compression",
         _ => false,
     };
-    if cli::world().is_some() && !distributed {
+    if cli::ranks::world().is_some() && !distributed {
         return Err(radiosity::error::Error::InvalidParameter {
             name: "command",
             value: "under mpirun with several ranks".into(),
@@ -47,7 +47,7 @@ fn main() -> ExitCode {
     let _mpi = start_mpi();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => match cli::world() {
+        Err(e) => match cli::ranks::world() {
             // The other ranks may be waiting in a collective: stop them all.
             Some(w) => w.abort(&format!("error (rank {}): {e}", w.rank()), 1),
             None => {
@@ -82,7 +82,7 @@ fn start_mpi() -> Option<radiosity::distributed::MpiSession> {
     let (session, world) = radiosity::distributed::MpiWorld::init()?;
     if world.size() > 1 {
         let world = Arc::new(world);
-        cli::set_world(world.clone());
+        cli::ranks::set_world(world.clone());
         let report = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
             report(info);

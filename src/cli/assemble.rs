@@ -1,11 +1,12 @@
 //! `radiosity assemble`: the matrix K as a NumPy file.
 
 use radiosity::assembly::Assembly;
-use radiosity::error::Result;
+use radiosity::error::{Error, Result};
+use radiosity::operator::OperatorChoice;
 use radiosity::pipeline::{self, Problem, RunConfig};
 use radiosity::progress::Silent;
 
-use super::*;
+use super::args::{AssembleArgs, backend};
 
 pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
     let mut config = args.geometry.config()?;

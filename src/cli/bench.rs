@@ -5,7 +5,8 @@ use radiosity::operator::OperatorChoice;
 use radiosity::pipeline::{self, Backend};
 use radiosity::report;
 
-use super::*;
+use super::args::{BackendArg, BenchArgs, backend};
+use super::ranks::is_root;
 
 pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     let mut config = args.geometry.config()?;

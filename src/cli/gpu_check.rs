@@ -6,7 +6,7 @@ use radiosity::error::Result;
 use radiosity::gpu::Precision;
 use radiosity::report;
 
-use super::*;
+use super::args::PrecisionArg;
 
 /// What `gpu-check` prints.
 #[derive(Serialize)]

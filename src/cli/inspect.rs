@@ -6,8 +6,8 @@ use radiosity::error::{Error, Result};
 use radiosity::pipeline::{self, Problem};
 use radiosity::report;
 
+use super::args::SolveArgs;
 use super::assemble::assemble_without_progress;
-use super::*;
 
 /// What `inspect` prints.
 #[derive(Serialize)]
@@ -91,7 +91,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         op.as_ref().and_then(|op| op.memory_estimate.as_ref()).map(|e| e.peak_bytes());
     let distributed = op.and_then(|op| pipeline::distributed_report(&op, setup_seconds));
     // Every rank of a distributed run holds the row sums; rank 0 prints them.
-    if !super::is_root() {
+    if !super::ranks::is_root() {
         return Ok(());
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);

@@ -4,23 +4,8 @@ use radiosity::error::{Error, Result};
 use radiosity::pipeline::{self, RunReport};
 use radiosity::report;
 
-use super::*;
-
-/// Three comma-separated numbers.
-pub(crate) fn parse_point(name: &'static str, text: &str) -> Result<glam::DVec3> {
-    // Every component must parse: "1,x,2,3" is refused, not read as (1, 2, 3).
-    let values: Option<Vec<f64>> = text.split(',').map(|s| s.trim().parse().ok()).collect();
-    match values.as_deref().unwrap_or_default() {
-        &[x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
-            Ok(glam::DVec3::new(x, y, z))
-        }
-        _ => Err(Error::InvalidParameter {
-            name,
-            value: text.into(),
-            reason: "expected three finite numbers X,Y,Z".into(),
-        }),
-    }
-}
+use super::args::{OutputArgs, SolveArgs, parse_point};
+use super::ranks::is_root;
 
 pub(crate) fn write_outputs(
     run: &pipeline::Run,

@@ -7,8 +7,9 @@ use radiosity::report::TableFormat;
 use radiosity::study::compression::{CompressionSeries, TOLERANCES, run_compression};
 use radiosity::study::{StudyDevice, StudyOptions};
 
+use super::args::{BackendArg, StudyArgs, backend};
 use super::output::emit;
-use super::*;
+use super::ranks::{is_root, world};
 
 /// Runs the study `args.id` and prints it (JSON to `--json` when given, and the table unless
 /// the JSON goes to standard output); plots go to `--figures`.

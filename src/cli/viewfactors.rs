@@ -9,7 +9,7 @@ use radiosity::viewfactors::{
     MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors,
 };
 
-use super::*;
+use super::args::ViewFactorArgs;
 
 /// The smallest tolerance f64 arithmetic can meet on an entry F_ij (about 64 ulp of 1).
 const ROUNDING_FLOOR: f64 = 1e-14;

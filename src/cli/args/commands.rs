@@ -1,0 +1,168 @@
+//! Each command's own arguments: the groups of flags it flattens, and its own flags.
+
+use clap::{Args, ValueEnum};
+
+use super::colour::ColourArgs;
+use super::device::{BackendArg, DeviceArgs, PrecisionArg};
+use super::geometry::GeometryArgs;
+use super::operator::OperatorArgs;
+use super::outputs::OutputArgs;
+
+/// `radiosity study`'s arguments.
+#[derive(Args)]
+pub(crate) struct StudyArgs {
+    /// Study id
+    pub(crate) id: String,
+    /// Largest number of elements n to run (default: the paper's largest)
+    #[arg(long)]
+    pub(crate) max_n: Option<usize>,
+    /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
+    /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
+    #[arg(long, value_enum)]
+    pub(crate) backend: Option<BackendArg>,
+    /// Precision of the GPU kernels with --backend gpu
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    pub(crate) precision: PrecisionArg,
+    /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
+    #[arg(long, value_name = "DIR", default_value = "figures")]
+    pub(crate) figures: String,
+    /// Also write JSON to PATH; `-`: JSON on standard output instead of the text table
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+    /// Print Markdown tables instead of aligned text
+    #[arg(long)]
+    pub(crate) markdown: bool,
+    /// `study compression` on this scene (built-in name, city:NXxNY[:lit], or a .toml, .obj or
+    /// .stl file) instead of the five-piece surface: centroid method, the scene's own emission
+    #[arg(long)]
+    pub(crate) scene: Option<String>,
+    /// `study compression`'s tolerances, comma-separated [default: 1e-3,1e-6,1e-9]
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) tolerances: Option<Vec<f64>>,
+    /// `study compression` with shadowed blocks (as `solve --shadowed-blocks`)
+    #[arg(long)]
+    pub(crate) shadowed_blocks: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SolverArg {
+    Auto,
+    Lu,
+    Iterative,
+}
+
+#[derive(Args)]
+pub(crate) struct SolveArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    #[command(flatten)]
+    pub(crate) device: DeviceArgs,
+    /// Precision of the dense matrix kept in the GPU's memory (`--backend gpu --solver
+    /// iterative`): f32 halves its memory and the products' reads; the error it adds is
+    /// measured on every entry and reported
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    pub(crate) storage: PrecisionArg,
+    #[command(flatten)]
+    pub(crate) operator: OperatorArgs,
+    /// True solution (x2y2, shadow, edge, none); default x2y2 on the paper's surfaces, none elsewhere
+    #[arg(long)]
+    pub(crate) solution: Option<String>,
+    /// beta of the shadow (3.3) or edge (3.4) solution
+    #[arg(long)]
+    pub(crate) beta: Option<f64>,
+    /// gamma of the shadow solution (3.3)
+    #[arg(long)]
+    pub(crate) gamma: Option<f64>,
+    /// Linear solver: LU up to 6000 unknowns and GMRES beyond (auto), or forced
+    #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
+    pub(crate) solver: SolverArg,
+    /// Relative residual ||E - (I - K) u||_2 / ||E||_2 at which the iterative solver stops
+    #[arg(long, default_value_t = radiosity::solve::DEFAULT_TOLERANCE)]
+    pub(crate) tolerance: f64,
+    /// Read the operator from this file (written by `assemble --save`) instead of building it;
+    /// refused if it was built for another scene, mesh, method or tolerance
+    #[arg(long, value_name = "OP.bin")]
+    pub(crate) operator_file: Option<String>,
+    /// Solve one emission case per column of this CSV file on the one operator (one row per
+    /// face, in the scene's order, or one per node; a header row may name the cases); outputs
+    /// get u and E per case
+    #[arg(long, value_name = "E.csv")]
+    pub(crate) emission_file: Option<String>,
+    /// Also report the largest errors over all of S, of u_n and of the iterated solution E + K u_n,
+    /// at the interior points of a barycentric lattice of spacing 1/M in every element
+    #[arg(long, value_name = "M")]
+    pub(crate) surface_lattice: Option<usize>,
+    /// Write JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+    #[command(flatten)]
+    pub(crate) outputs: OutputArgs,
+    #[command(flatten)]
+    pub(crate) colour: ColourArgs,
+}
+
+#[derive(Args)]
+pub(crate) struct BenchArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    #[command(flatten)]
+    pub(crate) operator: OperatorArgs,
+    /// Backends to run, comma separated [default: cpu, and gpu where an adapter can run the
+    /// precision asked for]
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub(crate) backends: Option<Vec<BackendArg>>,
+    /// Precision of the GPU kernels
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
+    pub(crate) precision: PrecisionArg,
+    /// Repetitions per backend (the best time counts)
+    #[arg(long, default_value_t = 3)]
+    pub(crate) repeats: usize,
+    /// Write JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+}
+
+#[derive(Args)]
+pub(crate) struct ViewFactorArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    /// Absolute tolerance on each F_ij: the outer integral is refined where its error estimates
+    /// (two Gauss orders, or two tanh-sinh levels where elements touch) add up to more
+    #[arg(long, default_value_t = 1e-10)]
+    pub(crate) tolerance: f64,
+    /// Most times a touching part is split into four where the tanh-sinh levels disagree; each
+    /// split costs up to 4x its time (the finest level is far more accurate than the level
+    /// difference says: on the paper's surface, reciprocity is 5e-11 without splitting)
+    #[arg(long, default_value_t = 0)]
+    pub(crate) max_depth: u32,
+    /// Integrate F_ij and F_ji each, so that reciprocity checks the accuracy (twice the time);
+    /// by default each pair is integrated once, over the smaller element, and the other entry
+    /// is A_i F_ij / A_j
+    #[arg(long)]
+    pub(crate) each_direction: bool,
+    /// Write F (n x n, row-major) to FILE: NumPy .npy or .csv (dense), or only its non-zero
+    /// entries as SciPy sparse CSR .npz (scipy.sparse.load_npz) or Matrix Market .mtx
+    #[arg(long, value_name = "FILE")]
+    pub(crate) output: Option<String>,
+    /// Write the summary as JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+}
+
+#[derive(Args)]
+pub(crate) struct AssembleArgs {
+    #[command(flatten)]
+    pub(crate) geometry: GeometryArgs,
+    #[command(flatten)]
+    pub(crate) device: DeviceArgs,
+    #[command(flatten)]
+    pub(crate) operator: OperatorArgs,
+    /// Write the dense matrix K to this NumPy file (.npy, float64, row-major dof x dof)
+    #[arg(long, value_name = "FILE.npy")]
+    pub(crate) output: Option<String>,
+    /// Save the operator (dense or compressed, as --operator chooses) for `solve
+    /// --operator-file`: a versioned binary file that records the scene, mesh and method it
+    /// was built for
+    #[arg(long, value_name = "OP.bin")]
+    pub(crate) save: Option<String>,
+}

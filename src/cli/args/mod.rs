@@ -1,0 +1,18 @@
+//! The arguments (clap): groups of flags by what they configure, each command's own arguments,
+//! and how they become the library's `RunConfig`.
+
+mod colour;
+mod commands;
+mod device;
+mod geometry;
+mod import;
+mod operator;
+mod outputs;
+mod run_config;
+mod values;
+
+pub(crate) use commands::{AssembleArgs, BenchArgs, SolveArgs, StudyArgs, ViewFactorArgs};
+pub(crate) use device::{BackendArg, PrecisionArg};
+pub(crate) use outputs::OutputArgs;
+pub(crate) use run_config::backend;
+pub(crate) use values::parse_point;

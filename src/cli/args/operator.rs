@@ -1,0 +1,66 @@
+//! Which operator is stored, how it is compressed, and the memory the run may hold:
+//! `OperatorArgs`.
+
+use clap::{Args, ValueEnum};
+
+/// Which operator to store, and how to compress it.
+#[derive(Args)]
+pub(crate) struct OperatorArgs {
+    /// Operator: dense (every entry stored; the reference), compressed (exact blocks near,
+    /// low-rank blocks far), or auto (compressed above 12 000 unknowns)
+    #[arg(long, value_enum, default_value_t = OperatorArg::Auto)]
+    pub(crate) operator: OperatorArg,
+    /// Relative error of each low-rank block of the compressed operator, in (0, 1): its cross
+    /// approximation's, and half as much again from its recompression
+    #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
+    pub(crate) compression_tolerance: f64,
+    /// Compress the blocks that occluders or tangent planes cut once, without occlusion, and
+    /// keep only their partly visible pairs exact: less memory and setup where faces hold many
+    /// elements [default: where they hold at least 512 on average]
+    #[arg(long, conflicts_with = "no_shadowed_blocks")]
+    pub(crate) shadowed_blocks: bool,
+    /// Never make shadowed blocks: split the blocks that occluders or tangent planes cut down
+    /// to exact leaves and low-rank blocks
+    #[arg(long)]
+    pub(crate) no_shadowed_blocks: bool,
+    /// Most memory the run may hold resident (bytes, or with K, M, G or T: powers of 1024); a
+    /// matrix that would pass it is refused before it is built, a compressed operator before
+    /// its build where the estimate of its peak (from a sample of its blocks) cannot fit, or
+    /// else where its build reaches it [default: 80 % of the available memory for each large
+    /// structure]
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    pub(crate) memory_limit: Option<u64>,
+}
+
+/// A size in bytes: digits, optionally with K, M, G or T (powers of 1024; `B` or `iB` may
+/// follow).
+fn parse_bytes(text: &str) -> std::result::Result<u64, String> {
+    let t = text.trim();
+    let t = t.strip_suffix("iB").or_else(|| t.strip_suffix('B')).unwrap_or(t);
+    let (digits, shift) = match t.char_indices().last() {
+        Some((k, c)) if c.is_ascii_alphabetic() => {
+            let shift = match c.to_ascii_uppercase() {
+                'K' => 10,
+                'M' => 20,
+                'G' => 30,
+                'T' => 40,
+                _ => return Err(format!("'{text}': the unit must be K, M, G or T")),
+            };
+            (&t[..k], shift)
+        }
+        _ => (t, 0),
+    };
+    let value: f64 = digits.trim().parse().map_err(|_| format!("'{text}' is no size in bytes"))?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("'{text}': the limit must be at least one byte"));
+    }
+    Ok(bytes as u64)
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum OperatorArg {
+    Auto,
+    Dense,
+    Compressed,
+}
