@@ -30,6 +30,13 @@ pub fn json(args: &[&str]) -> Value {
         .unwrap_or_else(|e| panic!("bad JSON from {args:?}: {e}\n{stdout}"))
 }
 
+/// A directory for a test's files, named by `tag` and the process.
+pub fn temp_dir(tag: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("radiosity-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
 /// The scene file `path` (relative to the crate's root) moved rigidly by `offset`: every
 /// `vertices` and `translate` triple shifted, mesh files referred to by absolute path. Written to
 /// `dir`; returns the new file's path.
