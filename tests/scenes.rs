@@ -143,6 +143,18 @@ fn view_factors_of_howell_c11_and_a_closed_box() {
     assert!(reciprocity > 0.0 && reciprocity < 1e-9, "{v}");
     let (ok, _, err) = radiosity(&["viewfactors", "--scene", "cube", "--output", "F.txt"]);
     assert!(!ok && err.contains(".npy, .csv, .npz (sparse CSR) or .mtx"), "{err}");
+    // Only the options view factors use: the scene and its mesh, not the collocation method
+    // and its quadrature, which would be ignored.
+    let (ok, help, err) = radiosity(&["viewfactors", "--help"]);
+    assert!(ok, "{err}");
+    for option in ["--scene", "--refine", "--mesh", "--grade", "--coplanar", "--tolerance"] {
+        assert!(help.contains(option), "{option} missing from:\n{help}");
+    }
+    for option in ["--method", "--alpha", "--quadrature", "--max-level", "--ibase", "--imt-nodes"] {
+        assert!(!help.contains(option), "{option} offered by:\n{help}");
+    }
+    let (ok, _, err) = radiosity(&["viewfactors", "--scene", "cube", "--method", "linear"]);
+    assert!(!ok && err.contains("--method"), "{err}");
 }
 
 /// The arrays of a NumPy `.npz` archive by name, as npyz reads each `.npy` in it.

@@ -32,7 +32,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
             args.tolerance
         );
     }
-    let config = args.geometry.config()?;
+    let config = args.scene.config()?;
     let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, planner, .. } = &problem;
     super::output::print_notes(scene);

@@ -4,7 +4,7 @@ use clap::{Args, ValueEnum};
 
 use super::colour::ColourArgs;
 use super::device::{BackendArg, DeviceArgs, PrecisionArg};
-use super::geometry::GeometryArgs;
+use super::geometry::{GeometryArgs, SceneArgs};
 use super::operator::OperatorArgs;
 use super::outputs::OutputArgs;
 
@@ -125,7 +125,7 @@ pub(crate) struct BenchArgs {
 #[derive(Args)]
 pub(crate) struct ViewFactorArgs {
     #[command(flatten)]
-    pub(crate) geometry: GeometryArgs,
+    pub(crate) scene: SceneArgs,
     /// Absolute tolerance on each F_ij: the outer integral is refined where its error estimates
     /// (two Gauss orders, or two tanh-sinh levels where elements touch) add up to more
     #[arg(long, default_value_t = 1e-10)]

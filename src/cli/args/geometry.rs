@@ -1,5 +1,6 @@
-//! The scene, its mesh, the collocation method and the quadrature: `GeometryArgs`, which every
-//! command that builds a problem flattens.
+//! The scene and its mesh (`SceneArgs`), the collocation method and its quadrature
+//! (`CollocationArgs`), and both together (`GeometryArgs`), which every command that builds a
+//! collocation problem flattens; `viewfactors` takes the scene and its mesh alone.
 
 use clap::{Args, ValueEnum};
 
@@ -38,19 +39,23 @@ pub(crate) enum QuadratureArg {
     Gauss,
 }
 
-/// The scene, its mesh and the collocation method.
+/// The scene, its mesh and the collocation method: every command that builds a collocation
+/// problem flattens it.
 #[derive(Args)]
 pub(crate) struct GeometryArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    #[command(flatten)]
+    pub(crate) collocation: CollocationArgs,
+}
+
+/// The scene and its mesh (all that `viewfactors` takes of the geometry).
+#[derive(Args)]
+pub(crate) struct SceneArgs {
     /// Scene: four-piece, five-piece, cube, baffled-box, a generated city (city:NXxNY, or
     /// city:NXxNY:lit under an emitting sky panel), or a scene file (.toml, .obj, .stl)
     #[arg(long)]
     pub(crate) scene: String,
-    /// Collocation method
-    #[arg(long, value_enum, default_value_t = MethodArg::Centroid)]
-    pub(crate) method: MethodArg,
-    /// Node parameter alpha of the linear method, in [0, 1/3) (default 1/6)
-    #[arg(long)]
-    pub(crate) alpha: Option<f64>,
     /// Mesh
     #[arg(long, value_enum, default_value_t = MeshArg::Uniform)]
     pub(crate) mesh: MeshArg,
@@ -71,6 +76,19 @@ pub(crate) struct GeometryArgs {
     /// Surface parameters A,B,C of the paper's surfaces
     #[arg(long, value_name = "A,B,C", default_value = "5,2,1")]
     pub(crate) params: String,
+    #[command(flatten)]
+    pub(crate) import: ImportArgs,
+}
+
+/// The collocation method and how its integrals are evaluated.
+#[derive(Args)]
+pub(crate) struct CollocationArgs {
+    /// Collocation method
+    #[arg(long, value_enum, default_value_t = MethodArg::Centroid)]
+    pub(crate) method: MethodArg,
+    /// Node parameter alpha of the linear method, in [0, 1/3) (default 1/6)
+    #[arg(long)]
+    pub(crate) alpha: Option<f64>,
     /// How the collocation integrals are evaluated: closed forms (+ IMT), or the paper's graded
     /// 7-point or collapsed-Gauss rules (sec. 4.2)
     #[arg(long, value_enum, default_value_t = QuadratureArg::Exact)]
@@ -93,6 +111,4 @@ pub(crate) struct GeometryArgs {
     /// (slower, and less accurate there, where the closed forms cancel)
     #[arg(long)]
     pub(crate) no_far_field: bool,
-    #[command(flatten)]
-    pub(crate) import: ImportArgs,
 }

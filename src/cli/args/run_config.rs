@@ -16,7 +16,9 @@ use crate::cli::ranks::{is_root, world};
 
 use super::commands::{SolveArgs, SolverArg};
 use super::device::{BackendArg, PrecisionArg};
-use super::geometry::{GeometryArgs, MeshArg, MethodArg, QuadratureArg, ShadowLinesArg};
+use super::geometry::{
+    CollocationArgs, GeometryArgs, MeshArg, MethodArg, QuadratureArg, SceneArgs, ShadowLinesArg,
+};
 use super::operator::{OperatorArg, OperatorArgs};
 use super::values::parse_params;
 
@@ -30,7 +32,7 @@ pub(crate) fn backend(b: BackendArg, p: PrecisionArg) -> Backend {
     }
 }
 
-impl GeometryArgs {
+impl CollocationArgs {
     pub(crate) fn quadrature(&self) -> Result<Quadrature> {
         let (max_level, ibase, near_ratio) = (self.max_level, self.ibase, self.near_ratio);
         let q = match self.quadrature {
@@ -42,9 +44,8 @@ impl GeometryArgs {
         Ok(q)
     }
 
-    /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere.
-    pub(crate) fn config(&self) -> Result<RunConfig> {
-        let scene = SceneSource::parse(&self.scene)?.with_import(self.import.options());
+    /// The method and the options of its integrals.
+    fn method_and_assembly(&self) -> Result<(Method, AssemblyOptions)> {
         let method = match self.method {
             MethodArg::Centroid if self.alpha.is_some() => {
                 return Err(Error::InvalidParameter {
@@ -63,6 +64,31 @@ impl GeometryArgs {
                 reason: "the IMT rule needs at least 2 subintervals".into(),
             });
         }
+        let assembly = AssemblyOptions {
+            quadrature: self.quadrature()?,
+            imt_nodes: self.imt_nodes,
+            far_field: !self.no_far_field,
+            ..Default::default()
+        };
+        Ok((method, assembly))
+    }
+}
+
+impl SceneArgs {
+    /// A configuration of the scene and its mesh alone (`viewfactors`, which integrates its own
+    /// way): the centroid method and the default options of its integrals, unused there.
+    pub(crate) fn config(&self) -> Result<RunConfig> {
+        self.config_with(None)
+    }
+
+    /// A configuration with the paper's x2y2 solution on the paper's surfaces, none elsewhere;
+    /// the method and its integrals from `collocation`, or the defaults.
+    fn config_with(&self, collocation: Option<&CollocationArgs>) -> Result<RunConfig> {
+        let scene = SceneSource::parse(&self.scene)?.with_import(self.import.options());
+        let (method, assembly) = match collocation {
+            Some(c) => c.method_and_assembly()?,
+            None => (Method::Centroid, AssemblyOptions::default()),
+        };
         let solution = scene.is_paper_surface().then_some(TrueSolution::X2Y2);
         Ok(RunConfig {
             scene,
@@ -85,12 +111,7 @@ impl GeometryArgs {
             grading_exponent: self.grading,
             method,
             solution,
-            assembly: AssemblyOptions {
-                quadrature: self.quadrature()?,
-                imt_nodes: self.imt_nodes,
-                far_field: !self.no_far_field,
-                ..Default::default()
-            },
+            assembly,
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,
             storage: Precision::F64,
@@ -105,6 +126,13 @@ impl GeometryArgs {
             operator_file: None,
             ranks: world(),
         })
+    }
+}
+
+impl GeometryArgs {
+    /// A configuration of the scene, its mesh and the collocation method.
+    pub(crate) fn config(&self) -> Result<RunConfig> {
+        self.scene.config_with(Some(&self.collocation))
     }
 }
 
