@@ -255,6 +255,16 @@ fn request_len(entries: &Entries, x: &Crossing) -> usize {
     }
 }
 
+/// Bytes the host holds for one round of exact blocks, at most (a block larger than a round
+/// alone is not bounded by it): per pair, its task twice (listed per block, then gathered), the
+/// position of its entry, its values read back and the block's entries before they are
+/// compacted; partly visible pairs' pieces are not counted.
+pub(super) const ROUND_BYTES: u64 = (PAIRS_PER_ROUND
+    * (2 * std::mem::size_of::<PairTask>()
+        + std::mem::size_of::<usize>()
+        + std::mem::size_of::<[f64; 3]>()
+        + 3 * std::mem::size_of::<f64>())) as u64;
+
 /// Consecutive ranges of items whose sizes add up to at most [`PAIRS_PER_ROUND`] (one item
 /// alone may exceed it).
 fn rounds(sizes: &[usize]) -> Vec<Range<usize>> {

@@ -93,9 +93,12 @@ impl CompressedOperator {
         // Before the plan is walked and its blocks built, what they will hold is estimated from
         // a sample of it, and a run that cannot fit is refused now rather than after minutes.
         let size = ranks.map_or(1, |r| r.size());
-        let estimate = in_stage(progress, "memory estimate", || {
+        let mut estimate = in_stage(progress, "memory estimate", || {
             estimate_memory(&entries, &faces, options, scene.faces.len(), size)
         });
+        if batches.is_some() {
+            estimate.rounds = batched::ROUND_BYTES;
+        }
         progress.note(&estimate.note());
         guard.estimate = Some(estimate);
         let refusal = guard.refusal(&estimate, options.refine);

@@ -35,6 +35,10 @@ pub struct MemoryEstimate {
     pub crossing: u64,
     /// GMRES's Krylov vectors for one right-hand side and the products' buffers.
     pub solver: u64,
+    /// Where a device evaluates the entries in batches: the host's buffers of one round of
+    /// exact blocks (their pairs' tasks, twice while they are gathered, where each value goes,
+    /// the values read back and the blocks' entries before they are compacted), at most.
+    pub rounds: u64,
     /// One standard error of the sampled parts' sum (sampling alone; the ranks of the blocks
     /// not cross-approximated in the sample are the sampled ones' mean).
     pub error: u64,
@@ -73,7 +77,8 @@ impl MemoryEstimate {
     pub fn peak_bytes(&self) -> u64 {
         let values = self.share(self.exact + self.factors) + self.orders;
         let walk = self.trees + 2 * self.plan;
-        let build = self.trees + self.plan + self.lists + self.views + self.crossing + values;
+        let build =
+            self.trees + self.plan + self.lists + self.views + self.crossing + self.rounds + values;
         let after = values + self.share(self.index) + self.solver;
         walk.max(build).max(after)
     }
@@ -90,7 +95,7 @@ impl MemoryEstimate {
             "memory estimate: about {} at the peak of the compressed operator's build (stored \
              operator {}: exact entries {}, low-rank factors {}, block index {}; block plan {}, \
              build lists and slots {}, cluster trees {}, row walks' views {}, cross \
-             approximations in flight {}, solver vectors {}; {} blocks), within {} (one \
+             approximations in flight {}, solver vectors {}{}; {} blocks), within {} (one \
              standard error) from {} sampled pairs{}",
             t(self.peak_bytes()),
             t(self.operator_bytes()),
@@ -103,6 +108,10 @@ impl MemoryEstimate {
             t(self.views),
             t(self.crossing),
             t(self.solver),
+            match self.rounds {
+                0 => String::new(),
+                r => format!(", a round of batches for the device {}", t(r)),
+            },
             self.blocks,
             t(self.error),
             self.samples,
@@ -140,6 +149,7 @@ impl MemoryEstimate {
             views: d(self.views),
             crossing: d(self.crossing),
             solver: d(self.solver),
+            rounds: d(self.rounds),
             error: d(self.error),
             ..*self
         }
@@ -225,6 +235,7 @@ mod tests {
             views: 1 << 20,
             crossing: 2 << 20,
             solver: 300_000,
+            rounds: 0,
             error: 5 << 20,
             samples: 4096,
             blocks: 100_000,

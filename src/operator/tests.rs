@@ -244,6 +244,7 @@ fn a_build_whose_estimate_cannot_fit_is_refused_naming_both_sizes() {
         views: 0,
         crossing: 1 << 20,
         solver: 1 << 20,
+        rounds: 0,
         error: 2 << 20,
         samples: 4096,
         blocks: 10_000,
@@ -372,6 +373,12 @@ fn the_memory_estimate_comes_near_what_the_build_stores() {
             c.scene.name
         );
         assert!(estimate.peak_bytes() >= estimate.operator_bytes());
+        assert_eq!(estimate.rounds, 0, "no device: no rounds of batches");
+        // Entries evaluated in batches (by the CPU's evaluator here, as a device would): the
+        // host's buffers of a round are among the build's peak.
+        let batched = build_with(&c, &options, true).memory_estimate.unwrap();
+        assert_eq!(batched.rounds, super::batched::ROUND_BYTES);
+        assert!(batched.peak_bytes() >= estimate.peak_bytes() + batched.rounds / 2);
     }
 }
 
