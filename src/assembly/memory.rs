@@ -55,6 +55,11 @@ pub fn allowance_source() -> String {
     }
 }
 
+/// `bytes` in GiB.
+pub fn gib(bytes: f64) -> f64 {
+    bytes / (1u64 << 30) as f64
+}
+
 /// `bytes` in GiB from one GiB on, else in MiB, else in KiB.
 pub fn size_text(bytes: f64) -> String {
     const GIB: f64 = (1u64 << 30) as f64;
@@ -91,8 +96,8 @@ pub fn check_fits(bytes: f64, dof: usize) -> Result<()> {
         if bytes > allowed {
             return Err(Error::TooLarge {
                 dof,
-                needed_gib: bytes / (1u64 << 30) as f64,
-                available_gib: allowed / (1u64 << 30) as f64,
+                needed_gib: gib(bytes),
+                available_gib: gib(allowed),
             });
         }
     }

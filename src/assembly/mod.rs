@@ -17,8 +17,8 @@ pub use integrator::PairIntegrator;
 pub(crate) use integrator::{FullPair, LaneObserver, push_fan};
 pub use matrix::CollocationMatrix;
 pub use memory::{
-    MEMORY_SHARE, allowance_source, available_memory, check_fits, memory_allowance, memory_limit,
-    resident_bytes, set_memory_limit, size_text,
+    MEMORY_SHARE, allowance_source, available_memory, check_fits, gib, memory_allowance,
+    memory_limit, resident_bytes, set_memory_limit, size_text,
 };
 pub use options::{AssemblyOptions, Quadrature};
 pub use pairs::{CpuPairs, PairEvaluation, PairTask};

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::blocks::PlanBudget;
 use super::estimate::MemoryEstimate;
-use crate::assembly::{allowance_source, memory_allowance, resident_bytes};
+use crate::assembly::{allowance_source, gib, memory_allowance, resident_bytes, size_text};
 use crate::error::{Error, Result};
 
 /// What the build of a compressed operator holds against what may be used
@@ -36,11 +36,6 @@ pub(super) struct MemoryGuard {
 
 /// The guard looks at the resident memory each time the stored blocks grow by this much.
 const LOOK_EVERY: u64 = 16 << 20;
-
-/// A size in words.
-fn size(bytes: f64) -> String {
-    crate::assembly::size_text(bytes)
-}
 
 impl MemoryGuard {
     pub(super) fn new(dof: usize) -> Self {
@@ -81,11 +76,11 @@ impl MemoryGuard {
                  build (at least {}: the estimate less two standard errors; stored operator \
                  about {}{}), but {} may be used ({})",
                 self.dof,
-                size(peak),
-                size(estimate.low_bytes() as f64),
-                size(estimate.operator_bytes() as f64),
+                size_text(peak),
+                size_text(estimate.low_bytes() as f64),
+                size_text(estimate.operator_bytes() as f64),
                 estimate.mostly_blocks().map_or(String::new(), |why| format!("; {why}")),
-                size(available),
+                size_text(available),
                 self.source
             ),
             advice: estimate.advice(available, self.resident, refine),
@@ -104,8 +99,8 @@ impl MemoryGuard {
                 "the compressed operator of {} unknowns was refused: another rank may use less \
                  than its estimate of about {} at the peak (this one may use {})",
                 self.dof,
-                size(peak),
-                size(available)
+                size_text(peak),
+                size_text(available)
             ),
             advice: "give every rank the same --memory-limit, or use machines with more memory"
                 .into(),
@@ -131,8 +126,8 @@ impl MemoryGuard {
                  walked: the plan's lists (counted twice: they grow by doubling) and the cluster \
                  trees had reached {}, more than the {} that may be used ({}){}",
                 self.dof,
-                size(taken),
-                size(available),
+                size_text(taken),
+                size_text(available),
                 self.source,
                 self.estimate_was(taken)
             ),
@@ -149,10 +144,10 @@ impl MemoryGuard {
             Some(e) if (e.peak_bytes() as f64) < taken => {
                 format!(
                     "; the estimate made before, about {}, was low",
-                    size(e.peak_bytes() as f64)
+                    size_text(e.peak_bytes() as f64)
                 )
             }
-            Some(e) => format!("; estimated before at about {}", size(e.peak_bytes() as f64)),
+            Some(e) => format!("; estimated before at about {}", size_text(e.peak_bytes() as f64)),
             None => String::new(),
         }
     }
@@ -223,19 +218,19 @@ impl MemoryGuard {
                  take: the {} that may be used ({}) less {} kept aside for what the guard does \
                  not see at once (the growth between two of its looks at the memory, the cross \
                  approximations in flight)",
-                size(taken),
-                size(cap),
-                size(available),
+                size_text(taken),
+                size_text(cap),
+                size_text(available),
                 self.source,
-                size(self.aside())
+                size_text(self.aside())
             )
         } else {
             format!(
                 "the {} that may be used ({}) leaves nothing once {} are kept aside for what the \
                  guard does not see at once",
-                size(available),
+                size_text(available),
                 self.source,
-                size(self.aside())
+                size_text(self.aside())
             )
         };
         Err(Error::OperatorTooLarge {
@@ -255,8 +250,3 @@ impl MemoryGuard {
 /// What a build stopped for memory may try.
 const BUILD_ADVICE: &str = "raise --memory-limit or --compression-tolerance, use a coarser mesh \
      (each refinement level multiplies the memory by about 5) or a machine with more memory";
-
-/// Bytes in GiB.
-fn gib(bytes: f64) -> f64 {
-    bytes / (1u64 << 30) as f64
-}

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::assembly::{Problem, memory_allowance};
+use crate::assembly::{Problem, gib, memory_allowance};
 use crate::error::{Error, Result};
 
 /// Which operator a run stores.
@@ -62,14 +62,14 @@ impl OperatorChoice {
                 let per_face = shape.elements_per_face();
                 let dense_bytes = 8.0 * (shape.dof as f64).powi(2);
                 let fits = memory_allowance().is_none_or(|a| dense_bytes <= a);
-                let gib = dense_bytes / (1u64 << 30) as f64;
+                let dense_gib = gib(dense_bytes);
                 let (compressed, why) = if !fits {
-                    (true, format!("the dense matrix would need {gib:.1} GiB"))
+                    (true, format!("the dense matrix would need {dense_gib:.1} GiB"))
                 } else if per_face < MIN_ELEMENTS_PER_FACE {
                     let why = format!(
                         "{per_face:.1} elements per face, fewer than {MIN_ELEMENTS_PER_FACE}: \
                          the compressed operator's blocks would be a few pairs each; the dense \
-                         matrix needs {gib:.1} GiB"
+                         matrix needs {dense_gib:.1} GiB"
                     );
                     (false, why)
                 } else {
