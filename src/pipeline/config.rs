@@ -210,15 +210,21 @@ pub const REPEAT_BELOW_SECONDS: f64 = 2.0;
 impl RunConfig {
     /// The paper's setup for a scene: uniform mesh, centroid method, u = x² + y².
     pub fn paper(scene: BuiltinScene, refine: u32) -> Self {
+        Self { refine, solution: Some(TrueSolution::X2Y2), ..Self::of(SceneSource::Builtin(scene)) }
+    }
+
+    /// The defaults for `scene`: refine 0, uniform mesh, centroid method with the default
+    /// options of its integrals, no true solution, dense operator on the CPU, one process.
+    pub fn of(scene: SceneSource) -> Self {
         Self {
-            scene: SceneSource::Builtin(scene),
+            scene,
             params: SurfaceParameters::default(),
             mesh: MeshChoice::Uniform,
-            refine,
+            refine: 0,
             grade: Vec::new(),
             grading_exponent: 2.0,
             method: Method::Centroid,
-            solution: Some(TrueSolution::X2Y2),
+            solution: None,
             assembly: AssemblyOptions::default(),
             emission: EmissionOptions::default(),
             backend: Backend::Cpu,

@@ -6,9 +6,9 @@ use radiosity::discretization::Method;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
 use radiosity::mesh::{LineExtent, S5Diagonals};
-use radiosity::operator::{CompressionOptions, OperatorChoice, ShadowedBlocks};
+use radiosity::operator::{OperatorChoice, ShadowedBlocks};
 use radiosity::pipeline::{Backend, MeshChoice, RunConfig, SceneSource};
-use radiosity::problems::{EmissionCases, EmissionOptions, TrueSolution};
+use radiosity::problems::{EmissionCases, TrueSolution};
 use radiosity::solve::{SolverChoice, SolverOptions};
 
 use crate::cli::progress;
@@ -91,7 +91,6 @@ impl SceneArgs {
         };
         let solution = scene.is_paper_surface().then_some(TrueSolution::X2Y2);
         Ok(RunConfig {
-            scene,
             params: parse_params(&self.params)?,
             mesh: match self.mesh {
                 MeshArg::Uniform => MeshChoice::Uniform,
@@ -112,19 +111,9 @@ impl SceneArgs {
             method,
             solution,
             assembly,
-            emission: EmissionOptions::default(),
-            backend: Backend::Cpu,
-            storage: Precision::F64,
-            solver: SolverOptions::default(),
             progress: if is_root() { progress::on_stderr() } else { Default::default() },
-            setup_repeats: 1,
-            surface_lattice: None,
-            operator: OperatorChoice::Dense,
-            compression: CompressionOptions::default(),
-            bands: Vec::new(),
-            cases: None,
-            operator_file: None,
             ranks: world(),
+            ..RunConfig::of(scene)
         })
     }
 }
