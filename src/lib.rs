@@ -13,6 +13,9 @@ pub mod geometry;
 pub mod progress;
 pub mod quadrature;
 
+// The names users give the options' values.
+pub mod vocabulary;
+
 // The collocation integrals' closed forms, and the scene.
 pub mod kernels;
 pub mod scene;

@@ -133,7 +133,10 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
             "exact method only",
         ),
         (&["solve", "--scene", "four-piece", "--surface-lattice", "2"], "surface-lattice"),
-        (&["solve", "--scene", "four-piece", "--alpha", "0.1"], "alpha belongs to --method linear"),
+        (
+            &["solve", "--scene", "four-piece", "--alpha", "0.1"],
+            "alpha belongs to the linear method",
+        ),
         (&["solve", "--scene", "five-piece", "--solution", "edge", "--gamma", "1"], "no gamma"),
         (
             &["solve", "--scene", "four-piece", "--solution", "shadow", "--beta", "nan"],

@@ -49,25 +49,8 @@ __all__ = [
     "tqdm_progress",
 ]
 
-# The command line's defaults (radiosity solve --help).
-_DEFAULTS: dict[str, Any] = dict(
-    refine=2,
-    method="centroid",
-    alpha=None,
-    mesh="uniform",
-    shadow_lines="segments",
-    solution=None,
-    beta=None,
-    gamma=None,
-    backend="cpu",
-    precision="f64",
-    operator="auto",
-    compression_tolerance=_native.DEFAULT_COMPRESSION_TOLERANCE,
-    solver="auto",
-    tolerance=_native.DEFAULT_SOLVER_TOLERANCE,
-    operator_file=None,
-    bands="grey",
-)
+# The library's defaults, which are the command line's (radiosity solve --help).
+_DEFAULTS: dict[str, Any] = dict(_native.default_options())
 
 
 def _options(given: dict[str, Any]) -> _RunOptions:

@@ -16,19 +16,20 @@ use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use radiosity::discretization::Method;
+use radiosity::discretization::MethodName;
 use radiosity::gpu::Precision;
-use radiosity::mesh::{LineExtent, S5Diagonals};
+use radiosity::mesh::LineExtent;
 use radiosity::operator::OperatorChoice;
 use radiosity::pipeline::{
-    self, Backend, BuiltOperator, MeshChoice, Problem, RunConfig, SceneSource,
+    self, BackendName, BuiltOperator, MeshName, Problem, RunConfig, SceneSource,
 };
-use radiosity::problems::{EmissionCases, TrueSolution};
+use radiosity::problems::{EmissionCases, SolutionName};
 use radiosity::progress::{Progress, ProgressSink};
-use radiosity::scene::{BuiltinScene, Coplanar, Duplicates, ImportOptions, NonPlanar};
+use radiosity::scene::{Coplanar, Duplicates, ImportOptions, NonPlanar};
 use radiosity::scene::{Scene, SurfaceParameters};
-use radiosity::solve::{SolverChoice, SolverOptions};
+use radiosity::solve::SolverChoice;
 use radiosity::viewfactors::{ViewFactorOptions, view_factors as compute_view_factors};
+use radiosity::vocabulary::Named;
 
 create_exception!(
     _native,
@@ -42,108 +43,85 @@ fn raised(e: radiosity::Error) -> PyErr {
     RadiosityError::new_err(e.to_string())
 }
 
-/// An option given a name it does not know.
-fn unknown(option: &'static str, value: &str, expected: &str) -> PyErr {
-    RadiosityError::new_err(format!("{option} '{value}' is not known: expected {expected}"))
+/// The Python keyword of the option `T` (the command line's flag with `_` for `-`).
+fn keyword<T: Named>() -> String {
+    T::OPTION.replace('-', "_")
 }
 
-/// An option's fixed vocabulary: each name it accepts and what that name means. These tables
-/// are the one place the names are spelled: the options are parsed through them ([`pick`]) and
-/// `option_values()` lists them (the package's type stubs are tested against that list).
-type Vocabulary<T> = &'static [(&'static str, T)];
-
-/// `nonplanar=` of `Scene.load`.
-const NONPLANAR: Vocabulary<NonPlanar> =
-    &[("split", NonPlanar::Split), ("refuse", NonPlanar::Refuse)];
-/// `duplicates=` of `Scene.load`.
-const DUPLICATES: Vocabulary<Duplicates> =
-    &[("drop", Duplicates::Drop), ("refuse", Duplicates::Refuse)];
-/// `coplanar=` of `Scene.load` and `Scene.from_arrays`.
-const COPLANAR: Vocabulary<Coplanar> = &[("merge", Coplanar::Merge), ("keep", Coplanar::Keep)];
-
-/// The discretization methods (`linear` takes `alpha`).
-#[derive(Clone, Copy)]
-enum MethodName {
-    Centroid,
-    Linear,
-}
-const METHOD: Vocabulary<MethodName> =
-    &[("centroid", MethodName::Centroid), ("linear", MethodName::Linear)];
-/// `mesh=`, given the shadow lines' extent (which only `auto-discontinuity` uses).
-const MESH: Vocabulary<fn(LineExtent) -> MeshChoice> = &[
-    ("uniform", |_| MeshChoice::Uniform),
-    ("discontinuity", |_| MeshChoice::Discontinuity(S5Diagonals::Paper)),
-    ("discontinuity-uniform-diagonals", |_| MeshChoice::Discontinuity(S5Diagonals::AsUniform)),
-    ("auto-discontinuity", MeshChoice::AutoDiscontinuity),
-];
-const SHADOW_LINES: Vocabulary<LineExtent> =
-    &[("segments", LineExtent::Segments), ("chords", LineExtent::Chords)];
-/// `solution=`: `none`, or a true solution by `TrueSolution::parse`'s names.
-const SOLUTION: Vocabulary<bool> =
-    &[("none", false), ("x2y2", true), ("shadow", true), ("edge", true)];
-/// `backend=`, given `precision=` (which only the GPU uses).
-const BACKEND: Vocabulary<fn(Precision) -> Backend> =
-    &[("cpu", |_| Backend::Cpu), ("gpu", Backend::Gpu)];
-const PRECISION: Vocabulary<Precision> = &[("f64", Precision::F64), ("f32", Precision::F32)];
-const OPERATOR: Vocabulary<OperatorChoice> = &[
-    ("auto", OperatorChoice::Auto),
-    ("dense", OperatorChoice::Dense),
-    ("compressed", OperatorChoice::Compressed),
-];
-const SOLVER: Vocabulary<SolverChoice> = &[
-    ("auto", SolverChoice::Auto),
-    ("lu", SolverChoice::Lu),
-    ("iterative", SolverChoice::Iterative),
-];
-
-/// The names of a vocabulary.
-fn names<T>(vocabulary: Vocabulary<T>) -> Vec<&'static str> {
-    vocabulary.iter().map(|(name, _)| *name).collect()
+/// The value named `value` of the option `T`, or an error naming the names it accepts (the
+/// library's table: this crate spells no option value).
+fn pick<T: Named>(value: &str) -> PyResult<T> {
+    T::parse(value).map_err(|_| {
+        let names: Vec<&str> = T::names().collect();
+        let expected = match names.split_last() {
+            Some((last, [])) => last.to_string(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        };
+        RadiosityError::new_err(format!(
+            "{} '{value}' is not known: expected {expected}",
+            keyword::<T>()
+        ))
+    })
 }
 
-/// What `value` means in `option`'s vocabulary, or an error naming the names it accepts.
-fn pick<T: Copy>(option: &'static str, value: &str, vocabulary: Vocabulary<T>) -> PyResult<T> {
-    match vocabulary.iter().find(|(name, _)| *name == value) {
-        Some((_, meaning)) => Ok(*meaning),
-        None => {
-            let names = names(vocabulary);
-            let expected = match names.split_last() {
-                Some((last, [])) => last.to_string(),
-                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
-                None => String::new(),
-            };
-            Err(unknown(option, value, &expected))
-        }
-    }
+/// The names an option accepts, under its keyword.
+fn vocabulary<T: Named>() -> (String, Vec<&'static str>) {
+    (keyword::<T>(), T::names().collect())
 }
 
-/// Every option with a fixed vocabulary and the names it accepts, from the tables the options
-/// are parsed through (for the package's tests and tools).
+/// Every option with a fixed vocabulary and the names it accepts, from the library's tables
+/// (for the package's tests and tools).
 #[pyfunction]
-fn option_values() -> std::collections::BTreeMap<&'static str, Vec<&'static str>> {
+fn option_values() -> std::collections::BTreeMap<String, Vec<&'static str>> {
     [
-        ("nonplanar", names(NONPLANAR)),
-        ("duplicates", names(DUPLICATES)),
-        ("coplanar", names(COPLANAR)),
-        ("method", names(METHOD)),
-        ("mesh", names(MESH)),
-        ("shadow_lines", names(SHADOW_LINES)),
-        ("solution", names(SOLUTION)),
-        ("backend", names(BACKEND)),
-        ("precision", names(PRECISION)),
-        ("operator", names(OPERATOR)),
-        ("solver", names(SOLVER)),
+        vocabulary::<NonPlanar>(),
+        vocabulary::<Duplicates>(),
+        vocabulary::<Coplanar>(),
+        vocabulary::<MethodName>(),
+        vocabulary::<MeshName>(),
+        vocabulary::<LineExtent>(),
+        vocabulary::<SolutionName>(),
+        vocabulary::<BackendName>(),
+        vocabulary::<Precision>(),
+        vocabulary::<OperatorChoice>(),
+        vocabulary::<SolverChoice>(),
     ]
     .into_iter()
     .collect()
+}
+
+/// The library's defaults of the run options (those of `radiosity solve`), by the keywords and
+/// in the order of `RunOptions` below.
+#[pyfunction]
+fn default_options(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
+    let d = pipeline::RunOptions::default();
+    let out = pyo3::types::PyDict::new(py);
+    out.set_item("refine", d.refine)?;
+    out.set_item("method", d.method.name())?;
+    out.set_item("alpha", d.alpha)?;
+    out.set_item("mesh", d.mesh.name())?;
+    out.set_item("shadow_lines", d.shadow_lines.name())?;
+    out.set_item("solution", d.solution.map(SolutionName::name))?;
+    out.set_item("beta", d.beta)?;
+    out.set_item("gamma", d.gamma)?;
+    out.set_item("backend", d.backend.name())?;
+    out.set_item("precision", d.precision.name())?;
+    out.set_item("operator", d.operator.name())?;
+    out.set_item("compression_tolerance", d.compression_tolerance)?;
+    out.set_item("solver", d.solver.name())?;
+    out.set_item("tolerance", d.tolerance)?;
+    out.set_item("operator_file", d.operator_file)?;
+    out.set_item("bands", d.bands)?;
+    Ok(out)
 }
 
 /// A scene, from a file, a built-in name or arrays.
 #[pyclass(name = "Scene", module = "radiosity", frozen)]
 struct PyScene {
     scene: Scene,
-    /// Whether it is one of the paper's surfaces (then `solve` defaults to its x2y2 solution).
-    paper_surface: bool,
+    /// Where it came from (the paper's surfaces default to their x2y2 solution).
+    source: SceneSource,
     params: SurfaceParameters,
 }
 
@@ -161,7 +139,8 @@ impl PyScene {
     ) -> PyResult<Self> {
         let options = import_options(nonplanar, duplicates, coplanar)?;
         let scene = py.detach(|| radiosity::scene::load_with(&path, options)).map_err(raised)?;
-        Ok(Self { scene, paper_surface: false, params: SurfaceParameters::default() })
+        let source = SceneSource::File(path, options);
+        Ok(Self { scene, source, params: SurfaceParameters::default() })
     }
 
     /// A built-in scene (four-piece, five-piece, cube, baffled-box) or a generated city
@@ -171,14 +150,17 @@ impl PyScene {
     fn builtin(py: Python<'_>, name: &str, params: (f64, f64, f64)) -> PyResult<Self> {
         let source = match SceneSource::parse(name).map_err(raised)? {
             SceneSource::File(..) => {
-                return Err(unknown("built-in scene", name, "a built-in name; files: Scene.load"));
+                return Err(RadiosityError::new_err(format!(
+                    "built-in scene '{name}' is not known: expected a built-in name; files: \
+                     Scene.load"
+                )));
             }
             source => source,
         };
         let params = SurfaceParameters { a: params.0, b: params.1, c: params.2 };
         params.validate().map_err(raised)?;
         let scene = py.detach(|| source.build(params)).map_err(raised)?;
-        Ok(Self { scene, paper_surface: source.is_paper_surface(), params })
+        Ok(Self { scene, source, params })
     }
 
     /// A triangle mesh: `vertices` (m x 3), `triangles` (t x 3 vertex indices), `rho` and
@@ -221,7 +203,8 @@ impl PyScene {
                 radiosity::scene::from_triangles(name, &points, &corners, &rho, &emission, options)
             })
             .map_err(raised)?;
-        Ok(Self { scene, paper_surface: false, params: SurfaceParameters::default() })
+        let source = SceneSource::Given(std::sync::Arc::new(scene.clone()));
+        Ok(Self { scene, source, params: SurfaceParameters::default() })
     }
 
     /// The scene's name.
@@ -258,9 +241,9 @@ fn import_options(
     coplanar: Option<&str>,
 ) -> PyResult<ImportOptions> {
     Ok(ImportOptions {
-        nonplanar: nonplanar.map(|v| pick("nonplanar", v, NONPLANAR)).transpose()?,
-        duplicates: duplicates.map(|v| pick("duplicates", v, DUPLICATES)).transpose()?,
-        coplanar: coplanar.map(|v| pick("coplanar", v, COPLANAR)).transpose()?,
+        nonplanar: nonplanar.map(pick).transpose()?,
+        duplicates: duplicates.map(pick).transpose()?,
+        coplanar: coplanar.map(pick).transpose()?,
     })
 }
 
@@ -287,40 +270,31 @@ struct RunOptions {
 }
 
 impl RunOptions {
-    /// The configuration of these options on `scene`, progress going to `progress`.
+    /// The configuration of these options on `scene`, progress going to `progress`: the
+    /// library's options by their names, made a configuration where the command line's are.
     fn config(&self, scene: &PyScene, progress: ProgressSink) -> PyResult<RunConfig> {
-        let mut config = RunConfig::paper(BuiltinScene::Cube, self.refine);
-        config.params = scene.params;
-        config.method = match (pick("method", &self.method, METHOD)?, self.alpha) {
-            (MethodName::Centroid, None) => Method::Centroid,
-            (MethodName::Centroid, Some(_)) => {
-                return Err(RadiosityError::new_err("alpha belongs to method='linear'"));
-            }
-            (MethodName::Linear, alpha) => {
-                Method::linear(alpha.unwrap_or(Method::PAPER_ALPHA)).map_err(raised)?
-            }
+        let options = pipeline::RunOptions {
+            params: scene.params,
+            refine: self.refine,
+            method: pick(&self.method)?,
+            alpha: self.alpha,
+            mesh: pick(&self.mesh)?,
+            shadow_lines: pick(&self.shadow_lines)?,
+            solution: self.solution.as_deref().map(pick).transpose()?,
+            beta: self.beta,
+            gamma: self.gamma,
+            backend: pick(&self.backend)?,
+            precision: pick(&self.precision)?,
+            operator: pick(&self.operator)?,
+            compression_tolerance: self.compression_tolerance,
+            solver: pick(&self.solver)?,
+            tolerance: self.tolerance,
+            operator_file: self.operator_file.clone(),
+            bands: self.bands.clone(),
+            ..Default::default()
         };
-        let extent = pick("shadow_lines", &self.shadow_lines, SHADOW_LINES)?;
-        config.mesh = pick("mesh", &self.mesh, MESH)?(extent);
-        config.solution = match self.solution.as_deref() {
-            None if scene.paper_surface => Some(TrueSolution::X2Y2),
-            None => None,
-            Some(name) => match pick("solution", name, SOLUTION)? {
-                false => None,
-                true => Some(TrueSolution::parse(name, self.beta, self.gamma).map_err(raised)?),
-            },
-        };
-        let precision = pick("precision", &self.precision, PRECISION)?;
-        config.backend = pick("backend", &self.backend, BACKEND)?(precision);
-        config.operator = pick("operator", &self.operator, OPERATOR)?;
-        config.compression.tolerance = self.compression_tolerance;
-        config.compression.validate().map_err(raised)?;
-        let choice = pick("solver", &self.solver, SOLVER)?;
-        config.solver = SolverOptions { choice, tolerance: self.tolerance };
-        config.operator_file = self.operator_file.clone();
-        config.bands = radiosity::scene::parse_bands(&self.bands).map_err(raised)?;
-        config.progress = progress;
-        Ok(config)
+        let config = options.config(scene.source.clone()).map_err(raised)?;
+        Ok(RunConfig { progress, ..config })
     }
 }
 
@@ -432,13 +406,15 @@ fn solve<'py>(
     emission: Option<&Bound<'py, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let mut options = options;
+    if emission.is_some() && options.solution.is_none() {
+        // The cases give E: no true solution unless one is asked for (and then refused).
+        options.solution = Some(SolutionName::None.name().into());
+    }
     let mut config = options.config(scene, progress_to(progress))?;
     if let Some(emission) = emission {
         let (columns, _) = emission_columns(emission)?;
         config.cases = Some(EmissionCases::from_columns(columns).map_err(raised)?);
-        if options.solution.is_none() {
-            config.solution = None;
-        }
     }
     let run = py
         .detach(|| {
@@ -607,8 +583,9 @@ fn view_factors<'py>(
 )> {
     let options = ViewFactorOptions { tolerance, max_depth, each_direction, ..Default::default() };
     options.validate().map_err(raised)?;
-    let mut config = RunConfig::paper(BuiltinScene::Cube, refine);
-    config.progress = progress_to(progress);
+    let run = pipeline::RunOptions { refine, params: scene.params, ..Default::default() };
+    let config = run.config(scene.source.clone()).map_err(raised)?;
+    let config = RunConfig { progress: progress_to(progress), ..config };
     let (f, summary) = py
         .detach(|| {
             let started = std::time::Instant::now();
@@ -645,9 +622,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(operator, m)?)?;
     m.add_function(wrap_pyfunction!(view_factors, m)?)?;
     m.add_function(wrap_pyfunction!(option_values, m)?)?;
+    m.add_function(wrap_pyfunction!(default_options, m)?)?;
     m.add("RadiosityError", m.py().get_type::<RadiosityError>())?;
-    // The command line's defaults that the package's options take.
-    m.add("DEFAULT_COMPRESSION_TOLERANCE", radiosity::operator::DEFAULT_TOLERANCE)?;
-    m.add("DEFAULT_SOLVER_TOLERANCE", radiosity::solve::DEFAULT_TOLERANCE)?;
     Ok(())
 }

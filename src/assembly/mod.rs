@@ -20,7 +20,7 @@ pub use memory::{
     MEMORY_SHARE, allowance_source, available_memory, check_fits, gib, memory_allowance,
     memory_limit, resident_bytes, set_memory_limit, size_text,
 };
-pub use options::{AssemblyOptions, Quadrature};
+pub use options::{AssemblyOptions, Quadrature, QuadratureRule};
 pub use pairs::{CpuPairs, PairEvaluation, PairTask};
 pub use problem::Problem;
 pub(crate) use rows::face_boxes;

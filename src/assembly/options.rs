@@ -7,6 +7,19 @@ use crate::error::{Error, Result};
 use crate::kernels::graded::{self, GradedRule};
 use crate::quadrature::ImtRule;
 
+crate::vocabulary::named_options! {
+    /// The rules for the collocation integrals by name; [`Quadrature`] carries their levels.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum QuadratureRule as "quadrature" {
+        /// Closed forms, and for the linear method one IMT quadrature per edge (sec. 4.1)
+        Exact = "exact",
+        /// The paper's graded 7-point rule (sec. 4.2)
+        SevenPoint = "seven-point",
+        /// The paper's graded collapsed Gauss rule (sec. 4.2)
+        Gauss = "gauss",
+    }
+}
+
 /// The method for the collocation integrals (paper sec. 4.2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(tag = "quadrature", rename_all = "kebab-case")]
@@ -45,13 +58,34 @@ impl Quadrature {
         Self::Gauss { ibase, max_level, near_ratio: graded::DEFAULT_NEAR }
     }
 
+    /// The rule `rule` at these levels (used by the graded rules only), validated.
+    pub fn named(
+        rule: QuadratureRule,
+        ibase: u32,
+        max_level: u32,
+        near_ratio: f64,
+    ) -> Result<Self> {
+        let q = match rule {
+            QuadratureRule::Exact => Self::Exact,
+            QuadratureRule::SevenPoint => Self::SevenPoint { max_level, near_ratio },
+            QuadratureRule::Gauss => Self::Gauss { ibase, max_level, near_ratio },
+        };
+        q.validate()?;
+        Ok(q)
+    }
+
+    /// The rule's name.
+    pub fn rule(&self) -> QuadratureRule {
+        match self {
+            Self::Exact => QuadratureRule::Exact,
+            Self::SevenPoint { .. } => QuadratureRule::SevenPoint,
+            Self::Gauss { .. } => QuadratureRule::Gauss,
+        }
+    }
+
     /// `exact`, `seven-point` or `gauss`.
     pub fn name(&self) -> &'static str {
-        match self {
-            Self::Exact => "exact",
-            Self::SevenPoint { .. } => "seven-point",
-            Self::Gauss { .. } => "gauss",
-        }
+        crate::vocabulary::Named::name(self.rule())
     }
 
     /// A short label with the parameters, e.g. `gauss(1,4)`.

@@ -146,8 +146,8 @@ fn fill_row(
 
 /// Element j's entries in `node`'s row as `vis` says it is seen. (A function of its own, with
 /// every reference a parameter, so that the compiler knows the row's stores leave the
-/// discretization alone: as a closure over them, the loop took a sixth longer on the five-piece
-/// surface.)
+/// discretization alone: a closure capturing them hides that, and the values are loaded again
+/// after every store.)
 fn fill_entry(
     j: usize,
     vis: &Visibility,

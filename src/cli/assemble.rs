@@ -1,16 +1,14 @@
 //! `radiosity assemble`: the matrix K as a NumPy file.
 
-use radiosity::assembly::Assembly;
 use radiosity::error::{Error, Result};
 use radiosity::operator::OperatorChoice;
-use radiosity::pipeline::{self, Problem, RunConfig};
-use radiosity::progress::Silent;
+use radiosity::pipeline;
 
-use super::args::{AssembleArgs, backend};
+use super::args::AssembleArgs;
 
 pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
     let mut config = args.geometry.config()?;
-    config.backend = backend(args.device.backend, args.device.precision);
+    config.backend = args.device.backend();
     args.operator.apply(&mut config)?;
     if args.output.is_none() && args.save.is_none() {
         return Err(Error::InvalidParameter {
@@ -52,10 +50,4 @@ pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// K for `config` on its backend.
-pub(crate) fn assemble_without_progress(config: &RunConfig, problem: &Problem) -> Result<Assembly> {
-    let (assembled, _) = pipeline::assemble_on(config.backend, problem, &config.assembly, &Silent)?;
-    Ok(assembled)
 }

@@ -2,10 +2,10 @@
 
 use radiosity::error::{Error, Result};
 use radiosity::operator::OperatorChoice;
-use radiosity::pipeline::{self, Backend};
+use radiosity::pipeline::{self, Backend, BackendName};
 use radiosity::report;
 
-use super::args::{BackendArg, BenchArgs, backend};
+use super::args::BenchArgs;
 use super::ranks::is_root;
 
 pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
@@ -14,21 +14,18 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     let named = match &args.backends {
         Some(named) => named.clone(),
         // Under mpirun the ranks build on their CPUs.
-        None if config.ranks.is_some() => vec![BackendArg::Cpu],
-        None => {
-            match radiosity::gpu::context_for(backend(BackendArg::Gpu, args.precision).precision())
-            {
-                Ok(_) => vec![BackendArg::Cpu, BackendArg::Gpu],
-                Err(e) => {
-                    eprintln!("note: the GPU is left out: {e}");
-                    vec![BackendArg::Cpu]
-                }
+        None if config.ranks.is_some() => vec![BackendName::Cpu],
+        None => match radiosity::gpu::context_for(args.precision) {
+            Ok(_) => vec![BackendName::Cpu, BackendName::Gpu],
+            Err(e) => {
+                eprintln!("note: the GPU is left out: {e}");
+                vec![BackendName::Cpu]
             }
-        }
+        },
     };
     let mut backends: Vec<Backend> = Vec::new();
     for &b in &named {
-        let b = backend(b, args.precision);
+        let b = Backend::named(b, args.precision);
         if backends.iter().any(|x| x.name() == b.name()) {
             return Err(Error::InvalidParameter {
                 name: "backends",

@@ -6,8 +6,6 @@ use radiosity::error::Result;
 use radiosity::gpu::Precision;
 use radiosity::report;
 
-use super::args::PrecisionArg;
-
 /// What `gpu-check` prints.
 #[derive(Serialize)]
 pub(crate) struct GpuCheck {
@@ -15,11 +13,7 @@ pub(crate) struct GpuCheck {
     functions: Vec<radiosity::gpu::math::UlpReport>,
 }
 
-pub(crate) fn gpu_check(samples: usize, precision: PrecisionArg, json: Option<&str>) -> Result<()> {
-    let precision = match precision {
-        PrecisionArg::F64 => Precision::F64,
-        PrecisionArg::F32 => Precision::F32,
-    };
+pub(crate) fn gpu_check(samples: usize, precision: Precision, json: Option<&str>) -> Result<()> {
     // Measured without the f64 gate of `context_for`: this is the table that explains a refusal.
     let ctx = radiosity::gpu::capable_context(precision)?;
     let functions = radiosity::gpu::math::measure(ctx, precision, samples)?;

@@ -7,7 +7,6 @@ use radiosity::pipeline::{self, Problem};
 use radiosity::report;
 
 use super::args::SolveArgs;
-use super::assemble::assemble_without_progress;
 
 /// What `inspect` prints.
 #[derive(Serialize)]
@@ -74,22 +73,11 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
     let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, disc, planner, .. } = &problem;
     super::output::print_notes(scene);
-    let started = std::time::Instant::now();
-    let dof = disc.dof();
-    let (row_sums, p, blocks, op) = if pipeline::compresses(&config, &problem) {
-        let assembler =
-            pipeline::Assembler::new(config.backend, disc.method, config.assembly.quadrature)?;
-        let (op, _) = pipeline::build_compressed(&config, &assembler, &problem)?;
-        (op.apply(&vec![1.0; dof]), op.pairs, Some(op.stats), Some(op))
-    } else {
-        let assembled = assemble_without_progress(&config, &problem)?;
-        let sums = (0..dof).map(|i| assembled.matrix.row(i).iter().sum::<f64>()).collect();
-        (sums, assembled.stats, None, None)
-    };
-    let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
-    let memory_estimate_bytes =
-        op.as_ref().and_then(|op| op.memory_estimate.as_ref()).map(|e| e.peak_bytes());
-    let distributed = op.and_then(|op| pipeline::distributed_report(&op, setup_seconds));
+    // The operator `solve` would use, decided and built where `solve` builds it.
+    let built = pipeline::build_operator(&config, &problem)?;
+    let row_sums = built.apply(&vec![1.0; disc.dof()])?;
+    let summary = built.summary(&config);
+    let distributed = built.distributed_report();
     // Every rank of a distributed run holds the row sums; rank 0 prints them.
     if !super::ranks::is_root() {
         return Ok(());
@@ -112,20 +100,20 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         dof: disc.dof(),
         row_sum_min: lo,
         row_sum_max: hi,
-        pairs_total: p.total,
-        pairs_skipped: p.skipped(),
-        pairs_full: p.full,
-        pairs_partial: p.partial,
-        pairs_same_plane: p.same_plane,
-        pairs_facing_away: p.facing_away,
-        pairs_hidden: p.hidden,
+        pairs_total: summary.pairs.total,
+        pairs_skipped: summary.pairs.skipped(),
+        pairs_full: summary.pairs.full,
+        pairs_partial: summary.pairs.partial,
+        pairs_same_plane: summary.pairs.same_plane,
+        pairs_facing_away: summary.pairs.facing_away,
+        pairs_hidden: summary.pairs.hidden,
         occluders_possible: planner.has_occlusion(),
-        setup_seconds,
-        operator: if blocks.is_some() { "compressed" } else { "dense" },
-        compression_tolerance: blocks.is_some().then_some(config.compression.tolerance),
-        operator_bytes: blocks.map_or(8 * (dof as u64) * (dof as u64), |b| b.operator_bytes),
-        memory_estimate_bytes,
-        blocks,
+        setup_seconds: summary.setup_seconds,
+        operator: summary.operator,
+        compression_tolerance: summary.compression_tolerance,
+        operator_bytes: summary.operator_bytes,
+        memory_estimate_bytes: summary.memory_estimate_bytes,
+        blocks: summary.blocks,
         peak_rss_bytes: pipeline::peak_rss_bytes(),
         distributed,
     };

@@ -19,7 +19,8 @@ pub(crate) mod viewfactors;
 
 use clap::{Parser, Subcommand};
 
-use args::{AssembleArgs, BenchArgs, PrecisionArg, SolveArgs, StudyArgs, ViewFactorArgs};
+use args::{AssembleArgs, BenchArgs, SolveArgs, StudyArgs, ViewFactorArgs, named};
+use radiosity::gpu::Precision;
 
 #[derive(Parser)]
 #[command(
@@ -66,8 +67,8 @@ pub(crate) enum Command {
         #[arg(long, default_value_t = 1_000_000)]
         samples: usize,
         /// Precision of the math library to test
-        #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
-        precision: PrecisionArg,
+        #[arg(long, value_parser = named::<Precision>(), default_value_t = Precision::F64)]
+        precision: Precision,
         /// Write JSON to PATH (`-` for standard output) instead of text
         #[arg(long, value_name = "PATH")]
         json: Option<String>,

@@ -149,7 +149,7 @@ fn print_transfers(t: &pipeline::DeviceTransfers) {
 pub(crate) fn run(args: &SolveArgs) -> Result<()> {
     let config = args.config()?;
     // Checked before the solve, which may take long.
-    let picture = (args.colour.up(&config.scene)?, args.colour.tone());
+    let picture = (args.colour.up(&config.scene)?, args.colour.tone);
     let run = pipeline::run_keeping_mesh(&config)?;
     // Every rank of a distributed run holds the solution; rank 0 writes and prints it.
     if !is_root() {

@@ -1,13 +1,13 @@
 //! `radiosity study`: the paper's tables and figures, and the stability studies.
 
 use radiosity::error::{Error, Result};
-use radiosity::pipeline::SceneSource;
+use radiosity::pipeline::{BackendName, SceneSource};
 use radiosity::report;
 use radiosity::report::TableFormat;
 use radiosity::study::compression::{CompressionSeries, TOLERANCES, run_compression};
 use radiosity::study::{StudyDevice, StudyOptions};
 
-use super::args::{BackendArg, StudyArgs, backend};
+use super::args::StudyArgs;
 use super::output::emit;
 use super::ranks::{is_root, world};
 
@@ -31,10 +31,10 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             });
         }
     }
-    let device = match (*device, backend(BackendArg::Gpu, *precision)) {
-        (None, _) => StudyDevice::Auto,
-        (Some(BackendArg::Cpu), _) => StudyDevice::Cpu,
-        (Some(BackendArg::Gpu), b) => StudyDevice::Gpu(b.precision()),
+    let device = match *device {
+        None => StudyDevice::Auto,
+        Some(BackendName::Cpu) => StudyDevice::Cpu,
+        Some(BackendName::Gpu) => StudyDevice::Gpu(*precision),
     };
     let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
     match id {

@@ -17,6 +17,17 @@ use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::visibility::Viewer;
 
+crate::vocabulary::named_options! {
+    /// The collocation methods by name; [`Method`] carries the linear method's α.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum MethodName as "method" {
+        /// Piecewise constant, nodes at the centroids (sec. 2.4)
+        Centroid = "centroid",
+        /// Piecewise linear, three nodes per element at parameter alpha (sec. 2.5)
+        Linear = "linear",
+    }
+}
+
 /// The collocation method.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Method {
@@ -49,12 +60,31 @@ impl Method {
         }
     }
 
+    /// The method named `name`, with α for the linear method (the paper's 1/6 where `alpha`
+    /// is `None`); α given to the centroid method is refused.
+    pub fn named(name: MethodName, alpha: Option<f64>) -> Result<Self> {
+        match (name, alpha) {
+            (MethodName::Centroid, None) => Ok(Self::Centroid),
+            (MethodName::Centroid, Some(alpha)) => Err(Error::InvalidParameter {
+                name: "alpha",
+                value: alpha.to_string(),
+                reason: "alpha belongs to the linear method".into(),
+            }),
+            (MethodName::Linear, alpha) => Self::linear(alpha.unwrap_or(Self::PAPER_ALPHA)),
+        }
+    }
+
+    /// The method's name.
+    pub fn kind(&self) -> MethodName {
+        match self {
+            Self::Centroid => MethodName::Centroid,
+            Self::Linear { .. } => MethodName::Linear,
+        }
+    }
+
     /// Command-line name.
     pub fn name(&self) -> &'static str {
-        match self {
-            Self::Centroid => "centroid",
-            Self::Linear { .. } => "linear",
-        }
+        crate::vocabulary::Named::name(self.kind())
     }
 
     /// α for the linear method.

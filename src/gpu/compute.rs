@@ -198,8 +198,8 @@ pub fn copy_mapped(
             .get_mapped_range()
             .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
         let bytes = &view[..size as usize];
-        // On all cores: one thread copying out of mapped memory took most of the time of a GPU
-        // assembly on a real card (docs/gpu.md).
+        // On all cores: copying out of mapped memory is bound by bandwidth, and on one thread it
+        // would take most of a GPU assembly's time on a real card (docs/gpu.md).
         match precision {
             Precision::F64 => {
                 let values: &[f64] = bytemuck::cast_slice(bytes);

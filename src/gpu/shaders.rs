@@ -1,14 +1,17 @@
 //! The WGSL sources and how they are joined: `alias real = f64|f32;`, then the math library of that
 //! precision, then the kernel. This is the only place shader text is assembled.
 
-/// Floating-point precision of a GPU kernel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// Double precision (needs `SHADER_F64`); software transcendentals.
-    F64,
-    /// Single precision, with the f32 math library of `shaders/math_f32.wgsl`.
-    F32,
+crate::vocabulary::named_options! {
+    /// Floating-point precision of a GPU kernel (f64 needs `SHADER_F64` and uses software
+    /// transcendentals; f32 the math library of `shaders/math_f32.wgsl`).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Precision as "precision" {
+        /// Double precision
+        F64 = "f64",
+        /// Single precision
+        F32 = "f32",
+    }
 }
 
 impl Precision {
@@ -17,14 +20,6 @@ impl Precision {
         match self {
             Self::F64 => 8,
             Self::F32 => 4,
-        }
-    }
-
-    /// Name on the command line and in reports.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::F64 => "f64",
-            Self::F32 => "f32",
         }
     }
 }

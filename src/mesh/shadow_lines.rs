@@ -24,14 +24,17 @@ pub enum Sources {
     All,
 }
 
-/// How far a shadow line reaches.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum LineExtent {
-    /// The event segments only.
-    Segments,
-    /// Each event's line across the whole face.
-    Chords,
+crate::vocabulary::named_options! {
+    /// How far a shadow line of `--mesh auto-discontinuity` reaches.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum LineExtent as "shadow-lines" {
+        /// Only where the visibility events are (far fewer elements in scenes with many
+        /// occluders)
+        Segments = "segments",
+        /// Each shadow line extended across its face (as the paper's mesh)
+        Chords = "chords",
+    }
 }
 
 /// A segment in a face's 2-D coordinates.

@@ -6,18 +6,20 @@ use serde::Serialize;
 use crate::assembly::{Problem, gib, memory_allowance};
 use crate::error::{Error, Result};
 
-/// Which operator a run stores.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum OperatorChoice {
-    /// Dense up to [`AUTO_COMPRESSED_ABOVE`] unknowns; beyond, compressed unless the faces are
-    /// too small for its blocks ([`OperatorChoice::decide`]).
-    #[default]
-    Auto,
-    /// The dense matrix: every entry stored (the reference).
-    Dense,
-    /// Low-rank blocks far away, exact blocks near.
-    Compressed,
+crate::vocabulary::named_options! {
+    /// Which operator a run stores; `auto` is dense up to [`AUTO_COMPRESSED_ABOVE`] unknowns
+    /// and beyond compressed unless the faces are too small for its blocks
+    /// ([`OperatorChoice::decide`]).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum OperatorChoice as "operator" {
+        /// Compressed for large problems whose faces hold enough elements, else dense
+        Auto = "auto" default,
+        /// Every entry stored (the reference)
+        Dense = "dense",
+        /// Exact blocks near, low-rank blocks far
+        Compressed = "compressed",
+    }
 }
 
 /// What the automatic choice of operator looks at.

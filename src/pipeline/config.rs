@@ -84,7 +84,7 @@ pub enum StudyDevice {
 }
 
 /// Where the scene comes from.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum SceneSource {
     /// A built-in scene.
     Builtin(BuiltinScene),
@@ -94,6 +94,8 @@ pub enum SceneSource {
     /// `city:NXxNY`: the generated city of NX x NY buildings ([`crate::scene::city`]), or with
     /// `:lit` under an emitting sky panel ([`crate::scene::lit_city`]).
     City(usize, usize, bool),
+    /// A scene built already (from arrays, by the Python package).
+    Given(std::sync::Arc<Scene>),
 }
 
 impl SceneSource {
@@ -126,6 +128,7 @@ impl SceneSource {
             Self::File(path, import) => crate::scene::load_with(path, *import),
             Self::City(nx, ny, false) => crate::scene::city(*nx, *ny),
             Self::City(nx, ny, true) => crate::scene::lit_city(*nx, *ny),
+            Self::Given(scene) => Ok(Scene::clone(scene)),
         }
     }
 

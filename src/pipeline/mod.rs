@@ -10,6 +10,7 @@ mod bands;
 mod cases;
 mod config;
 mod operator;
+mod options;
 mod report;
 mod saved;
 
@@ -20,6 +21,7 @@ pub use operator::{
     BuiltOperator, DeviceTransfers, OperatorSummary, TimedAssembly, build_compressed,
     build_operator, compressed_on_device, compresses, distributed_report,
 };
+pub use options::{BackendName, MeshName, RunOptions};
 pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
 pub use saved::{OperatorHeader, load_operator, save_operator};
 

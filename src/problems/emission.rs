@@ -172,7 +172,7 @@ mod tests {
     use super::*;
     use crate::discretization::{Discretization, Method};
     use crate::mesh::{Mesh, MeshKind};
-    use crate::problems::TrueSolution;
+    use crate::problems::{SolutionName, TrueSolution};
     use crate::scene::{SurfaceParameters, five_piece, four_piece};
 
     fn setup(scene: &Scene, refine: u32) -> (Discretization, PairPlanner) {
@@ -259,7 +259,9 @@ mod tests {
             .on_faces(&crate::scene::cube().unwrap(), &SurfaceParameters::default())
             .unwrap_err();
         assert!(e.to_string().contains("cube"), "{e}");
-        assert!(TrueSolution::parse("parabola", None, None).is_err());
-        assert!(TrueSolution::parse("edge", Some(-1.0), None).is_err());
+        assert!(TrueSolution::named(SolutionName::Edge, Some(-1.0), None).is_err());
+        assert!(TrueSolution::named(SolutionName::Edge, None, Some(1.0)).is_err());
+        assert!(TrueSolution::named(SolutionName::None, Some(1.0), None).is_err());
+        assert_eq!(TrueSolution::named(SolutionName::None, None, None).unwrap(), None);
     }
 }

@@ -9,4 +9,4 @@ mod solutions;
 
 pub use cases::EmissionCases;
 pub use emission::{Emission, EmissionOptions, emission_at};
-pub use solutions::{FaceFunction, TrueSolution};
+pub use solutions::{FaceFunction, SolutionName, TrueSolution};

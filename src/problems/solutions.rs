@@ -8,6 +8,21 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::scene::{Scene, SurfaceParameters};
 
+crate::vocabulary::named_options! {
+    /// The true solutions by name; [`TrueSolution`] carries their parameters.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum SolutionName as "solution" {
+        /// No true solution: the faces' own emission
+        None = "none",
+        /// u = x^2 + y^2 (3.2)
+        X2y2 = "x2y2",
+        /// The shadow solution (3.3), with beta and gamma
+        Shadow = "shadow",
+        /// The edge solution (3.4), with beta
+        Edge = "edge",
+    }
+}
+
 /// A known solution u of the radiosity equation (paper sec. 3.2); rho = 1.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TrueSolution {
@@ -88,19 +103,34 @@ impl FaceFunction {
 impl TrueSolution {
     /// Command-line name: `x2y2`, `shadow`, `edge`.
     pub fn name(&self) -> &'static str {
-        match self {
-            Self::X2Y2 => "x2y2",
-            Self::Shadow { .. } => "shadow",
-            Self::Edge { .. } => "edge",
-        }
+        crate::vocabulary::Named::name(match self {
+            Self::X2Y2 => SolutionName::X2y2,
+            Self::Shadow { .. } => SolutionName::Shadow,
+            Self::Edge { .. } => SolutionName::Edge,
+        })
     }
 
-    /// Parses a name with the given parameters (β, γ as applicable).
-    pub fn parse(name: &str, beta: Option<f64>, gamma: Option<f64>) -> Result<Self> {
+    /// The solution named `name` with the given parameters (β, γ as applicable); `none` is no
+    /// solution. β and γ given to a solution without them are refused.
+    pub fn named(
+        name: SolutionName,
+        beta: Option<f64>,
+        gamma: Option<f64>,
+    ) -> Result<Option<Self>> {
         let sol = match name {
-            "x2y2" => Self::X2Y2,
-            "shadow" => Self::Shadow { beta: beta.unwrap_or(1.0), gamma: gamma.unwrap_or(1.5) },
-            "edge" => {
+            SolutionName::None | SolutionName::X2y2 if beta.is_some() || gamma.is_some() => {
+                return Err(Error::InvalidParameter {
+                    name: "beta/gamma",
+                    value: "given".into(),
+                    reason: "beta and gamma belong to the shadow or edge solution".into(),
+                });
+            }
+            SolutionName::None => return Ok(None),
+            SolutionName::X2y2 => Self::X2Y2,
+            SolutionName::Shadow => {
+                Self::Shadow { beta: beta.unwrap_or(1.0), gamma: gamma.unwrap_or(1.5) }
+            }
+            SolutionName::Edge => {
                 if let Some(g) = gamma {
                     return Err(Error::InvalidParameter {
                         name: "gamma",
@@ -112,16 +142,9 @@ impl TrueSolution {
                 }
                 Self::Edge { beta: beta.unwrap_or(0.5) }
             }
-            _ => {
-                return Err(Error::UnknownName {
-                    kind: "true solution",
-                    name: name.into(),
-                    expected: "x2y2, shadow, edge".into(),
-                });
-            }
         };
         sol.validate()?;
-        Ok(sol)
+        Ok(Some(sol))
     }
 
     fn validate(&self) -> Result<()> {

@@ -108,15 +108,17 @@ fn side_is_open(field: &SolutionField, side: DVec3, area: f64, depth: f64) -> bo
 /// The default direction of [`Camera::overview`] in a z-up scene: from the south-west, above.
 pub const DEFAULT_VIEW: DVec3 = DVec3::new(-0.6, -1.0, 0.8);
 
-/// How values become colours.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Tone {
-    /// Proportional to the value, from the smallest to the largest (grey) or from 0 (colour).
-    Linear,
-    /// Proportional to the logarithm, over three decades below the largest value.
-    Log,
-    /// The linear scale to the power 1/2.2 (as a display's gamma): dark values spread out.
-    Gamma,
+crate::vocabulary::named_options! {
+    /// How values become colours.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Tone as "tone" {
+        /// Proportional to the value, from the smallest to the largest (grey) or from 0 (colour)
+        Linear = "linear",
+        /// Proportional to the logarithm, over three decades below the largest value
+        Log = "log",
+        /// The linear scale to the power 1/2.2 (as a display's gamma): dark values spread out
+        Gamma = "gamma",
+    }
 }
 
 /// Decades below the largest value that [`Tone::Log`] shows.
@@ -125,15 +127,6 @@ const LOG_DECADES: f64 = 3.0;
 const GAMMA: f64 = 2.2;
 
 impl Tone {
-    /// Name, as on the command line and in the colour bar.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Linear => "linear",
-            Self::Log => "log",
-            Self::Gamma => "gamma",
-        }
-    }
-
     /// The range actually shown for values spanning `(lo, hi)`: a log scale starts three decades
     /// below `hi` (or at `lo` if higher), and shows nothing of values <= 0.
     fn span(self, (lo, hi): (f64, f64)) -> (f64, f64) {

@@ -24,17 +24,18 @@ pub use system::ReducedSystem;
 use crate::assembly::CollocationMatrix;
 use crate::error::{Error, Result};
 
-/// Which solver to use.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SolverChoice {
-    /// LU up to [`LU_LIMIT`] unknowns, GMRES beyond.
-    #[default]
-    Auto,
-    /// Dense LU with partial pivoting.
-    Lu,
-    /// Restarted GMRES.
-    Iterative,
+crate::vocabulary::named_options! {
+    /// Which solver to use; `auto` is LU up to [`LU_LIMIT`] unknowns, GMRES beyond.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum SolverChoice as "solver" {
+        /// Dense LU for small problems, GMRES beyond (and for a compressed operator)
+        Auto = "auto" default,
+        /// Dense LU with partial pivoting
+        Lu = "lu",
+        /// Restarted GMRES
+        Iterative = "iterative",
+    }
 }
 
 /// Largest system solved by LU under [`SolverChoice::Auto`]: LU costs (2/3) n³ flops and a second

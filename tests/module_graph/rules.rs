@@ -38,6 +38,7 @@ pub const ALLOWED_CYCLES: &[&[&str]] = &[
 /// (ARCHITECTURE.md's table, which a test compares with this).
 pub const LAYERS: &[&[&str]] = &[
     &["error", "progress", "distributed", "geometry", "quadrature"],
+    &["vocabulary"],
     &["kernels", "scene"],
     &["visibility"],
     &["mesh"],

@@ -1,19 +1,13 @@
 //! Colour bands and how the picture is drawn: `ColourArgs`, its tone map and up direction.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use radiosity::error::{Error, Result};
-use radiosity::pipeline::SceneSource;
+use radiosity::pipeline::{RunOptions, SceneSource};
 use radiosity::report::Tone;
 
+use super::named::named;
 use super::values::parse_point;
-
-#[derive(Clone, Copy, ValueEnum)]
-pub(crate) enum ToneArg {
-    Linear,
-    Log,
-    Gamma,
-}
 
 /// Colour bands, and how the picture is drawn.
 #[derive(Args)]
@@ -21,29 +15,20 @@ pub(crate) struct ColourArgs {
     /// Solve per colour band on one assembled operator, each with its channel of rho and E (OBJ:
     /// Kd, Ke; grey faces the same in every band): rgb, a list such as r,g, or grey (one solve
     /// with the channels' means)
-    #[arg(long, value_name = "BANDS", default_value = "grey")]
+    #[arg(long, value_name = "BANDS", default_value_t = RunOptions::default().bands)]
     pub(crate) bands: String,
     /// The direction that is up in the picture [default: 0,1,0 for OBJ files, 0,0,1 otherwise]
     #[arg(long, value_name = "X,Y,Z")]
     pub(crate) up: Option<String>,
-    /// How u becomes colour: linear, log (three decades) or gamma (2.2)
-    #[arg(long, value_enum, default_value_t = ToneArg::Gamma)]
-    pub(crate) tone: ToneArg,
+    /// How u becomes colour
+    #[arg(long, value_parser = named::<Tone>(), default_value_t = Tone::Gamma)]
+    pub(crate) tone: Tone,
 }
 
 impl ColourArgs {
     /// The channels of --bands (empty: grey).
     pub(crate) fn channels(&self) -> Result<Vec<usize>> {
         radiosity::scene::parse_bands(&self.bands)
-    }
-
-    /// The tone map of --tone.
-    pub(crate) fn tone(&self) -> Tone {
-        match self.tone {
-            ToneArg::Linear => Tone::Linear,
-            ToneArg::Log => Tone::Log,
-            ToneArg::Gamma => Tone::Gamma,
-        }
     }
 
     /// The up direction of --up, or the default for `scene`.

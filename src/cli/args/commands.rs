@@ -1,10 +1,15 @@
 //! Each command's own arguments: the groups of flags it flattens, and its own flags.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
+use radiosity::gpu::Precision;
+use radiosity::pipeline::{BackendName, RunOptions};
+use radiosity::problems::SolutionName;
+use radiosity::solve::SolverChoice;
 
 use super::colour::ColourArgs;
-use super::device::{BackendArg, DeviceArgs, PrecisionArg};
+use super::device::DeviceArgs;
 use super::geometry::{GeometryArgs, SceneArgs};
+use super::named::named;
 use super::operator::OperatorArgs;
 use super::outputs::OutputArgs;
 
@@ -18,11 +23,11 @@ pub(crate) struct StudyArgs {
     pub(crate) max_n: Option<usize>,
     /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
     /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
-    #[arg(long, value_enum)]
-    pub(crate) backend: Option<BackendArg>,
+    #[arg(long, value_parser = named::<BackendName>())]
+    pub(crate) backend: Option<BackendName>,
     /// Precision of the GPU kernels with --backend gpu
-    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
-    pub(crate) precision: PrecisionArg,
+    #[arg(long, value_parser = named::<Precision>(), default_value_t = Precision::F64)]
+    pub(crate) precision: Precision,
     /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
     #[arg(long, value_name = "DIR", default_value = "figures")]
     pub(crate) figures: String,
@@ -44,13 +49,6 @@ pub(crate) struct StudyArgs {
     pub(crate) shadowed_blocks: bool,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum SolverArg {
-    Auto,
-    Lu,
-    Iterative,
-}
-
 #[derive(Args)]
 pub(crate) struct SolveArgs {
     #[command(flatten)]
@@ -60,24 +58,28 @@ pub(crate) struct SolveArgs {
     /// Precision of the dense matrix kept in the GPU's memory (`--backend gpu --solver
     /// iterative`): f32 halves its memory and the products' reads; the error it adds is
     /// measured on every entry and reported
-    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
-    pub(crate) storage: PrecisionArg,
+    #[arg(long, value_parser = named::<Precision>(), default_value_t = Precision::F64)]
+    pub(crate) storage: Precision,
     #[command(flatten)]
     pub(crate) operator: OperatorArgs,
-    /// True solution (x2y2, shadow, edge, none); default x2y2 on the paper's surfaces, none elsewhere
-    #[arg(long)]
-    pub(crate) solution: Option<String>,
+    /// True solution [default: x2y2 on the paper's surfaces, none elsewhere]
+    #[arg(long, value_parser = named::<SolutionName>())]
+    pub(crate) solution: Option<SolutionName>,
     /// beta of the shadow (3.3) or edge (3.4) solution
     #[arg(long)]
     pub(crate) beta: Option<f64>,
     /// gamma of the shadow solution (3.3)
     #[arg(long)]
     pub(crate) gamma: Option<f64>,
-    /// Linear solver: LU up to 6000 unknowns and GMRES beyond (auto), or forced
-    #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
-    pub(crate) solver: SolverArg,
+    /// Linear solver (auto: LU up to 6000 unknowns, GMRES beyond)
+    #[arg(
+        long,
+        value_parser = named::<SolverChoice>(),
+        default_value_t = RunOptions::default().solver
+    )]
+    pub(crate) solver: SolverChoice,
     /// Relative residual ||E - (I - K) u||_2 / ||E||_2 at which the iterative solver stops
-    #[arg(long, default_value_t = radiosity::solve::DEFAULT_TOLERANCE)]
+    #[arg(long, default_value_t = RunOptions::default().tolerance)]
     pub(crate) tolerance: f64,
     /// Read the operator from this file (written by `assemble --save`) instead of building it;
     /// refused if it was built for another scene, mesh, method or tolerance
@@ -109,11 +111,11 @@ pub(crate) struct BenchArgs {
     pub(crate) operator: OperatorArgs,
     /// Backends to run, comma separated [default: cpu, and gpu where an adapter can run the
     /// precision asked for]
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub(crate) backends: Option<Vec<BackendArg>>,
+    #[arg(long, value_parser = named::<BackendName>(), value_delimiter = ',')]
+    pub(crate) backends: Option<Vec<BackendName>>,
     /// Precision of the GPU kernels
-    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
-    pub(crate) precision: PrecisionArg,
+    #[arg(long, value_parser = named::<Precision>(), default_value_t = Precision::F64)]
+    pub(crate) precision: Precision,
     /// Repetitions per backend (the best time counts)
     #[arg(long, default_value_t = 3)]
     pub(crate) repeats: usize,

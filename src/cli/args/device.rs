@@ -1,26 +1,33 @@
-//! Where the matrix is assembled and in which precision: `DeviceArgs` and its choices.
+//! Where the matrix is assembled and in which precision: `DeviceArgs`.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
+use radiosity::gpu::Precision;
+use radiosity::pipeline::{Backend, BackendName, RunOptions};
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum BackendArg {
-    Cpu,
-    Gpu,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum PrecisionArg {
-    F64,
-    F32,
-}
+use super::named::named;
 
 /// Where the matrix is assembled.
 #[derive(Args)]
 pub(crate) struct DeviceArgs {
     /// Where the collocation matrix is assembled
-    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
-    pub(crate) backend: BackendArg,
+    #[arg(
+        long,
+        value_parser = named::<BackendName>(),
+        default_value_t = RunOptions::default().backend
+    )]
+    pub(crate) backend: BackendName,
     /// Precision of the GPU kernels
-    #[arg(long, value_enum, default_value_t = PrecisionArg::F64)]
-    pub(crate) precision: PrecisionArg,
+    #[arg(
+        long,
+        value_parser = named::<Precision>(),
+        default_value_t = RunOptions::default().precision
+    )]
+    pub(crate) precision: Precision,
+}
+
+impl DeviceArgs {
+    /// The backend these arguments name.
+    pub(crate) fn backend(&self) -> Backend {
+        Backend::named(self.backend, self.precision)
+    }
 }

@@ -6,13 +6,13 @@ mod commands;
 mod device;
 mod geometry;
 mod import;
+mod named;
 mod operator;
 mod outputs;
 mod run_config;
 mod values;
 
 pub(crate) use commands::{AssembleArgs, BenchArgs, SolveArgs, StudyArgs, ViewFactorArgs};
-pub(crate) use device::{BackendArg, PrecisionArg};
+pub(crate) use named::named;
 pub(crate) use outputs::OutputArgs;
-pub(crate) use run_config::backend;
 pub(crate) use values::parse_point;

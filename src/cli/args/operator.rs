@@ -1,18 +1,25 @@
 //! Which operator is stored, how it is compressed, and the memory the run may hold:
 //! `OperatorArgs`.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
+use radiosity::operator::OperatorChoice;
+use radiosity::pipeline::RunOptions;
+
+use super::named::named;
 
 /// Which operator to store, and how to compress it.
 #[derive(Args)]
 pub(crate) struct OperatorArgs {
-    /// Operator: dense (every entry stored; the reference), compressed (exact blocks near,
-    /// low-rank blocks far), or auto (compressed above 12 000 unknowns)
-    #[arg(long, value_enum, default_value_t = OperatorArg::Auto)]
-    pub(crate) operator: OperatorArg,
+    /// Operator (auto: compressed above 12 000 unknowns)
+    #[arg(
+        long,
+        value_parser = named::<OperatorChoice>(),
+        default_value_t = RunOptions::default().operator
+    )]
+    pub(crate) operator: OperatorChoice,
     /// Relative error of each low-rank block of the compressed operator, in (0, 1): its cross
     /// approximation's, and half as much again from its recompression
-    #[arg(long, value_name = "T", default_value_t = radiosity::operator::DEFAULT_TOLERANCE)]
+    #[arg(long, value_name = "T", default_value_t = RunOptions::default().compression_tolerance)]
     pub(crate) compression_tolerance: f64,
     /// Compress the blocks that occluders or tangent planes cut once, without occlusion, and
     /// keep only their partly visible pairs exact: less memory and setup where faces hold many
@@ -56,11 +63,4 @@ fn parse_bytes(text: &str) -> std::result::Result<u64, String> {
         return Err(format!("'{text}': the limit must be at least one byte"));
     }
     Ok(bytes as u64)
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub(crate) enum OperatorArg {
-    Auto,
-    Dense,
-    Compressed,
 }

@@ -65,33 +65,40 @@ pub enum Side {
     Both,
 }
 
-/// What to do with a polygon that is not planar.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NonPlanar {
-    /// Split it into planar triangles (a quadrilateral along its shorter diagonal).
-    Split,
-    /// Refuse the scene, naming the face.
-    Refuse,
+crate::vocabulary::named_options! {
+    /// What to do with a polygon that is not planar.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum NonPlanar as "nonplanar" {
+        /// Into planar triangles: a quadrilateral along its shorter diagonal, others by ear
+        /// clipping
+        Split = "split",
+        /// Refuse the scene, naming the face
+        Refuse = "refuse",
+    }
 }
 
-/// What to do with a face that repeats an earlier one exactly (same vertices in the same cyclic
-/// order, same properties).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Duplicates {
-    /// Keep the first, drop the others.
-    Drop,
-    /// Keep all: the scene is refused as overlapping.
-    Refuse,
+crate::vocabulary::named_options! {
+    /// What to do with a face that repeats an earlier one exactly (same vertices in the same
+    /// cyclic order, same properties).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Duplicates as "duplicates" {
+        /// Keep the first, drop the others
+        Drop = "drop",
+        /// Keep all: the scene is refused as overlapping
+        Refuse = "refuse",
+    }
 }
 
-/// What to do with coplanar triangles of a mesh file that share edges.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Coplanar {
-    /// Join them into planar polygons for visibility, the triangles kept as the elements
+crate::vocabulary::named_options! {
+    /// What to do with coplanar triangles of a mesh file that share edges and properties
     /// ([`crate::scene::merge_coplanar`]).
-    Merge,
-    /// Keep every triangle a face of its own.
-    Keep,
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Coplanar as "coplanar" {
+        /// Join them into planar faces for visibility, the triangles kept as elements
+        Merge = "merge",
+        /// Every triangle a face of its own
+        Keep = "keep",
+    }
 }
 
 /// How a scene file's imperfections are treated; `None`: split, drop and merge for OBJ/STL
