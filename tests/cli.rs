@@ -137,6 +137,11 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
             &["solve", "--scene", "four-piece", "--alpha", "0.1"],
             "alpha belongs to the linear method",
         ),
+        (
+            &["solve", "--scene", "four-piece", "--solution", "x2y2", "--beta", "1"],
+            "beta and gamma belong to the shadow or edge solution",
+        ),
+        (&["solve", "--scene", "four-piece", "--mesh", "fine"], "[possible values: uniform,"),
         (&["solve", "--scene", "five-piece", "--solution", "edge", "--gamma", "1"], "no gamma"),
         (
             &["solve", "--scene", "four-piece", "--solution", "shadow", "--beta", "nan"],
