@@ -4,13 +4,11 @@
 //! within the areas times the estimate when both directions are integrated, and no entry is
 //! negative.
 
-mod common;
-
-use common::generated::{city, face, louvre, room_with_boxes, slivers_touching_walls};
 use glam::DVec3;
 use radiosity::mesh::{Mesh, MeshKind};
 use radiosity::progress::Silent;
 use radiosity::scene::Scene;
+use radiosity::scene::generated::{city, face, louvre, room_with_boxes, slivers_touching_walls};
 use radiosity::viewfactors::{ViewFactorOptions, ViewFactors, view_factors};
 use radiosity::visibility::PairPlanner;
 

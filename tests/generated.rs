@@ -4,15 +4,13 @@
 //! compressed operator's products are within ten times its tolerance of the dense matrix's, with
 //! and without shadowed blocks. (GPU = CPU on the same families: `tests/gpu.rs`.)
 
-mod common;
-
-use common::generated::{city, louvre, room_with_boxes, slivers_touching_walls};
 use radiosity::assembly::{AssemblyOptions, CollocationMatrix, Problem, assemble};
 use radiosity::discretization::{Discretization, Method};
 use radiosity::mesh::{Mesh, MeshKind};
 use radiosity::operator::{CompressedOperator, CompressionOptions};
 use radiosity::progress::Silent;
 use radiosity::scene::Scene;
+use radiosity::scene::generated::{city, louvre, room_with_boxes, slivers_touching_walls};
 
 fn problem(scene: &Scene, method: Method, refine: u32) -> Problem {
     let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();

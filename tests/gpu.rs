@@ -621,7 +621,7 @@ fn the_compressed_operator_on_the_device_gives_the_host_product() {
 fn generated_scenes_assemble_on_the_gpu_as_on_the_cpu() {
     // Closed rooms with floating boxes, louvres, cities of rotated buildings far from the origin
     // and slivers touching walls (tests/common/generated.rs), both methods.
-    use common::generated::{city, louvre, room_with_boxes, slivers_touching_walls};
+    use radiosity::scene::generated::{city, louvre, room_with_boxes, slivers_touching_walls};
     let Some(ctx) = gpu() else { return };
     let scenes = [room_with_boxes(0), louvre(1), city(0), slivers_touching_walls(2)];
     for scene in scenes {

@@ -665,3 +665,34 @@ fn a_triangle_soup_merged_into_faces_gives_the_solution_of_its_triangles() {
     let lit = a.iter().map(|x| x.1).fold(0.0, f64::max);
     assert!(lit > 0.5 && worst <= 1e-13, "largest difference {worst:.2e}");
 }
+
+#[test]
+fn the_estimates_study_checks_every_scene_both_ways() {
+    // One seed of each generated family and the cube, at one tolerance: each run against the
+    // reference, each pair once and each direction, and every promise kept.
+    let v = json(&[
+        "study",
+        "estimates",
+        "--seeds",
+        "1",
+        "--tolerances",
+        "1e-4",
+        "--scene",
+        "cube",
+        "--json",
+        "-",
+    ]);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 5 * 2, "{v}");
+    assert!(rows.iter().any(|r| r["scene"] == "cube"), "{v}");
+    for r in rows {
+        assert!(r["error_ratio"].as_f64().unwrap() <= 1.0, "{r}");
+        assert_eq!(r["negative"], 0, "{r}");
+    }
+    assert_eq!(v["failed"], 0, "{v}");
+    assert_eq!(v["reference_tolerance"], 1e-11, "{v}");
+    let (ok, _, stderr) = radiosity(&["study", "estimates", "--shadowed-blocks"]);
+    assert!(!ok && stderr.contains("--shadowed-blocks belongs to study compression"), "{stderr}");
+    let (ok, _, stderr) = radiosity(&["study", "table-3.1", "--seeds", "2"]);
+    assert!(!ok && stderr.contains("--seeds belongs to study estimates"), "{stderr}");
+}

@@ -5,6 +5,9 @@ use radiosity::pipeline::{BackendName, SceneSource};
 use radiosity::report;
 use radiosity::report::TableFormat;
 use radiosity::study::compression::{CompressionSeries, TOLERANCES, run_compression};
+use radiosity::study::estimates::{
+    DEFAULT_SEEDS, EstimateSeries, TOLERANCES as ESTIMATE_TOLERANCES, run_estimates,
+};
 use radiosity::study::{StudyDevice, StudyOptions};
 
 use super::args::StudyArgs;
@@ -17,19 +20,27 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
     let StudyArgs { id, max_n, backend: device, precision, figures, markdown, .. } = args;
     let (id, max_n, markdown) = (id.as_str(), *max_n, *markdown);
     let json = args.json.as_deref();
-    if id != "compression" {
-        let given = [
-            ("scene", args.scene.is_some()),
-            ("tolerances", args.tolerances.is_some()),
-            ("shadowed-blocks", args.shadowed_blocks),
-        ];
-        if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
-            return Err(Error::InvalidParameter {
-                name: flag,
-                value: id.to_string(),
-                reason: format!("--{flag} belongs to study compression"),
-            });
-        }
+    let given = [
+        ("scene", !args.scene.is_empty(), &["compression", "estimates"][..]),
+        ("tolerances", args.tolerances.is_some(), &["compression", "estimates"]),
+        ("shadowed-blocks", args.shadowed_blocks, &["compression"]),
+        ("seeds", args.seeds.is_some(), &["estimates"]),
+    ];
+    if let Some((flag, _, owners)) =
+        given.iter().find(|(_, given, owners)| *given && !owners.contains(&id))
+    {
+        return Err(Error::InvalidParameter {
+            name: flag,
+            value: id.to_string(),
+            reason: format!("--{flag} belongs to study {}", owners.join(" and study ")),
+        });
+    }
+    if id == "compression" && args.scene.len() > 1 {
+        return Err(Error::InvalidParameter {
+            name: "scene",
+            value: args.scene.join(", "),
+            reason: "study compression runs on one scene".into(),
+        });
     }
     let device = match *device {
         None => StudyDevice::Auto,
@@ -52,7 +63,7 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             };
             let ranks = world();
             let series = CompressionSeries {
-                scene: args.scene.as_deref().map(SceneSource::parse).transpose()?,
+                scene: args.scene.first().map(|s| SceneSource::parse(s)).transpose()?,
                 max_n,
                 tolerances: args.tolerances.clone().unwrap_or(TOLERANCES.to_vec()),
                 shadowed_blocks: args.shadowed_blocks,
@@ -65,6 +76,22 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             result.figures =
                 report::write_compression_figure(&result, std::path::Path::new(figures))?;
             emit(&result, json, || report::compression_table(&result, format))
+        }
+        "estimates" => {
+            let mut scenes = Vec::new();
+            for name in &args.scene {
+                scenes.push(SceneSource::parse(name)?);
+            }
+            if scenes.is_empty() {
+                scenes.push(SceneSource::City(4, 4, false));
+            }
+            let series = EstimateSeries {
+                seeds: args.seeds.unwrap_or(DEFAULT_SEEDS),
+                tolerances: args.tolerances.clone().unwrap_or(ESTIMATE_TOLERANCES.to_vec()),
+                scenes,
+            };
+            let result = run_estimates(&series, &*super::progress::on_stderr())?;
+            emit(&result, json, || report::estimate_table(&result, format))
         }
         "stiff" => {
             let result = radiosity::study::stability::run_stiff(device)?;

@@ -1,6 +1,7 @@
 //! Reports: plain-text tables for people, JSON for programs, plots and NumPy files.
 
 mod compression_study;
+mod estimate_study;
 mod json;
 mod nodes_csv;
 mod npy;
@@ -14,6 +15,7 @@ mod table;
 mod vtk;
 
 pub use compression_study::{compression_table, write_compression_figure};
+pub use estimate_study::estimate_table;
 pub use json::write_json;
 pub use nodes_csv::write_node_csv;
 pub use npy::write_npy;

@@ -5,6 +5,7 @@ mod builtin;
 mod city;
 mod face;
 mod file;
+pub mod generated;
 mod merge;
 
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};

@@ -3,6 +3,7 @@
 
 mod analysis;
 pub mod compression;
+pub mod estimates;
 mod specs;
 pub mod stability;
 

@@ -449,5 +449,6 @@ pub fn study_ids() -> Vec<&'static str> {
     let mut ids: Vec<&'static str> = StudySpec::all().iter().map(|s| s.id).collect();
     ids.extend(crate::study::stability::STUDY_IDS);
     ids.push("compression");
+    ids.push("estimates");
     ids
 }

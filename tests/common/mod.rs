@@ -2,8 +2,6 @@
 // Each test crate uses what it needs of this module.
 #![allow(dead_code)]
 
-pub mod generated;
-
 use std::process::Command;
 
 use serde_json::Value;

@@ -38,12 +38,18 @@ pub(crate) struct StudyArgs {
     #[arg(long)]
     pub(crate) markdown: bool,
     /// `study compression` on this scene (built-in name, city:NXxNY[:lit], or a .toml, .obj or
-    /// .stl file) instead of the five-piece surface: centroid method, the scene's own emission
+    /// .stl file) instead of the five-piece surface: centroid method, the scene's own emission;
+    /// `study estimates`: scenes checked beside the generated ones (repeatable) [default:
+    /// city:4x4]
     #[arg(long)]
-    pub(crate) scene: Option<String>,
-    /// `study compression`'s tolerances, comma-separated [default: 1e-3,1e-6,1e-9]
+    pub(crate) scene: Vec<String>,
+    /// `study compression`'s tolerances, comma-separated [default: 1e-3,1e-6,1e-9];
+    /// `study estimates`' [default: 1e-4,1e-6,1e-8]
     #[arg(long, value_delimiter = ',')]
     pub(crate) tolerances: Option<Vec<f64>>,
+    /// `study estimates`: seeds 0..N of each generated family [default: 8]
+    #[arg(long, value_name = "N")]
+    pub(crate) seeds: Option<u64>,
     /// `study compression` with shadowed blocks (as `solve --shadowed-blocks`)
     #[arg(long)]
     pub(crate) shadowed_blocks: bool,

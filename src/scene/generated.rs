@@ -1,14 +1,16 @@
 //! Scenes generated from seeds, for invariants checked on families nobody tuned for: slivers
-//! touching walls, closed rooms with floating boxes, louvres, small cities of rotated buildings.
+//! touching walls, closed rooms with floating boxes, louvres, small cities of rotated buildings
+//! (the tests' families, and `study estimates`'). The same seed gives the same scene.
 
 use glam::DVec3;
-use radiosity::scene::{Face, Scene};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
+use super::{Face, Scene};
+
 /// A face of rho 0.5.
 pub fn face(name: String, vertices: Vec<DVec3>) -> Face {
-    Face::new(name, vertices, 0.5).unwrap()
+    Face::new(name, vertices, 0.5).expect("a generated face is planar and not degenerate")
 }
 
 /// Ground slivers (aspect 10 to 60) each touched at a corner by a wall triangle whose foot leaves
@@ -43,7 +45,7 @@ pub fn slivers_touching_walls(seed: u64) -> Scene {
     }
     let name = |s: &str| format!("{s}-{seed}");
     Scene::new(name("slivers"), vec![face(name("sliver"), sliver), face(name("wall"), wall)])
-        .unwrap()
+        .expect("a generated scene is valid")
 }
 
 /// An axis-aligned box's faces from `lo` to `hi`, facing out (or in, for a room).
@@ -146,7 +148,7 @@ pub fn room_with_boxes(seed: u64) -> Scene {
         );
         faces.extend(box_faces(&format!("box{k}"), lo, lo + size, false));
     }
-    Scene::new(format!("room-{seed}"), faces).unwrap()
+    Scene::new(format!("room-{seed}"), faces).expect("a generated scene is valid")
 }
 
 /// A louvre of two-sided slats (a random count and tilt) between two facing walls.
@@ -180,7 +182,7 @@ pub fn louvre(seed: u64) -> Scene {
         faces.push(face(format!("slat{k}"), top));
         faces.push(face(format!("slat{k}.back"), bottom));
     }
-    Scene::new(format!("louvre-{seed}"), faces).unwrap()
+    Scene::new(format!("louvre-{seed}"), faces).expect("a generated scene is valid")
 }
 
 /// Buildings (boxes without bottoms, random heights, footprints and rotations) on a ground
@@ -215,5 +217,5 @@ pub fn city(seed: u64) -> Scene {
         faces
             .push(face(format!("b{k}-roof"), ring.iter().map(|&(x, y)| corner(x, y, h)).collect()));
     }
-    Scene::new(format!("city-{seed}"), faces).unwrap()
+    Scene::new(format!("city-{seed}"), faces).expect("a generated scene is valid")
 }
