@@ -268,6 +268,12 @@ fn bench_prints_per_backend_timings_and_differences_as_json() {
     }
     assert!(v["device"].as_str().unwrap().contains('('), "{v}");
     assert!(v["speedup"].as_f64().unwrap() > 0.0);
+    // The host's share: the GPU path's planning over the CPU's whole setup.
+    let planning = v["gpu"]["breakdown"]["planning_seconds"].as_f64().unwrap();
+    let share = v["host_share"].as_f64().unwrap();
+    assert!(
+        (share - planning / v["cpu"]["setup_seconds"].as_f64().unwrap()).abs() <= 1e-12 * share
+    );
     assert!(v["max_rel_diff"].as_f64().unwrap() <= 1e-12, "{v}");
     assert!(v["max_abs_diff"].as_f64().unwrap() <= 1e-12, "{v}");
 }

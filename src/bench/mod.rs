@@ -59,6 +59,9 @@ pub struct BenchReport {
     pub gpu: Option<BackendTiming>,
     /// CPU time / GPU time, when both ran.
     pub speedup: Option<f64>,
+    /// The GPU path's host planning over the CPU's whole setup, when both ran: at 1 or more the
+    /// host alone takes as long as the CPU's whole assembly, whatever the device's speed.
+    pub host_share: Option<f64>,
     /// Largest |K_cpu - K_gpu|, when both ran.
     pub max_abs_diff: Option<f64>,
     /// Largest |K_cpu - K_gpu| relative to the largest |K_cpu| entry of its row, when both ran.
@@ -122,6 +125,7 @@ pub fn run(
         cpu: None,
         gpu: None,
         speedup: None,
+        host_share: None,
         max_abs_diff: None,
         max_rel_diff: None,
         max_row_norm_rel_diff: None,
@@ -166,6 +170,7 @@ pub fn run(
     }
     if let (Some(c), Some(g)) = (&report.cpu, &report.gpu) {
         report.speedup = Some(c.setup_seconds / g.setup_seconds);
+        report.host_share = g.breakdown.map(|b| b.planning_seconds / c.setup_seconds);
         let cpu_index = backends.iter().position(|b| *b == Backend::Cpu).expect("cpu ran");
         let gpu_index = 1 - cpu_index;
         let diff = matrix_differences(&matrices[cpu_index], &matrices[gpu_index]);

@@ -95,6 +95,9 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
              row's largest entry {rel:.2e}, to the row's 1-norm {norm:.2e}"
         );
     }
+    if let Some(share) = r.host_share {
+        println!("host share (the GPU path's host planning / the CPU's setup): {share:.2}");
+    }
     Ok(())
 }
 
