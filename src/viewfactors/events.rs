@@ -240,8 +240,7 @@ impl<'a> EdgeTwins<'a> {
 /// upper edges an edge of two). The vertex–edge events through those are the earlier polygon's,
 /// the same planes with the same segments (an edge's reversal only turns the normal), found
 /// first; a second cut along a plane leaves the pieces whole or cuts off a sliver of rounding,
-/// so they are looked for once (tessellated city 5 x 5 without its sky at --tolerance 1e-6:
-/// every entry within 1.9e-13 of before, 4 012 fewer of 30.5 M evaluations). The pairs of
+/// so they are looked for once: a repeated cut changes no entry beyond rounding. The pairs of
 /// occluders that take one polygon or the other are skipped alike, since both bound the same
 /// solid.
 pub(super) struct SolidRepeats {

@@ -23,14 +23,13 @@ use crate::visibility::PairPlanner;
 /// corners are looked for from the piece's corners too (from the centroid alone, a louvre's
 /// slat beside a jamb missed the jamb edge's corner on the floor, and an entry was 7.3e-8 off
 /// at --tolerance 1e-8). A vertex behind T_j's plane or above the viewer's level makes no
-/// corner. Before, every such edge and vertex counted: the furnished room took 4.81 M
-/// evaluations at --tolerance 1e-6 and 8.60 M at 1e-8, now 2.91 M and 5.88 M, every entry as
-/// far from a run at 1e-10. A shadow edge that turns about a point that stays put crosses an
-/// edge of T_j through that point only, and makes no pole: an occluder edge in T_i's plane (a
-/// wall's foot, seen from the ground), or one whose line meets T_j's plane on the line of T_j's
-/// edge; nor does a viewer on a pole count where the shadow there runs beside T_j's edge,
-/// not along it. Each had put poles along the sides of ground triangles at buildings'
-/// corners, which then took the tanh-sinh rule.
+/// corner: it bounds no shadow edge that crosses T_j, and counting it would add poles, and
+/// evaluations, without changing an entry. A shadow edge that turns about a point that stays
+/// put crosses an edge of T_j through that point only, and makes no pole: an occluder edge in
+/// T_i's plane (a wall's foot, seen from the ground), or one whose line meets T_j's plane on
+/// the line of T_j's edge; nor does a viewer on a pole count where the shadow there runs
+/// beside T_j's edge, not along it. Counting them would put poles along the sides of ground
+/// triangles at buildings' corners and send those triangles to the costlier tanh-sinh rule.
 /// A corner or an edge that several faces of one convex solid share makes its poles once
 /// ([`SolidRepeats`]): they depend on the corner or the edge alone. `faces`: T_i's and T_j's.
 /// Returns each plane's unit normal, a point and the sine of its angle with T_i's plane.

@@ -46,9 +46,9 @@ impl Context<'_> {
     /// behind T_i's plane, that has a side on the line where the planes meet. A real direction
     /// pointing away from the side is no singularity (the side's angle times the unit normal of
     /// its plane with the point is analytic on its line beyond its ends). The rule then
-    /// converges as on a patch apart, as at an obstacle's corner: on the louvre room at
-    /// --tolerance 1e-6 such triangles took 1 000 points each by the tanh-sinh rule, and a
-    /// slat's triangle touching a jamb, the planes' line along its side, 5 506.
+    /// converges as on a patch apart, as at an obstacle's corner, where the tanh-sinh rule,
+    /// collapsed at the contact, would spend thousands of points on a direction that is no
+    /// singularity.
     pub(super) fn at_target_corner(
         &self,
         t: [DVec3; 3],
@@ -225,8 +225,8 @@ impl Context<'_> {
 /// order 2 a ground triangle at a building's corner had orders 3 and 4 agree while missing by
 /// 1.6e-6, from 6 every entry was within 6.4e-7 of a run at 1e-12; at the default 1e-10, from 6
 /// an entry of the louvre room was 2.2e-9 off, from 10 none more than with tanh-sinh there.
-/// Such misses are far below a looser tolerance, which takes fewer orders: at least 6 at every
-/// tolerance took city:4x4 at 1e-3 to 1.21 M evaluations, half of them at such corners.
+/// Such misses are far below a looser tolerance, which takes fewer orders: a fixed floor of 6
+/// would spend most of a loose run at such corners.
 pub(super) fn corner_order(tolerance: f64) -> usize {
     ((-tolerance.log10()).ceil() as usize).clamp(3, GAUSS_MAX - 1)
 }

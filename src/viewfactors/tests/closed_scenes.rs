@@ -28,8 +28,8 @@ fn box_around_a_floating_cube_rows_sum_to_one_and_are_reciprocal() {
 #[test]
 fn room_whose_ceiling_tiles_touch_parts_of_wall_elements_is_reciprocal() {
     // The furnished room without its furniture: each ceiling tile lies along part of a wall
-    // element's top edge, so the contact ends inside that edge (reciprocity 4e-3 before T_i
-    // was cut there; 6.6e-11 measured).
+    // element's top edge, so the contact ends inside that edge: T_i is cut where the contact
+    // ends, so that each piece's integrand is analytic.
     let scene = example_before("furnished-room.toml", "desk-bottom");
     assert_eq!(scene.faces.len(), 14);
     assert_closed_and_reciprocal(&compute(&scene, 0).1);
