@@ -70,9 +70,11 @@ fn the_sliver_touching_a_wall_at_a_corner_meets_its_tolerance() {
 
 #[test]
 fn slivers_touching_walls_at_a_corner_keep_their_estimates() {
-    // At 1e-8 one of these pairs is 1.0e-11 off under an estimate of 7e-12: not yet held.
-    for seed in 0..6 {
-        assert_estimates_hold(&slivers_touching_walls(seed), 0, &[1e-4, 1e-6]);
+    // Seed 6 is a wall touching the sliver 5.4 degrees off its foot, which the collapsed rule
+    // about the corner took with too small an estimate (seeds 4 and 5 too, at 1e-8): a narrow
+    // contact is the tanh-sinh rule's, checked by its quarters.
+    for seed in 0..8 {
+        assert_estimates_hold(&slivers_touching_walls(seed), 0, &[1e-4, 1e-6, 1e-8]);
     }
 }
 

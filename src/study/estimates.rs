@@ -56,6 +56,8 @@ pub struct EstimateRow {
     pub largest_error: f64,
     /// `largest_error` over the two runs' estimates: at most 1 where the promise holds.
     pub error_ratio: f64,
+    /// The elements (i, j) of the entry where `error_ratio` is reached.
+    pub worst_entry: (usize, usize),
     /// Reciprocity over what the estimate allows: at most 1 where it holds.
     pub reciprocity_ratio: f64,
     /// Entries below zero.
@@ -133,6 +135,7 @@ pub fn run_estimates(series: &EstimateSeries, progress: &dyn Progress) -> Result
                     error_estimate: f.error_estimate,
                     largest_error: check.largest_error,
                     error_ratio: check.error_ratio,
+                    worst_entry: check.worst_entry,
                     reciprocity_ratio: check.reciprocity_ratio,
                     negative: check.negative,
                     evaluations: f.evaluations,
