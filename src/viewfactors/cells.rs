@@ -50,9 +50,7 @@ impl Context<'_> {
         // while missing (a partition's element under the louvre room's ceiling: estimate
         // 1.4e-8, 2.1e-6 off). The triangle's quarters check it. Where occluders alone shadow
         // T_j, the probe of views decides ([`Context::touching_triangle`]): checking all those
-        // too took 7.13 M evaluations instead of 6.19 M on the louvre room at --tolerance 1e-6,
-        // 16.6 M instead of 12.6 M at 1e-8, 11.3 M instead of 8.7 M on the furnished room at
-        // 1e-8, with the same largest difference from a run at 1e-10.
+        // too would cost a quarters rule per triangle and catch no miss the probe lets through.
         let checked = part.clipped && distance <= TOUCHING * size;
         let distance = distance.min(part.obstacle_distance(patch.corners()));
         // Where occluders shadow T_j the order is only a first guess, since the estimate with
@@ -62,11 +60,8 @@ impl Context<'_> {
         // The Bernstein bound is relative to the integrand's size, which from a patch at
         // distance d from T_j is at most A_j / (π d²) (cosines at most 1): the tolerance on
         // F_ij asks for that much less relative accuracy of a patch far from a small T_j.
-        // Relaxed at most tenfold instead (a cap that once kept low first orders from failing
-        // and splitting on five-piece, which no longer happens), the tessellated city 5 x 5
-        // without its sky at --tolerance 1e-6 took 36.7 M evaluations instead of 30.5 M, every
-        // entry within 8.4e-7 of a run at 1e-9 either way (6.1e-7 with the cap); five-piece
-        // refine 3 at the default 2.61 M instead of 2.57 M, within 4.6e-13 of a run at 1e-13.
+        // Not capped: a first order is checked against one order more, so relaxing it does not
+        // make patches fail and split; it only saves evaluations.
         let shadowed_target = self.options.tolerance / integrand_bound(to_target, part.target_area);
         if distance <= TOUCHING * size {
             for t in patch.triangles() {
@@ -209,13 +204,11 @@ impl Context<'_> {
         // two rules' difference can miss by far more than it says (an entry of city:4x4 was
         // 1.4e-9 off at the default tolerance). Across such a kink the rules' errors scatter
         // with the order instead of falling: order q + 2 is a third sample of that scatter,
-        // and its difference from order q + 1 counts too. It took the place of the rule over
-        // the patch's quarters of half the order (about as many points), which agreed by chance
-        // with the two orders where the third order did not: on a patch of city:4x4 (pair
-        // (244, 61), --tolerance 1e-8) orders 4 and 5 and the quarters agreed to 2.7e-9 of F
-        // and missed it by 1.7e-8, and order 6 differed by 2.3e-8; city:4x4 at 1e-8 had 7
-        // entries off by more than the tolerance (up to 2.0e-8) and now has one (1.4e-8),
-        // for the same evaluations.
+        // and its difference from order q + 1 counts too. It costs about as many points as the
+        // rule over the patch's quarters at half the order, but does not agree by chance where
+        // they can: on a patch of city:4x4 (pair (244, 61), --tolerance 1e-8) orders 4 and 5 and
+        // the quarters agreed to 2.7e-9 of F and missed it by 1.7e-8, where order 6 differed by
+        // 2.3e-8.
         // Where no order meets the a priori bound (a patch too near a point where the
         // integrand is not analytic: a chair's backrest whose corner stands 0.014 from the
         // seat, furnished room at --tolerance 1e-6, had orders 15 and 16 differ by 7.1e-7 and
@@ -235,9 +228,8 @@ impl Context<'_> {
     /// its value at the centre: the integral lies between 0 and `most`, so the one-point rule
     /// is off by at most the larger of its value and `most` less it. A bound, not an estimate;
     /// where the pair's budget needs it, the rules take the patch after all ([`Refine::ByRules`]).
-    /// Settled for good, such cells left the others half the budget: the louvre room and the
-    /// furnished room at --tolerance 1e-8 took 9.36 M and 5.29 M evaluations instead of 9.31 M
-    /// and 5.25 M (measured with a lowest Gauss order of 1).
+    /// Settled for good, such cells leave the others at least half the pair's budget, so the
+    /// rules on patches that hold F_ij need not tighten for cells that hold little of it.
     pub(super) fn bounded_cell(
         &self,
         (i, j): (usize, usize),
