@@ -116,6 +116,12 @@ impl Part<'_> {
         })
     }
 
+    /// Whether T_j holds two corners of the triangle `t`: they touch along a side.
+    pub(super) fn contact_along_a_side(&self, t: &[DVec3; 3]) -> bool {
+        let near = TOUCHING * Patch::Triangle(*t).size();
+        t.iter().filter(|&&v| convex_polygons_distance(&[v], &self.target) <= near).count() >= 2
+    }
+
     /// The distance from the convex polygon (or point) `corners` to the nearest of the
     /// piece's [`Obstacle`]s.
     pub(super) fn obstacle_distance(&self, corners: &[DVec3]) -> f64 {
