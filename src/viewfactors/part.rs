@@ -116,10 +116,15 @@ impl Part<'_> {
         })
     }
 
+    /// The corners of the triangle `t` that lie on T_j (within [`TOUCHING`] of its size).
+    pub(super) fn corners_on_target(&self, t: &[DVec3; 3]) -> SmallVec<[usize; 3]> {
+        let near = TOUCHING * Patch::Triangle(*t).size();
+        (0..3).filter(|&k| convex_polygons_distance(&[t[k]], &self.target) <= near).collect()
+    }
+
     /// Whether T_j holds two corners of the triangle `t`: they touch along a side.
     pub(super) fn contact_along_a_side(&self, t: &[DVec3; 3]) -> bool {
-        let near = TOUCHING * Patch::Triangle(*t).size();
-        t.iter().filter(|&&v| convex_polygons_distance(&[v], &self.target) <= near).count() >= 2
+        self.corners_on_target(t).len() >= 2
     }
 
     /// The distance from the convex polygon (or point) `corners` to the nearest of the

@@ -58,9 +58,7 @@ impl Context<'_> {
     ) -> Option<([DVec3; 3], usize)> {
         let size = Patch::Triangle(t).size();
         let near = TOUCHING * size;
-        let on_target = |x: DVec3| convex_polygons_distance(&[x], &part.target) <= near;
-        let on_target: SmallVec<[usize; 3]> = (0..3).filter(|&k| on_target(t[k])).collect();
-        let [k] = on_target[..] else { return None };
+        let [k] = part.corners_on_target(&t)[..] else { return None };
         let t = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]];
         let contact = t[0];
         let elsewhere = |w: DVec3| w.distance(contact) > near;
