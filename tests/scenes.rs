@@ -688,6 +688,7 @@ fn the_estimates_study_checks_every_scene_both_ways() {
     for r in rows {
         assert!(r["error_ratio"].as_f64().unwrap() <= 1.0, "{r}");
         assert_eq!(r["negative"], 0, "{r}");
+        assert_eq!(r["holds"], true, "{r}");
     }
     assert_eq!(v["failed"], 0, "{v}");
     assert_eq!(v["reference_tolerance"], 1e-11, "{v}");

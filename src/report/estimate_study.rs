@@ -10,7 +10,6 @@ pub fn estimate_table(study: &EstimateStudy, format: TableFormat) -> String {
         .rows
         .iter()
         .map(|r| {
-            let holds = r.error_ratio <= 1.0 && r.reciprocity_ratio <= 1.0 && r.negative == 0;
             vec![
                 r.scene.clone(),
                 r.n.to_string(),
@@ -23,7 +22,7 @@ pub fn estimate_table(study: &EstimateStudy, format: TableFormat) -> String {
                 r.negative.to_string(),
                 format!("{:.2}", r.evaluations as f64 / 1e6),
                 format!("{:.2}", r.seconds),
-                if holds { "yes" } else { "NO" }.into(),
+                if r.holds { "yes" } else { "NO" }.into(),
             ]
         })
         .collect();
