@@ -119,7 +119,8 @@ fn default_options(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
 /// A scene, from a file, a built-in name or arrays.
 #[pyclass(name = "Scene", module = "radiosity", frozen)]
 struct PyScene {
-    scene: Scene,
+    /// Shared with `source` where that is the scene itself (arrays).
+    scene: std::sync::Arc<Scene>,
     /// Where it came from (the paper's surfaces default to their x2y2 solution).
     source: SceneSource,
     params: SurfaceParameters,
@@ -140,7 +141,7 @@ impl PyScene {
         let options = import_options(nonplanar, duplicates, coplanar)?;
         let scene = py.detach(|| radiosity::scene::load_with(&path, options)).map_err(raised)?;
         let source = SceneSource::File(path, options);
-        Ok(Self { scene, source, params: SurfaceParameters::default() })
+        Ok(Self { scene: scene.into(), source, params: SurfaceParameters::default() })
     }
 
     /// A built-in scene (four-piece, five-piece, cube, baffled-box) or a generated city
@@ -159,7 +160,7 @@ impl PyScene {
         };
         let params = SurfaceParameters { a: params.0, b: params.1, c: params.2 };
         params.validate().map_err(raised)?;
-        let scene = py.detach(|| source.build(params)).map_err(raised)?;
+        let scene = py.detach(|| source.build(params)).map_err(raised)?.into();
         Ok(Self { scene, source, params })
     }
 
@@ -203,7 +204,8 @@ impl PyScene {
                 radiosity::scene::from_triangles(name, &points, &corners, &rho, &emission, options)
             })
             .map_err(raised)?;
-        let source = SceneSource::Given(std::sync::Arc::new(scene.clone()));
+        let scene = std::sync::Arc::new(scene);
+        let source = SceneSource::Given(scene.clone());
         Ok(Self { scene, source, params: SurfaceParameters::default() })
     }
 
@@ -418,7 +420,7 @@ fn solve<'py>(
     }
     let run = py
         .detach(|| {
-            pipeline::run_problem(&config, pipeline::build_on(&config, scene.scene.clone())?)
+            pipeline::run_problem(&config, pipeline::build_on(&config, Scene::clone(&scene.scene))?)
         })
         .map_err(raised)?;
     let out = pyo3::types::PyDict::new(py);
@@ -552,7 +554,7 @@ fn operator(
         ));
     }
     py.detach(|| {
-        let problem = pipeline::build_on(&config, scene.scene.clone())?;
+        let problem = pipeline::build_on(&config, Scene::clone(&scene.scene))?;
         let built = pipeline::build_operator(&config, &problem)?;
         Ok(PyOperator { config, problem, built })
     })
@@ -589,7 +591,7 @@ fn view_factors<'py>(
     let (f, summary) = py
         .detach(|| {
             let started = std::time::Instant::now();
-            let problem = pipeline::build_on(&config, scene.scene.clone())?;
+            let problem = pipeline::build_on(&config, Scene::clone(&scene.scene))?;
             let Problem { scene, mesh, planner, .. } = &problem;
             config.progress.start("viewfactors", mesh.len());
             let f = compute_view_factors(scene, mesh, planner, &options, &*config.progress)?;
