@@ -85,7 +85,7 @@ impl Quadrature {
 
     /// `exact`, `seven-point` or `gauss`.
     pub fn name(&self) -> &'static str {
-        crate::vocabulary::Named::name(self.rule())
+        self.rule().name()
     }
 
     /// A short label with the parameters, e.g. `gauss(1,4)`.

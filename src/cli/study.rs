@@ -78,10 +78,8 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             emit(&result, json, || report::compression_table(&result, format))
         }
         "estimates" => {
-            let mut scenes = Vec::new();
-            for name in &args.scene {
-                scenes.push(SceneSource::parse(name)?);
-            }
+            let mut scenes: Vec<SceneSource> =
+                args.scene.iter().map(|s| SceneSource::parse(s)).collect::<Result<_>>()?;
             if scenes.is_empty() {
                 scenes.push(SceneSource::City(4, 4, false));
             }

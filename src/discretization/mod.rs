@@ -84,7 +84,7 @@ impl Method {
 
     /// Command-line name.
     pub fn name(&self) -> &'static str {
-        crate::vocabulary::Named::name(self.kind())
+        self.kind().name()
     }
 
     /// α for the linear method.

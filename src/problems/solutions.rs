@@ -103,11 +103,12 @@ impl FaceFunction {
 impl TrueSolution {
     /// Command-line name: `x2y2`, `shadow`, `edge`.
     pub fn name(&self) -> &'static str {
-        crate::vocabulary::Named::name(match self {
+        let name = match self {
             Self::X2Y2 => SolutionName::X2y2,
             Self::Shadow { .. } => SolutionName::Shadow,
             Self::Edge { .. } => SolutionName::Edge,
-        })
+        };
+        name.name()
     }
 
     /// The solution named `name` with the given parameters (β, γ as applicable); `none` is no
