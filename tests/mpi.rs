@@ -122,7 +122,8 @@ fn two_ranks_inspect_the_row_sums_of_one_process() {
         let (a, b) = (one[key].as_f64().unwrap(), two[key].as_f64().unwrap());
         assert!((a - b).abs() <= 1e-13, "{key}: {a} against {b}");
     }
-    for key in ["near_entries", "far_blocks", "empty_blocks", "pairs_partial"] {
+    for key in ["near_entries", "far_blocks", "empty_blocks", "empty_block_pairs", "pairs_partial"]
+    {
         assert_eq!(one[key], two[key], "{key}");
     }
     assert_eq!(two["ranks"], 2);

@@ -12,6 +12,7 @@ use super::options::{CompressionOptions, ShadowedBlocks};
 use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
 use crate::geometry::box_corners;
+use crate::progress::Progress;
 use crate::scene::Scene;
 use crate::visibility::{OccluderUnit, PairPlanner, Shaft};
 
@@ -198,22 +199,80 @@ pub(super) struct BlockPlan {
     /// Admissible blocks that occluders cut, with their sub-blocks.
     pub shadowed: Vec<ShadowedBlock>,
     /// Blocks holding nothing, left out.
-    pub empty: usize,
+    pub empty: Empty,
+}
+
+/// The blocks a plan found to hold nothing (sub-blocks of shadowed blocks among them), and the
+/// (node, element) pairs in them: pairs settled without a test of their own, which shows how
+/// much of the pair matrix the plan culls whole.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct Empty {
+    pub blocks: usize,
+    pub pairs: u64,
+}
+
+impl Empty {
+    fn add(&mut self, nodes: &Cluster, elements: &Cluster) {
+        self.blocks += 1;
+        self.pairs += (nodes.len() * elements.len()) as u64;
+    }
+}
+
+impl std::ops::AddAssign for Empty {
+    fn add_assign(&mut self, other: Self) {
+        self.blocks += other.blocks;
+        self.pairs += other.pairs;
+    }
+}
+
+/// How far a walk of the plan has got, reported to a [`Progress`] in thousandths of the
+/// (node, element) pairs it settles: the pairs of every block it settles, whatever its kind,
+/// so the count ends at the whole. A block's cost is that of its classification, not of its
+/// pairs, so this paces the walk only roughly (large blocks settle early).
+pub(super) struct PlanProgress<'a> {
+    progress: &'a dyn Progress,
+    total: u64,
+    settled: AtomicU64,
+}
+
+/// Steps of a plan's progress stage.
+pub(super) const PLAN_STEPS: usize = 1000;
+
+impl<'a> PlanProgress<'a> {
+    /// Progress over `total` pairs, whose stage the caller has started with [`PLAN_STEPS`].
+    pub(super) fn new(progress: &'a dyn Progress, total: u64) -> Self {
+        Self { progress, total: total.max(1), settled: AtomicU64::new(0) }
+    }
+
+    fn settle(&self, pairs: u64) {
+        let before = self.settled.fetch_add(pairs, Ordering::Relaxed);
+        let step = |p: u64| {
+            (u128::from(p.min(self.total)) * PLAN_STEPS as u128 / u128::from(self.total)) as usize
+        };
+        let (from, to) = (step(before), step(before + pairs));
+        if to > from {
+            self.progress.advance(to - from);
+        }
+    }
 }
 
 impl BlockPlan {
     /// The plan of the blocks of `nodes` × `elements`; with `budget`, unfinished where the
-    /// plan passes it ([`PlanBudget::is_over`] then tells).
+    /// plan passes it ([`PlanBudget::is_over`] then tells). The walk reports to `progress`
+    /// ([`PLAN_STEPS`] steps).
     pub(super) fn new(
         nodes: &ClusterTree,
         elements: &ClusterTree,
         faces: &FacePairs,
         options: &CompressionOptions,
         budget: Option<&PlanBudget>,
+        progress: &dyn Progress,
     ) -> Self {
         let mut plan = Self::default();
         if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
-            let walk = Walk { nodes, elements, faces, options, budget };
+            let total = (nodes.order.len() * elements.order.len()) as u64;
+            let pace = PlanProgress::new(progress, total);
+            let walk = Walk { nodes, elements, faces, options, budget, pace: Some(&pace) };
             walk.visit(&mut plan, 0, 0, None);
         }
         plan
@@ -229,13 +288,14 @@ impl BlockPlan {
         options: &CompressionOptions,
         at: (usize, usize),
     ) -> Located {
-        let walk = Walk { nodes, elements, faces, options, budget: None };
+        let walk = Walk { nodes, elements, faces, options, budget: None, pace: None };
         walk.locate(0, 0, None, at)
     }
 
     /// The plan [`BlockPlan::new`] makes, walked in parts by the ranks of `ranks` (every rank
     /// calls this) and gathered: the top of the block tree is walked by all, the subtrees below
-    /// it dealt out in turn. The same blocks as the single walk's, in another order.
+    /// it dealt out in turn. The same blocks as the single walk's, in another order. Each rank
+    /// reports its own subtrees' walk to `progress` ([`PLAN_STEPS`] steps).
     pub(super) fn new_shared(
         nodes: &ClusterTree,
         elements: &ClusterTree,
@@ -243,12 +303,19 @@ impl BlockPlan {
         options: &CompressionOptions,
         ranks: &dyn Collective,
         budget: Option<&PlanBudget>,
+        progress: &dyn Progress,
     ) -> Self {
         let mut plan = Self::default();
         let mut mine = Self::default();
         if !nodes.clusters.is_empty() && !elements.clusters.is_empty() {
-            let walk = Walk { nodes, elements, faces, options, budget };
-            let frontier = walk.frontier(&mut plan, FRONTIER_PER_RANK * ranks.size());
+            let top = Walk { nodes, elements, faces, options, budget, pace: None };
+            let frontier = top.frontier(&mut plan, FRONTIER_PER_RANK * ranks.size());
+            let dealt = || frontier.iter().skip(ranks.rank()).step_by(ranks.size());
+            let total = dealt()
+                .map(|(t, s, _)| (nodes.clusters[*t].len() * elements.clusters[*s].len()) as u64)
+                .sum();
+            let pace = PlanProgress::new(progress, total);
+            let walk = Walk { pace: Some(&pace), ..top };
             let parts: Vec<BlockPlan> = frontier
                 .par_iter()
                 .skip(ranks.rank())
@@ -302,8 +369,9 @@ impl BlockPlan {
                 rest = &after[seen + leaves..];
             }
         }
-        plan.empty +=
-            ranks.gather(&[mine.empty as u64]).iter().map(|e| e[0] as usize).sum::<usize>();
+        for part in ranks.gather(&[mine.empty.blocks as u64, mine.empty.pairs]) {
+            plan.empty += Empty { blocks: part[0] as usize, pairs: part[1] };
+        }
         plan
     }
 
@@ -345,6 +413,8 @@ struct Walk<'a> {
     options: &'a CompressionOptions,
     /// What the plan may take; the walk stops where it passes it.
     budget: Option<&'a PlanBudget>,
+    /// Where the walk reports the pairs it settles.
+    pace: Option<&'a PlanProgress<'a>>,
 }
 
 /// How the walk settles a block ([`Walk::settle`]).
@@ -471,9 +541,13 @@ impl Walk<'_> {
         s: usize,
         within: Option<&'b [OccluderUnit]>,
     ) -> Option<(Vec<(usize, usize)>, Between<'b>)> {
-        let bytes = match self.settle(t, s, within) {
+        let settled = self.settle(t, s, within);
+        if let (Some(pace), false) = (self.pace, matches!(settled, Settled::Split(..))) {
+            pace.settle((self.nodes.clusters[t].len() * self.elements.clusters[s].len()) as u64);
+        }
+        let bytes = match settled {
             Settled::Empty => {
-                plan.empty += 1;
+                plan.empty.add(&self.nodes.clusters[t], &self.elements.clusters[s]);
                 0
             }
             Settled::Far => {
@@ -593,7 +667,7 @@ impl Walk<'_> {
     fn visit_shadowed(
         &self,
         block: &mut ShadowedBlock,
-        empty: &mut usize,
+        empty: &mut Empty,
         t: usize,
         s: usize,
         within: Option<&[OccluderUnit]>,
@@ -601,7 +675,7 @@ impl Walk<'_> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
         let between = Between::new(within);
         match classify(self.faces, tc, sc, &between) {
-            PairClass::Nothing => *empty += 1,
+            PairClass::Nothing => empty.add(tc, sc),
             PairClass::Smooth => block.seen.push((t, s)),
             PairClass::Shadowed | PairClass::Mixed => {
                 match self.children(t, s, SHADOWED_LEAF * self.options.mixed_leaf_size) {

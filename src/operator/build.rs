@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::blocks::{BlockPlan, FacePairs};
+use super::blocks::{BlockPlan, FacePairs, PLAN_STEPS};
 use super::built::{Built, by_node_cluster, kept_blocks};
 use super::cluster::{ClusterTree, Item};
 use super::compressed::{Block, CompressedOperator, RankShare};
@@ -78,7 +78,8 @@ impl CompressedOperator {
             Precision::F64 => PairIntegrator::new(disc.method, assembly),
         };
         let faces = FacePairs::new(scene, planner, options);
-        let (nodes, elements) = in_stage(progress, "blocks", || cluster_trees(mesh, disc, options));
+        let (nodes, elements) =
+            in_stage(progress, "clusters", || cluster_trees(mesh, disc, options));
         let entries = Entries {
             mesh,
             disc,
@@ -109,7 +110,8 @@ impl CompressedOperator {
         }
         // The plan stops where its lists pass what the trees leave of the allowance.
         let budget = guard.plan_budget(estimate.trees);
-        let plan = in_stage(progress, "blocks", || match ranks {
+        progress.start("block plan", PLAN_STEPS);
+        let plan = match ranks {
             Some(ranks) => {
                 let whole = BlockPlan::new_shared(
                     &nodes,
@@ -118,12 +120,14 @@ impl CompressedOperator {
                     options,
                     &**ranks,
                     budget.as_ref(),
+                    progress,
                 );
                 let rank = (ranks.rank(), ranks.size());
                 share::share_of(&whole, &nodes, &elements, per, rank)
             }
-            None => BlockPlan::new(&nodes, &elements, &faces, options, budget.as_ref()),
-        });
+            None => BlockPlan::new(&nodes, &elements, &faces, options, budget.as_ref(), progress),
+        };
+        progress.finish();
         if let Some(budget) = &budget {
             let over = budget.is_over();
             let over =
@@ -152,7 +156,8 @@ impl CompressedOperator {
         };
         progress.finish();
 
-        let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty, per);
+        let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty.blocks, per);
+        stats.empty_block_pairs = plan.empty.pairs;
         stats.faces_viewed = entries.faces.viewed();
         stats.operator_bytes += order_bytes(disc.dof(), per);
         let share = ranks.map(|ranks| {

@@ -2,7 +2,7 @@
 //! ([`crate::distributed`]): every rank holds the whole block plan and takes the blocks dealt to
 //! it, so that the ranks' estimated costs come out about equal.
 
-use super::blocks::{BlockPlan, NearBlock, ShadowedBlock};
+use super::blocks::{BlockPlan, Empty, NearBlock, ShadowedBlock};
 use super::cluster::ClusterTree;
 
 /// Cross-approximation steps assumed per low-rank block when estimating its cost (each step
@@ -68,8 +68,10 @@ pub(super) fn share_of(
             .then_with(|| a.far.cmp(&b.far))
             .then_with(|| at(a).cmp(&at(b)))
     });
-    let mut mine =
-        BlockPlan { empty: if rank == 0 { plan.empty } else { 0 }, ..Default::default() };
+    let mut mine = BlockPlan {
+        empty: if rank == 0 { plan.empty } else { Empty::default() },
+        ..Default::default()
+    };
     for (position, unit) in units.into_iter().enumerate() {
         let (turn, seat) = (position / size, position % size);
         let dealt_to = if turn % 2 == 0 { seat } else { size - 1 - seat };
@@ -108,7 +110,8 @@ mod tests {
         let near = pairs(&leaves, 3).into_iter();
         let near = near.map(|(t, s)| NearBlock { t, s, seen_whole: (t + s) % 2 == 0 }).collect();
         let far = pairs(&inner[1..], 5);
-        let plan = BlockPlan { near, far, shadowed: Vec::new(), empty: 5 };
+        let empty = Empty { blocks: 5, pairs: 40 };
+        let plan = BlockPlan { near, far, shadowed: Vec::new(), empty };
         for size in [1, 2, 3] {
             let shares: Vec<BlockPlan> =
                 (0..size).map(|r| share_of(&plan, &tree, &tree, 1, (r, size))).collect();
@@ -120,7 +123,8 @@ mod tests {
             far.sort_unstable();
             want_far.sort_unstable();
             assert_eq!((near, far), (want_near, want_far), "{size} ranks");
-            assert_eq!(shares.iter().map(|p| p.empty).sum::<usize>(), 5);
+            assert_eq!(shares.iter().map(|p| p.empty.blocks).sum::<usize>(), 5);
+            assert_eq!(shares.iter().map(|p| p.empty.pairs).sum::<u64>(), 40);
             let cost = |p: &BlockPlan| -> usize {
                 let near: usize = p
                     .near

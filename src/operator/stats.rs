@@ -41,6 +41,10 @@ pub struct OperatorStats {
     /// behind it): over the unknowns, the faces examined per node. Not among
     /// [`OperatorStats::counts`] (none in a loaded operator).
     pub faces_viewed: u64,
+    /// (Node, element) pairs in the blocks found to hold nothing: pairs the plan culled whole,
+    /// without a test of their own. Not among [`OperatorStats::counts`] (none in a loaded
+    /// operator).
+    pub empty_block_pairs: u64,
 }
 
 impl OperatorStats {
@@ -88,6 +92,7 @@ impl OperatorStats {
             low_rank_bytes: 0,
             shadowed_blocks: 0,
             faces_viewed: 0,
+            empty_block_pairs: 0,
         }
     }
 }
@@ -107,6 +112,7 @@ impl std::ops::AddAssign for OperatorStats {
         self.low_rank_bytes += o.low_rank_bytes;
         self.shadowed_blocks += o.shadowed_blocks;
         self.faces_viewed += o.faces_viewed;
+        self.empty_block_pairs += o.empty_block_pairs;
     }
 }
 
@@ -121,16 +127,18 @@ pub(super) fn summed_over(
     stats: OperatorStats,
     pairs: PairStats,
 ) -> (OperatorStats, PairStats) {
-    let more = [stats.low_rank_bytes, stats.shadowed_blocks, stats.faces_viewed];
+    let more =
+        [stats.low_rank_bytes, stats.shadowed_blocks, stats.faces_viewed, stats.empty_block_pairs];
     let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).chain(more).collect();
     let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
     for counts in ranks.gather(&mine) {
         let (s, rest) = counts.split_at(OperatorStats::COUNTS);
-        let (p, more) = rest.split_at(rest.len() - 3);
+        let (p, more) = rest.split_at(rest.len() - more.len());
         stats += OperatorStats {
             low_rank_bytes: more[0],
             shadowed_blocks: more[1],
             faces_viewed: more[2],
+            empty_block_pairs: more[3],
             ..OperatorStats::from_counts(s.try_into().expect("a rank's statistics"))
         };
         pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));

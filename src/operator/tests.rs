@@ -1,6 +1,7 @@
 //! The compressed operator against the dense matrix (the reference): same products to the
 //! tolerance, exact where visibility is partial, nothing stored where nothing is seen.
 
+use crate::progress::Silent;
 use glam::DVec3;
 
 use super::blocks::{BlockPlan, FacePairs, Located, ShadowedPart};
@@ -52,11 +53,11 @@ fn build_with(c: &Case, options: &CompressionOptions, batched: bool) -> Compress
     let integrator = PairIntegrator::new(c.disc.method, &assembly);
     let cpu = crate::assembly::CpuPairs::new(&c.disc, &integrator);
     let batches = batched.then_some(&cpu as &dyn PairEvaluation);
-    CompressedOperator::build(c, &assembly, options, batches, &crate::progress::Silent).unwrap()
+    CompressedOperator::build(c, &assembly, options, batches, &Silent).unwrap()
 }
 
 fn dense(c: &Case) -> CollocationMatrix {
-    assemble(c, &AssemblyOptions::default(), &crate::progress::Silent).unwrap().matrix
+    assemble(c, &AssemblyOptions::default(), &Silent).unwrap().matrix
 }
 
 #[test]
@@ -277,12 +278,12 @@ fn a_plan_whose_lists_pass_its_budget_stops_its_walk() {
     let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
     let faces = FacePairs::new(&c.scene, &c.planner, &options);
     let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
-    let whole = BlockPlan::new(&nodes, &elements, &faces, &options, None);
+    let whole = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
     let roomy = blocks::PlanBudget::new(1 << 30);
-    let plan = BlockPlan::new(&nodes, &elements, &faces, &options, Some(&roomy));
+    let plan = BlockPlan::new(&nodes, &elements, &faces, &options, Some(&roomy), &Silent);
     assert!(!roomy.is_over() && plan.near.len() == whole.near.len() && roomy.used() > 0);
     let tight = blocks::PlanBudget::new(1_000);
-    let cut = BlockPlan::new(&nodes, &elements, &faces, &options, Some(&tight));
+    let cut = BlockPlan::new(&nodes, &elements, &faces, &options, Some(&tight), &Silent);
     assert!(tight.is_over() && cut.near.len() + cut.far.len() < whole.near.len() + whole.far.len());
     // The guard's error names what the plan had reached above what may be used.
     let guard = MemoryGuard::with_allowance(640, Some(1_000.0));
@@ -308,7 +309,7 @@ fn a_pair_is_located_in_the_block_of_the_plan_that_holds_it() {
             };
             let faces = FacePairs::new(&c.scene, &c.planner, &options);
             let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
-            let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None);
+            let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
             let holds = |t: usize, s: usize, (k, l): (usize, usize)| {
                 let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
                 (tc.start..tc.end).contains(&k) && (sc.start..sc.end).contains(&l)
@@ -362,8 +363,7 @@ fn the_memory_estimate_comes_near_what_the_build_stores() {
         let options =
             CompressionOptions { shadowed_blocks: ShadowedBlocks::On, ..Default::default() };
         let assembly = AssemblyOptions::default();
-        let op = CompressedOperator::build(&c, &assembly, &options, None, &crate::progress::Silent)
-            .unwrap();
+        let op = CompressedOperator::build(&c, &assembly, &options, None, &Silent).unwrap();
         let estimate = *op.memory_estimate.unwrap();
         let (estimated, stored) =
             (estimate.operator_bytes() as f64, op.stats.operator_bytes as f64);
@@ -427,7 +427,7 @@ fn far_blocks_whose_boxes_clear_the_planes_have_no_pair_that_gives_nothing() {
         let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
         let faces = FacePairs::new(&c.scene, &c.planner, &options);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
-        let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
         let (mut clear, mut not) = (0, 0);
         for &(t, s) in &plan.far {
             let (tc, sc) = (&nodes.clusters[t], &elements.clusters[s]);
@@ -537,7 +537,7 @@ fn a_written_operator_reads_back_block_for_block() {
         assert!(op.stats.low_rank_bytes < op.stats.operator_bytes);
         let (read, bytes) = written_and_read(&op);
         // What the build's walks cost is not saved.
-        let stats = OperatorStats { faces_viewed: 0, ..op.stats };
+        let stats = OperatorStats { faces_viewed: 0, empty_block_pairs: 0, ..op.stats };
         assert_eq!((read.stats, read.pairs, read.zero_rows), (stats, op.pairs, op.zero_rows));
         assert_eq!(kinds(&read), kinds(&op));
         let x: Vec<f64> = (0..op.dof()).map(|i| (i as f64 * 0.7).sin()).collect();
@@ -654,7 +654,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
         };
         let faces = FacePairs::new(&c.scene, &c.planner, &options);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
-        let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None);
+        let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
         let reflects = |i: usize| c.disc.nodes[i].rho != 0.0;
         let integrator = PairIntegrator::new(c.disc.method, &AssemblyOptions::default());
         let entries = Entries {
@@ -685,7 +685,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
         }
         assert!(whole > 0 && mixed > 0, "{}: {whole} seen whole, {mixed} mixed", c.scene.name);
         let assembly = AssemblyOptions::default();
-        let op = CompressedOperator::build(&c, &assembly, &options, None, &crate::progress::Silent);
+        let op = CompressedOperator::build(&c, &assembly, &options, None, &Silent);
         let certain = plan.certain_near_entries(&nodes, &elements, 1, reflects);
         assert!(certain <= op.unwrap().stats.near_entries, "{}", c.scene.name);
     }
@@ -714,8 +714,7 @@ fn shadowed_blocks_of(c: Case) {
         ..Default::default()
     };
     let assembly = AssemblyOptions::default();
-    let op =
-        CompressedOperator::build(&c, &assembly, &options, None, &crate::progress::Silent).unwrap();
+    let op = CompressedOperator::build(&c, &assembly, &options, None, &Silent).unwrap();
     let (mut seen, mut leaves, mut partial) = (0, 0, 0);
     for b in &op.blocks {
         let (rows, width) = (b.row_range().len(), b.col_range().len() * op.per);
@@ -771,6 +770,61 @@ fn shadowed_blocks_of(c: Case) {
         for other in [&y, &from_file] {
             let worst = other.iter().zip(&single).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
             assert!(worst <= 1e-13 * scale, "{worst:.1e} of {scale:.1e}");
+        }
+    }
+}
+
+#[test]
+fn the_plan_settles_every_pair_once_and_counts_the_culled_ones() {
+    // Every (node, element) pair is in one block of the plan: the blocks' pairs, empty ones
+    // included, make up the whole matrix, and the statistics count the empty blocks' pairs
+    // (`empty_block_pairs`) apart from the pairs the exact blocks walk and the entries the
+    // low-rank blocks stand for. The progress reported reaches its last step exactly.
+    struct Steps(std::sync::atomic::AtomicUsize);
+    impl crate::progress::Progress for Steps {
+        fn start(&self, _: &str, _: usize) {}
+        fn advance(&self, steps: usize) {
+            self.0.fetch_add(steps, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn finish(&self) {}
+        fn note(&self, _: &str) {}
+    }
+    let scenes = [(crate::scene::lit_city(3, 2).unwrap(), 1), (baffled_box().unwrap(), 2)];
+    for (scene, refine) in scenes {
+        let c = case(scene, Method::Centroid, refine);
+        for shadowed_blocks in [ShadowedBlocks::On, ShadowedBlocks::Off] {
+            let options = CompressionOptions {
+                tolerance: 1e-6,
+                leaf_size: 8,
+                mixed_leaf_size: 8,
+                shadowed_blocks,
+                ..Default::default()
+            };
+            let faces = FacePairs::new(&c.scene, &c.planner, &options);
+            let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
+            let steps = Steps(Default::default());
+            let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &steps);
+            let size =
+                |t: usize, s: usize| (nodes.clusters[t].len() * elements.clusters[s].len()) as u64;
+            // Top-level exact and low-rank blocks, the parts of shadowed blocks that hold
+            // something, and the empty blocks (some of them parts of shadowed blocks).
+            let near: u64 = plan.near.iter().map(|b| size(b.t, b.s)).sum();
+            let far: u64 = plan.far.iter().map(|&(t, s)| size(t, s)).sum();
+            let parts: u64 = plan
+                .shadowed
+                .iter()
+                .flat_map(|b| b.seen.iter().chain(&b.leaves))
+                .map(|&(t, s)| size(t, s))
+                .sum();
+            let all = (c.disc.dof() * c.disc.elements.len()) as u64;
+            let label = format!("{}, shadowed blocks {shadowed_blocks:?}", c.scene.name);
+            assert_eq!(near + far + parts + plan.empty.pairs, all, "{label}");
+            assert_eq!(steps.0.into_inner(), super::blocks::PLAN_STEPS, "{label}");
+            let op = build_with(&c, &options, false);
+            assert_eq!(op.stats.empty_block_pairs, plan.empty.pairs, "{label}");
+            assert!(plan.empty.pairs > 0, "{label}");
+            let on = shadowed_blocks == ShadowedBlocks::On;
+            assert_eq!(!plan.shadowed.is_empty(), on, "{label}");
         }
     }
 }
