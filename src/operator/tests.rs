@@ -584,7 +584,8 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
     // Ranks as threads: the block plan walked in parts and gathered, each rank building its
     // share, the products summed over the ranks. The same blocks and pair classes as one
     // process's, products equal to rounding, and each rank holding a part of the blocks; on the
-    // paper's surface and on a scene with shadows (the baffled box), both methods.
+    // paper's surface and on a scene with shadows (the baffled box), both methods. GMRES over
+    // the ranks, each holding its rows of the vectors, gives one process's solution.
     let linear = Method::linear(1.0 / 6.0).unwrap();
     let scenes = [
         (five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 4),
@@ -608,13 +609,25 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
         let assembly = AssemblyOptions::default();
         let silent = &crate::progress::Silent;
         let one = CompressedOperator::build(&c, &assembly, &options, None, silent).unwrap();
+        let rho: Vec<f64> = c.disc.nodes.iter().map(|n| n.rho).collect();
+        let emission: Vec<f64> = (0..c.disc.dof()).map(|i| 1.0 + (i as f64 * 0.3).sin()).collect();
+        let solver = crate::solve::SolverOptions { tolerance: 1e-12, ..Default::default() };
+        let solve = |op: &CompressedOperator| {
+            crate::solve::solve_by_products(op, &emission, (&rho, &rho), solver, 1e-8).unwrap()
+        };
+        let alone = solve(&one);
         for size in [2, 3] {
             let parts = crate::distributed::threads::run(size, |ranks| {
                 let op =
                     CompressedOperator::build_shared(&c, &assembly, &options, None, silent, &ranks)
                         .unwrap();
                 let d = op.max_product_difference(&|x| one.apply(x));
-                (op.stats, op.pairs, op.share.unwrap().operator_bytes, d)
+                let spread = solve(&op);
+                let u =
+                    spread.u.iter().zip(&alone.u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                assert_eq!(spread.rows_eliminated, alone.rows_eliminated);
+                assert!(spread.residual <= 1e-11, "residual {:.2e}", spread.residual);
+                (op.stats, op.pairs, op.share.unwrap().operator_bytes, d.max(u))
             });
             for (rank, (stats, pairs, bytes, d)) in parts.iter().enumerate() {
                 let what = format!("{method}, rank {rank} of {size}");
@@ -629,7 +642,7 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
                 assert_eq!(stats.low_rank_bytes, s.low_rank_bytes, "{what}");
                 assert_eq!(stats.shadowed_blocks, s.shadowed_blocks, "{what}");
                 assert_eq!(s.shadowed_blocks > 0, shadowed_blocks, "{what}");
-                assert!(*d <= 1e-13, "{what}: products differ by {d:.2e}");
+                assert!(*d <= 1e-13, "{what}: products or solutions differ by {d:.2e}");
                 assert!(*bytes < s.operator_bytes / 2 + s.operator_bytes / 4, "{what}: {bytes}");
             }
         }

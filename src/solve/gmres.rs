@@ -10,6 +10,7 @@
 //! and says how far it got, instead of running to an iteration limit.
 
 use super::system::{ReducedSystem, dot};
+use crate::distributed::Collective;
 use crate::error::{Error, IterationFailure, Result};
 
 /// Krylov vectors kept per cycle (memory: `(RESTART + 1) n` values).
@@ -78,11 +79,65 @@ pub enum Need<'a> {
     Residual(&'a [f64]),
 }
 
+/// Where a GMRES solve's vectors are: whole in this process, or each rank holding its own rows
+/// ([`crate::distributed`]), so that the Krylov basis is divided among the ranks. The sums
+/// over a vector (dot products, norms) add the ranks' partial sums in rank order, the same
+/// on every rank, so every rank's solve takes the same steps; on one rank they are the plain
+/// sums.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Rows<'a> {
+    ranks: Option<&'a dyn Collective>,
+}
+
+impl<'a> Rows<'a> {
+    /// Vectors whole in this process.
+    pub fn whole() -> Self {
+        Self { ranks: None }
+    }
+
+    /// Each rank of `ranks` holding its own rows.
+    pub fn over(ranks: &'a dyn Collective) -> Self {
+        Self { ranks: Some(ranks) }
+    }
+
+    /// The sum over the ranks of each of `values`, in rank order.
+    fn summed(&self, values: &[f64]) -> Vec<f64> {
+        match self.ranks {
+            None => values.to_vec(),
+            Some(ranks) => {
+                let parts = ranks.gather_f64(values);
+                (0..values.len()).map(|k| parts.iter().map(|p| p[k]).sum()).collect()
+            }
+        }
+    }
+
+    fn dot(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.summed(&[dot(a, b)])[0]
+    }
+
+    fn norm(&self, a: &[f64]) -> f64 {
+        // Scaled so that neither large nor tiny entries over- or underflow; the scale is the
+        // largest entry of all the ranks' rows.
+        let local = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let scale = match self.ranks {
+            None => local,
+            Some(ranks) => ranks.gather_f64(&[local]).iter().fold(0.0f64, |m, p| m.max(p[0])),
+        };
+        if scale == 0.0 || !scale.is_finite() {
+            return scale;
+        }
+        let squares: f64 = a.iter().map(|v| (v / scale).powi(2)).sum();
+        scale * self.summed(&[squares])[0].sqrt()
+    }
+}
+
 /// One GMRES solve as a sequence of requests ([`Gmres::need`], answered by [`Gmres::give`]), so
 /// that many solves on one operator can have their products computed together, each matrix
-/// entry read once for all of them.
+/// entry read once for all of them. Its vectors are those of its [`Rows`]: the products it asks
+/// for and is given are of its rows only.
 #[derive(Debug)]
-pub struct Gmres {
+pub struct Gmres<'a> {
+    rows: Rows<'a>,
     b_norm: f64,
     target: f64,
     x: Vec<f64>,
@@ -104,11 +159,19 @@ enum State {
     Done(Option<Error>),
 }
 
-impl Gmres {
-    /// A solve of `A x = b` to `||b - A x||_2 <= tolerance ||b||_2`, from `x = b`.
+impl<'a> Gmres<'a> {
+    /// A solve of `A x = b` to `||b - A x||_2 <= tolerance ||b||_2`, from `x = b`, its vectors
+    /// whole.
     pub fn new(b: &[f64], tolerance: f64) -> Self {
-        let b_norm = norm(b);
+        Self::over_rows(b, tolerance, Rows::whole())
+    }
+
+    /// As [`Gmres::new`], `b` being this process's rows of the right-hand side as `rows` holds
+    /// them.
+    pub fn over_rows(b: &[f64], tolerance: f64, rows: Rows<'a>) -> Self {
+        let b_norm = rows.norm(b);
         let mut solver = Self {
+            rows,
             b_norm,
             target: tolerance * b_norm,
             x: b.to_vec(),
@@ -140,11 +203,11 @@ impl Gmres {
         match std::mem::replace(&mut self.state, State::Done(None)) {
             State::Start { b } => {
                 let r: Vec<f64> = given.iter().zip(&b).map(|(ax, bi)| bi - ax).collect();
-                self.r_norm = norm(&r);
+                self.r_norm = self.rows.norm(&r);
                 self.state = self.next_cycle(r);
             }
             State::Arnoldi(mut cycle) => {
-                self.state = match cycle.step(given, self.target) {
+                self.state = match cycle.step(given, self.target, self.rows) {
                     false => State::Arnoldi(cycle),
                     true => {
                         self.iterations += cycle.finish(&mut self.x);
@@ -153,7 +216,7 @@ impl Gmres {
                 };
             }
             State::Restart => {
-                let new_norm = norm(&given);
+                let new_norm = self.rows.norm(&given);
                 let (b_norm, iterations) = (self.b_norm, self.iterations);
                 self.state = if !new_norm.is_finite() {
                     State::Done(Some(failure(IterationFailure::NotFinite, new_norm, iterations)))
@@ -222,19 +285,19 @@ impl Cycle {
     }
 
     /// One Arnoldi step with `w` = A times the newest basis vector; whether the cycle ends.
-    fn step(&mut self, mut w: Vec<f64>, target: f64) -> bool {
+    fn step(&mut self, mut w: Vec<f64>, target: f64, rows: Rows) -> bool {
         let j = self.h.len();
-        let w_norm_before = norm(&w);
+        let w_norm_before = rows.norm(&w);
         let mut column = vec![0.0; j + 2];
         // Modified Gram–Schmidt, twice ("twice is enough": Giraud, Langou, Rozložník 2005).
         for _ in 0..2 {
             for (i, v) in self.basis.iter().enumerate() {
-                let hij = dot(&w, v);
+                let hij = rows.dot(&w, v);
                 column[i] += hij;
                 w.iter_mut().zip(v).for_each(|(wk, vk)| *wk -= hij * vk);
             }
         }
-        let w_norm = norm(&w);
+        let w_norm = rows.norm(&w);
         column[j + 1] = w_norm;
         for (i, &(c, s)) in self.rotations.iter().enumerate() {
             let (a, b) = (column[i], column[i + 1]);
@@ -275,13 +338,4 @@ impl Cycle {
         }
         k
     }
-}
-
-fn norm(a: &[f64]) -> f64 {
-    // Scaled so that neither large nor tiny entries over- or underflow.
-    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    if scale == 0.0 || !scale.is_finite() {
-        return scale;
-    }
-    scale * a.iter().map(|v| (v / scale).powi(2)).sum::<f64>().sqrt()
 }

@@ -2,10 +2,13 @@
 //! ([`crate::operator`]), or K kept on the GPU ([`crate::gpu::DeviceOperator`]). GMRES, since no
 //! matrix is there to factor.
 
-use super::gmres::{Gmres, Need, RESTART};
+use std::ops::Range;
+
+use super::gmres::{Gmres, Need, RESTART, Rows};
 use super::{
     CLOSED_ROW_TOLERANCE, SolveOutcome, SolverOptions, check_tolerance, reject_unit_row_sums,
 };
+use crate::distributed::Collective;
 use crate::error::Result;
 use crate::gpu::{DeviceBlocks, DeviceOperator};
 use crate::operator::CompressedOperator;
@@ -14,8 +17,14 @@ use crate::operator::CompressedOperator;
 pub trait Products: Sync {
     /// Number of unknowns.
     fn dof(&self) -> usize;
-    /// `K x` for every `x` in `xs`, the operator read once for all of them.
+    /// `K x` for every `x` in `xs`, the operator read once for all of them; over several
+    /// ranks every rank calls it with the same `xs` and gets the whole products.
     fn apply_many(&self, xs: &[&[f64]]) -> Result<Vec<Vec<f64>>>;
+    /// The ranks the operator is spread over, if it is: the solve then divides its vectors
+    /// among them.
+    fn ranks(&self) -> Option<&dyn Collective> {
+        None
+    }
 }
 
 impl Products for CompressedOperator {
@@ -25,6 +34,10 @@ impl Products for CompressedOperator {
 
     fn apply_many(&self, xs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
         Ok(CompressedOperator::apply_many(self, xs))
+    }
+
+    fn ranks(&self) -> Option<&dyn Collective> {
+        self.share.as_ref().map(|share| &*share.ranks as &dyn Collective)
     }
 }
 
@@ -48,17 +61,29 @@ impl Products for DeviceBlocks {
     }
 }
 
-/// `I - diag(s) K` (s = 1 but for a colour band's rows).
+/// `I - diag(s) K` (s = 1 but for a colour band's rows), on this process's rows of the
+/// vectors: over several ranks each holds the rows [`own_rows`] gives it, and a product
+/// gathers the whole `x` from them, every rank's partial `K x` is summed, and each keeps its
+/// rows of the result.
 struct ProductSystem<'a> {
     k: &'a dyn Products,
+    /// This process's rows of `s`.
     row_scale: Option<Vec<f64>>,
+    rows: Range<usize>,
 }
 
 impl ProductSystem<'_> {
-    /// `A x` for every `x` in `xs`, the operator read once for all of them.
+    /// This process's rows of `A x` for every `x` in `xs` (this process's rows of each), the
+    /// operator read once for all of them.
     fn apply_many(&self, xs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
-        let mut kxs = self.k.apply_many(xs)?;
+        let whole = whole_vectors(xs, self.k.dof(), self.k.ranks());
+        let whole: Vec<&[f64]> = whole.iter().map(Vec::as_slice).collect();
+        let whole = if whole.is_empty() { xs } else { &whole[..] };
+        let mut kxs = self.k.apply_many(whole)?;
         for (x, kx) in xs.iter().zip(&mut kxs) {
+            if kx.len() != x.len() {
+                *kx = kx[self.rows.clone()].to_vec();
+            }
             if let Some(scale) = &self.row_scale {
                 kx.iter_mut().zip(scale).for_each(|(v, s)| *v *= s);
             }
@@ -66,6 +91,44 @@ impl ProductSystem<'_> {
         }
         Ok(kxs)
     }
+}
+
+/// The rows of an `n`-vector that this process holds in a solve over `ranks`: a contiguous
+/// range, the ranks' ranges in rank order, their lengths differing by one at most.
+fn own_rows(n: usize, ranks: Option<&dyn Collective>) -> Range<usize> {
+    match ranks {
+        None => 0..n,
+        Some(ranks) => rows_of(n, ranks.rank(), ranks.size()),
+    }
+}
+
+fn rows_of(n: usize, rank: usize, size: usize) -> Range<usize> {
+    n * rank / size..n * (rank + 1) / size
+}
+
+/// The whole `n`-vectors of which `parts` are this process's rows ([`own_rows`]), gathered
+/// from every rank in one exchange; nothing (the parts are whole) in one process.
+fn whole_vectors(parts: &[&[f64]], n: usize, ranks: Option<&dyn Collective>) -> Vec<Vec<f64>> {
+    let Some(ranks) = ranks else {
+        return Vec::new();
+    };
+    // Every rank sends as many values: its rows of each vector, padded to the longest share.
+    let width = n.div_ceil(ranks.size());
+    let mut mine = vec![0.0; width * parts.len()];
+    for (slot, part) in mine.chunks_mut(width).zip(parts) {
+        slot[..part.len()].copy_from_slice(part);
+    }
+    let all = ranks.gather_f64(&mine);
+    (0..parts.len())
+        .map(|v| {
+            let mut x = Vec::with_capacity(n);
+            for (rank, theirs) in all.iter().enumerate() {
+                let len = rows_of(n, rank, ranks.size()).len();
+                x.extend_from_slice(&theirs[v * width..v * width + len]);
+            }
+            x
+        })
+        .collect()
 }
 
 /// Most bytes of the interleaved vectors of one round of products (each of the product's
@@ -106,20 +169,22 @@ pub fn solve_by_products_many(
     compression_tolerance: f64,
 ) -> Result<Vec<SolveOutcome>> {
     check_tolerance(options.tolerance)?;
-    let row_scale = (rho != operator_rho).then(|| {
+    let row_scale: Option<Vec<f64>> = (rho != operator_rho).then(|| {
         rho.iter().zip(operator_rho).map(|(&b, &g)| if g == 0.0 { 0.0 } else { b / g }).collect()
     });
-    let sys = ProductSystem { k, row_scale };
     if !rho.is_empty() && rho.iter().all(|&r| r == 1.0) {
         let ones = vec![1.0; k.dof()];
         let mut sums = k.apply_many(&[&ones])?.pop().expect("one product");
-        if let Some(scale) = &sys.row_scale {
+        if let Some(scale) = &row_scale {
             sums.iter_mut().zip(scale).for_each(|(v, s)| *v *= s);
         }
         reject_unit_row_sums(&sums, CLOSED_ROW_TOLERANCE.max(10.0 * compression_tolerance))?;
     }
+    let rows = own_rows(k.dof(), k.ranks());
+    let row_scale = row_scale.map(|s| s[rows.clone()].to_vec());
+    let sys = ProductSystem { k, row_scale, rows };
     // Each solve holds its Krylov basis: as many at once as fit in the budget.
-    let together = (SOLVES_BYTES / (8 * (RESTART + 2) * k.dof()).max(1)).max(1);
+    let together = (SOLVES_BYTES / (8 * (RESTART + 2) * sys.rows.len()).max(1)).max(1);
     let mut outcomes = Vec::with_capacity(rhs.len());
     for group in rhs.chunks(together) {
         outcomes.extend(solve_together(&sys, group, rho, options.tolerance)?);
@@ -128,15 +193,20 @@ pub fn solve_by_products_many(
 }
 
 /// GMRES for each right-hand side of `rhs` on `sys`, in lockstep: each round's products in one
-/// pass over the blocks.
+/// pass over the blocks. The solves hold their vectors' rows of `sys`; the solutions are whole.
 fn solve_together(
     sys: &ProductSystem,
-    rhs: &[&[f64]],
-    rho: &[f64],
+    whole_rhs: &[&[f64]],
+    whole_rho: &[f64],
     tolerance: f64,
 ) -> Result<Vec<SolveOutcome>> {
     let round = (ROUND_BYTES / (8 * sys.k.dof()).max(1)).max(1);
-    let mut solvers: Vec<Gmres> = rhs.iter().map(|b| Gmres::new(b, tolerance)).collect();
+    let ranks = sys.k.ranks();
+    let rows = ranks.map_or(Rows::whole(), Rows::over);
+    let rhs: Vec<&[f64]> = whole_rhs.iter().map(|b| &b[sys.rows.clone()]).collect();
+    let rho = &whole_rho[sys.rows.clone()];
+    let mut solvers: Vec<Gmres> =
+        rhs.iter().map(|b| Gmres::over_rows(b, tolerance, rows)).collect();
     loop {
         let asking: Vec<usize> =
             (0..solvers.len()).filter(|&i| solvers[i].need().is_some()).collect();
@@ -165,7 +235,7 @@ fn solve_together(
         }
     }
     let mut solutions = Vec::with_capacity(rhs.len());
-    for (solver, b) in solvers.into_iter().zip(rhs) {
+    for (solver, b) in solvers.into_iter().zip(&rhs) {
         let g = solver.finish()?;
         let mut u = g.x;
         let mut fixed = 0;
@@ -180,18 +250,37 @@ fn solve_together(
     let mut outcomes = Vec::with_capacity(rhs.len());
     for group in solutions.chunks(round) {
         let us: Vec<&[f64]> = group.iter().map(|(u, ..)| u.as_slice()).collect();
-        for ((u, iterations, fixed), au) in group.iter().zip(sys.apply_many(&us)?) {
-            let b = rhs[outcomes.len()];
-            let r = b.iter().zip(&au).fold(0.0f64, |m, (b, au)| m.max((b - au).abs()));
+        let products = sys.apply_many(&us)?;
+        // The residuals' largest entries and the rows eliminated, over the ranks' rows; the
+        // solutions whole.
+        let mut counts = Vec::with_capacity(2 * group.len());
+        for ((_, _, fixed), au) in group.iter().zip(&products) {
+            let b = rhs[outcomes.len() + counts.len() / 2];
+            counts.push(b.iter().zip(au).fold(0.0f64, |m, (b, au)| m.max((b - au).abs())));
+            counts.push(*fixed as f64);
+        }
+        let counts = match ranks {
+            None => counts,
+            Some(ranks) => {
+                let all = ranks.gather_f64(&counts);
+                let over = |k: usize, add: bool| {
+                    all.iter().fold(0.0, |m: f64, p| if add { m + p[k] } else { m.max(p[k]) })
+                };
+                (0..counts.len()).map(|k| over(k, k % 2 == 1)).collect()
+            }
+        };
+        let us = whole_vectors(&us, sys.k.dof(), ranks);
+        for (at, ((u, iterations, _), found)) in group.iter().zip(counts.chunks(2)).enumerate() {
+            let b = whole_rhs[outcomes.len()];
             let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
             outcomes.push(SolveOutcome {
-                residual: r / scale,
-                u: u.clone(),
+                residual: found[0] / scale,
+                u: us.get(at).unwrap_or(u).clone(),
                 solver: "gmres",
                 iterations: *iterations,
                 condition_estimate: None,
                 refinement_steps: 0,
-                rows_eliminated: *fixed,
+                rows_eliminated: found[1] as usize,
             });
         }
     }
