@@ -97,6 +97,14 @@ fn two_ranks_solve_as_one_process_does() {
             assert_eq!(r["rank"], rank);
             assert!(r["operator_bytes"].as_u64().unwrap() > 0, "{args:?}: {r}");
             assert!(r["setup_seconds"].as_f64().unwrap() > 0.0, "{args:?}: {r}");
+            // What every rank holds whatever its share: at least the operator's orders (16
+            // bytes an element), and within the rank's peak.
+            let replicated = r["replicated_bytes"].as_u64().unwrap();
+            let n = one.len() as u64;
+            assert!(replicated >= 8 * n, "{args:?}: {r}");
+            if let Some(peak) = r["peak_rss_bytes"].as_u64() {
+                assert!(replicated < peak, "{args:?}: {r}");
+            }
         }
         assert!(report["communication_bytes"].as_u64().unwrap() > 0);
         assert!(report["load_imbalance"].as_f64().unwrap() >= 1.0);

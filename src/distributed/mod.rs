@@ -65,6 +65,9 @@ pub struct RankReport {
     pub setup_seconds: f64,
     /// Bytes of its blocks.
     pub operator_bytes: u64,
+    /// What it holds whatever its share: the scene, mesh, discretization and occluder index,
+    /// the cluster trees, the block plan and the orders (`RankShare::replicated_bytes`).
+    pub replicated_bytes: u64,
     /// Its peak resident memory.
     pub peak_rss_bytes: Option<u64>,
     /// Time in collectives, waiting included.
@@ -97,6 +100,7 @@ impl DistributedReport {
             mine.peak_rss_bytes.map_or(-1.0, |b| b as f64),
             mine.communication_seconds,
             mine.communication_bytes as f64,
+            mine.replicated_bytes as f64,
         ];
         let per_rank: Vec<RankReport> = ranks
             .gather_f64(&fields)
@@ -109,6 +113,7 @@ impl DistributedReport {
                 peak_rss_bytes: (f[2] >= 0.0).then_some(f[2] as u64),
                 communication_seconds: f[3],
                 communication_bytes: f[4] as u64,
+                replicated_bytes: f[5] as u64,
             })
             .collect();
         let setups: Vec<f64> = per_rank.iter().map(|r| r.setup_seconds).collect();

@@ -164,7 +164,11 @@ impl CompressedOperator {
             let operator_bytes = stats.operator_bytes;
             (stats, pairs) = summed_over(&**ranks, stats, pairs);
             let waited_seconds = ranks.traffic().seconds - waited_before.unwrap_or(0.0);
-            RankShare { ranks: ranks.clone(), operator_bytes, waited_seconds }
+            let replicated_bytes = guard.resident_at_start().unwrap_or(0)
+                + estimate.trees
+                + estimate.plan
+                + estimate.orders;
+            RankShare { ranks: ranks.clone(), operator_bytes, waited_seconds, replicated_bytes }
         });
         let zero_rows = disc.nodes.iter().filter(|n| n.rho == 0.0).count();
         Ok(Self {

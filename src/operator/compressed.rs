@@ -57,6 +57,10 @@ pub struct RankShare {
     pub operator_bytes: u64,
     /// Time of the build this rank spent waiting for the others in collectives.
     pub waited_seconds: f64,
+    /// What the rank holds whatever its share: its resident memory when the build began (the
+    /// scene, mesh, discretization and occluder index, the same on every rank), the cluster
+    /// trees, the whole block plan (while its share is taken) and the orders.
+    pub replicated_bytes: u64,
 }
 
 impl CompressedOperator {

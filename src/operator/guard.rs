@@ -38,6 +38,11 @@ pub(super) struct MemoryGuard {
 const LOOK_EVERY: u64 = 16 << 20;
 
 impl MemoryGuard {
+    /// The process's resident memory when the build began, where the system tells.
+    pub(super) fn resident_at_start(&self) -> Option<u64> {
+        self.resident_at_start
+    }
+
     pub(super) fn new(dof: usize) -> Self {
         Self { source: allowance_source(), ..Self::with_allowance(dof, memory_allowance()) }
     }

@@ -65,6 +65,14 @@ const CROSSING_BYTES: u64 = 32;
 /// solver's layer is above the operator's, which cannot name it).
 const GMRES_VECTORS: u64 = 32;
 
+/// Vectors of n values that the solve holds on a rank, with `threads` of its own: its rows of
+/// GMRES's vectors, two per thread for the products, and over several ranks the whole `x` of
+/// a product and what is gathered to make it.
+fn solver_vectors(ranks: u64, threads: u64) -> u64 {
+    let gathered = if ranks > 1 { 2 } else { 0 };
+    GMRES_VECTORS.div_ceil(ranks.max(1)) + 2 * threads + gathered
+}
+
 /// How a node sees an element.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Sight {
@@ -186,7 +194,7 @@ pub(super) fn estimate_memory(
         dof,
         trees: tree_bytes(nodes) + tree_bytes(elements),
         orders: order_bytes(dof, per),
-        solver: 8 * dof as u64 * (GMRES_VECTORS + 2 * threads),
+        solver: 8 * dof as u64 * solver_vectors(ranks as u64, threads),
         ranks,
         single: entries.precision == Precision::F32,
         ..Default::default()

@@ -319,6 +319,7 @@ pub fn distributed_report(
         peak_rss_bytes: super::peak_rss_bytes(),
         communication_seconds: traffic.seconds,
         communication_bytes: traffic.bytes,
+        replicated_bytes: share.replicated_bytes,
     };
     Some(DistributedReport::gather(&*share.ranks, mine))
 }
