@@ -63,7 +63,7 @@ pub fn interpolant_at(disc: &Discretization, u: &[f64], point: &Node) -> f64 {
     let j = point.element;
     let per = disc.method.nodes_per_element();
     let q = disc.elements[j].frame.to_plane(point.position);
-    (0..per).map(|l| u[j * per + l] * disc.bases[j][l].eval(q)).sum()
+    (0..per).map(|l| u[j * per + l] * disc.basis(j)[l].eval(q)).sum()
 }
 
 /// The errors of `u` (the collocation solution) against the true solution `truth` (face by face)

@@ -49,7 +49,7 @@ impl PairEvaluation for CpuPairs<'_> {
                 let node = &self.disc.nodes[t.node];
                 let values = self.integrator.integrate(
                     &self.disc.elements[t.element],
-                    &self.disc.bases[t.element],
+                    self.disc.basis(t.element),
                     node.position,
                     node.normal,
                     &t.visible,

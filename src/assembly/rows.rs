@@ -163,7 +163,7 @@ fn fill_entry(
     let sink = |j: usize, v: f64| row[j] += scale * v;
     let Some(values) = integrator.integrate_or_batch(
         el,
-        &disc.bases[j],
+        disc.basis(j),
         node.position,
         node.normal,
         vis,

@@ -93,7 +93,7 @@ impl ThinElements {
             let j = self.elements[k];
             let el = &disc.elements[j];
             let values =
-                self.integrator.integrate(el, &disc.bases[j], node.position, node.normal, vis);
+                self.integrator.integrate(el, disc.basis(j), node.position, node.normal, vis);
             write(k, values.map(|v| scale * v));
         };
         let faces = self.by_face.iter().map(|(face, list)| (*face, list.iter().copied()));

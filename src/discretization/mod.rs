@@ -172,9 +172,14 @@ pub struct Discretization {
     pub nodes: Vec<Node>,
     /// Element frames, in mesh order.
     pub elements: Vec<ElementFrame>,
-    /// Basis functions per element (one or three used), in the element's local frame.
-    pub bases: Vec<[Affine2; 3]>,
+    /// The linear method's basis functions per element, in the element's local frame; none
+    /// for the centroid method, whose one basis function is 1 on every element
+    /// ([`Discretization::basis`]).
+    bases: Vec<[Affine2; 3]>,
 }
+
+/// The centroid method's basis on every element: the constant 1 (the others unused).
+const CONSTANT_BASIS: [Affine2; 3] = [Affine2::ONE, Affine2::ZERO, Affine2::ZERO];
 
 impl Discretization {
     /// Nodes and bases of `mesh` (on `scene`) for `method`.
@@ -184,7 +189,8 @@ impl Discretization {
         }
         let mut nodes = Vec::with_capacity(mesh.len() * method.nodes_per_element());
         let mut elements = Vec::with_capacity(mesh.len());
-        let mut bases = Vec::with_capacity(mesh.len());
+        let linear = matches!(method, Method::Linear { .. });
+        let mut bases = Vec::with_capacity(if linear { mesh.len() } else { 0 });
         for (j, e) in mesh.elements().iter().enumerate() {
             let face = &scene.faces[e.face];
             let centroid = e.centroid();
@@ -210,10 +216,7 @@ impl Discretization {
                 rho: face.rho,
             };
             match method {
-                Method::Centroid => {
-                    nodes.push(node(centroid));
-                    bases.push([Affine2::ONE, Affine2::default(), Affine2::default()]);
-                }
+                Method::Centroid => nodes.push(node(centroid)),
                 Method::Linear { alpha } => {
                     let sum = e.vertices[0] + e.vertices[1] + e.vertices[2];
                     for v in e.vertices {
@@ -234,6 +237,14 @@ impl Discretization {
     /// Number of elements n.
     pub fn element_count(&self) -> usize {
         self.elements.len()
+    }
+
+    /// The basis functions on element `j` (one or three used), in its local frame.
+    pub fn basis(&self, j: usize) -> &[Affine2; 3] {
+        match self.method {
+            Method::Centroid => &CONSTANT_BASIS,
+            Method::Linear { .. } => &self.bases[j],
+        }
     }
 }
 
@@ -266,7 +277,7 @@ mod tests {
         let d = Discretization::new(&scene, &mesh, Method::linear(1.0 / 6.0).unwrap()).unwrap();
         assert_eq!(d.dof(), 3 * mesh.len());
         for (j, e) in d.elements.iter().enumerate() {
-            for (l, basis) in d.bases[j].iter().enumerate() {
+            for (l, basis) in d.basis(j).iter().enumerate() {
                 for m in 0..3 {
                     let node = d.nodes[3 * j + m].position;
                     let value = basis.eval(e.frame.to_plane(node));
@@ -279,7 +290,7 @@ mod tests {
             }
             // The three basis functions sum to 1 (they interpolate constants).
             let q = DVec2::new(0.1, -0.05);
-            let sum: f64 = d.bases[j].iter().map(|b| b.eval(q)).sum();
+            let sum: f64 = d.basis(j).iter().map(|b| b.eval(q)).sum();
             assert!((sum - 1.0).abs() < 1e-13);
         }
     }
@@ -291,6 +302,12 @@ mod tests {
         let d = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
         for (node, e) in d.nodes.iter().zip(mesh.elements()) {
             assert!((node.position - e.centroid()).length() < 1e-15);
+        }
+        // Its basis is the constant 1 on every element, kept once, not per element.
+        assert!(d.bases.is_empty());
+        for j in 0..d.element_count() {
+            let q = DVec2::new(0.3, -0.2);
+            assert_eq!(d.basis(j).map(|b| b.eval(q)), [1.0, 0.0, 0.0]);
         }
         for alpha in [-0.1, 1.0 / 3.0, f64::NAN] {
             assert!(matches!(Method::linear(alpha), Err(Error::InvalidAlpha { .. })));

@@ -89,6 +89,8 @@ pub struct Affine2 {
 impl Affine2 {
     /// The constant function 1 (the centroid method's basis function).
     pub const ONE: Self = Self { c0: 1.0, cx: 0.0, cy: 0.0 };
+    /// The function 0.
+    pub const ZERO: Self = Self { c0: 0.0, cx: 0.0, cy: 0.0 };
 
     /// Value at `q`.
     pub fn eval(&self, q: DVec2) -> f64 {

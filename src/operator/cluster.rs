@@ -115,6 +115,9 @@ impl ClusterTree {
         }
         faces.sort_unstable();
         faces.dedup();
+        // The list held one entry per member: a tree of n items would keep n of them on each
+        // of its levels (most clusters are on one face).
+        faces.shrink_to_fit();
         let several_faces = faces.len() > 1;
         self.clusters.push(Cluster { start, end, lo, hi, children: None, faces });
         if end - start <= leaf_size && !several_faces {
@@ -214,6 +217,8 @@ mod tests {
                 assert!(items[k].point.cmpge(c.lo).all() && items[k].point.cmple(c.hi).all());
                 assert!(c.faces.contains(&items[k].face));
             }
+            // A cluster keeps its faces, not a slot per member (n per level of the tree).
+            assert_eq!(c.faces.capacity(), c.faces.len());
             match c.children {
                 Some((l, r)) => {
                     assert_eq!(

@@ -199,7 +199,7 @@ impl Entries<'_> {
             let sink = |(at, scale): (usize, f64), v: f64| data[at] += scale * v;
             let Some(values) = self.integrator.integrate_or_batch(
                 el,
-                &self.disc.bases[j],
+                self.disc.basis(j),
                 node.position,
                 node.normal,
                 &vis,
@@ -271,7 +271,7 @@ impl Entries<'_> {
             let sink = |(at, scale): (usize, f64), v: f64| out[at] += scale * v;
             let Some(values) = self.integrator.integrate_or_batch(
                 &self.disc.elements[j],
-                &self.disc.bases[j],
+                self.disc.basis(j),
                 node.position,
                 node.normal,
                 &Visibility::Full,

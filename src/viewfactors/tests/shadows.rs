@@ -78,9 +78,8 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
                     }
                 }
                 let vis = planner.visible(&view, &part);
-                let want = integrator.integrate(&disc.elements[j], &disc.bases[j], p, normal, &vis)
-                    [0]
-                    / PI;
+                let want =
+                    integrator.integrate(&disc.elements[j], disc.basis(j), p, normal, &vis)[0] / PI;
                 assert!((got - want).abs() <= 1e-14, "{i} -> {j} at {p}: {got} vs {want}");
             }
         }
