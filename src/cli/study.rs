@@ -4,6 +4,7 @@ use radiosity::error::{Error, Result};
 use radiosity::pipeline::{BackendName, SceneSource};
 use radiosity::report;
 use radiosity::report::TableFormat;
+use radiosity::study::cities::{CitySeries, SIZES, run_cities};
 use radiosity::study::compression::{CompressionSeries, TOLERANCES, run_compression};
 use radiosity::study::estimates::{
     DEFAULT_SEEDS, EstimateSeries, TOLERANCES as ESTIMATE_TOLERANCES, run_estimates,
@@ -90,6 +91,11 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             };
             let result = run_estimates(&series, &*super::progress::on_stderr())?;
             emit(&result, json, || report::estimate_table(&result, format))
+        }
+        "cities" => {
+            let series = CitySeries { sizes: SIZES.to_vec(), max_n };
+            let result = run_cities(&series, &*super::progress::on_stderr())?;
+            emit(&result, json, || report::city_table(&result, format))
         }
         "stiff" => {
             let result = radiosity::study::stability::run_stiff(device)?;

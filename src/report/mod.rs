@@ -1,5 +1,6 @@
 //! Reports: plain-text tables for people, JSON for programs, plots and NumPy files.
 
+mod city_study;
 mod compression_study;
 mod estimate_study;
 mod json;
@@ -14,6 +15,7 @@ mod study_table;
 mod table;
 mod vtk;
 
+pub use city_study::city_table;
 pub use compression_study::{compression_table, write_compression_figure};
 pub use estimate_study::estimate_table;
 pub use json::write_json;

@@ -2,6 +2,7 @@
 //! [`crate::pipeline::run`], with the paper's printed value beside ours where it has one.
 
 mod analysis;
+pub mod cities;
 pub mod compression;
 pub mod estimates;
 mod specs;

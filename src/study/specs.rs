@@ -450,5 +450,6 @@ pub fn study_ids() -> Vec<&'static str> {
     ids.extend(crate::study::stability::STUDY_IDS);
     ids.push("compression");
     ids.push("estimates");
+    ids.push("cities");
     ids
 }

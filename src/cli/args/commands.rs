@@ -18,7 +18,8 @@ use super::outputs::OutputArgs;
 pub(crate) struct StudyArgs {
     /// Study id
     pub(crate) id: String,
-    /// Largest number of elements n to run (default: the paper's largest)
+    /// Largest number of elements n to run (default: the paper's largest; `study cities`: the
+    /// cities of 4 to 32 blocks a side)
     #[arg(long)]
     pub(crate) max_n: Option<usize>,
     /// Where to assemble: cpu (GPU series left out), gpu (everything that can runs on the
