@@ -95,7 +95,7 @@ impl PairIntegrator {
             LaneObserver::Scalar => {
                 FullPair::Values(self.integrate(el, basis, p, normal, &Visibility::Full))
             }
-            LaneObserver::Lane(obs) => FullPair::Lane(obs, el.scaled),
+            LaneObserver::Lane(obs) => FullPair::Lane(obs, el.scaled()),
         }
     }
 
@@ -205,7 +205,7 @@ impl PairIntegrator {
                 let loops: Vec<&[DVec2]> = shifted.iter().map(Vec::as_slice).collect();
                 self.integrate_loops(&obs, el, &loops, &basis)
             }
-            _ => self.integrate_loops(&obs, el, &[&el.scaled[..]], &basis),
+            _ => self.integrate_loops(&obs, el, &[&el.scaled()[..]], &basis),
         }
     }
 
@@ -219,7 +219,7 @@ impl PairIntegrator {
         basis: &[Affine2; 3],
     ) -> [f64; 3] {
         if let Some(rule) = &self.graded {
-            return rule.integrate(obs, &el.scaled, loops, basis);
+            return rule.integrate(obs, &el.scaled(), loops, basis);
         }
         if let Some(rule) = self.subdivision.as_ref().filter(|_| el.thin) {
             let near = |piece: &[DVec2; 3]| self.closed_forms(obs, &[&piece[..]], basis);

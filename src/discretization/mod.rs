@@ -142,9 +142,7 @@ pub struct ElementFrame {
     /// exact. The kernels integrate in these units, where no square or fourth power of a length
     /// under- or overflows, whatever the scene's unit (G dS is invariant under scaling).
     pub unit: f64,
-    /// `local` times `unit`.
-    pub scaled: [DVec2; 3],
-    /// Radius of `scaled` about the centroid ([`far_field::radius`]).
+    /// Radius of [`ElementFrame::scaled`] about the centroid ([`far_field::radius`]).
     pub scaled_radius: f64,
     /// Whether the closed forms cancel on it ([`far_field::is_thin`]).
     pub thin: bool,
@@ -156,8 +154,14 @@ impl ElementFrame {
         self.local.map(|v| v + self.centroid_in_face)
     }
 
+    /// Vertices in the local frame's 2-D coordinates and the element's units: `local` times
+    /// `unit`, where the kernels integrate (made when asked for, not kept: 48 bytes an element).
+    pub fn scaled(&self) -> [DVec2; 3] {
+        self.local.map(|v| v * self.unit)
+    }
+
     /// A point of the face frame's 2-D coordinates in the element's local coordinates and units
-    /// (those of `scaled`, where the kernels integrate).
+    /// (those of [`ElementFrame::scaled`], where the kernels integrate).
     pub fn to_scaled(&self, q: DVec2) -> DVec2 {
         (q - self.centroid_in_face) * self.unit
     }
@@ -197,15 +201,13 @@ impl Discretization {
             let frame = face.frame.with_origin(centroid);
             let local = e.vertices.map(|v| frame.to_plane(v));
             let unit = crate::geometry::power_of_two_unit(far_field::radius(&local));
-            let scaled = local.map(|v| v * unit);
             elements.push(ElementFrame {
                 frame,
                 face: e.face,
                 centroid_in_face: face.frame.to_plane(centroid),
                 local,
                 unit,
-                scaled,
-                scaled_radius: far_field::radius(&scaled),
+                scaled_radius: far_field::radius(&local.map(|v| v * unit)),
                 thin: far_field::is_thin(&local),
             });
             let node = |position| Node {
