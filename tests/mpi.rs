@@ -79,10 +79,11 @@ fn tempfile_dir() -> std::path::PathBuf {
 
 #[test]
 fn two_ranks_solve_as_one_process_does() {
-    let cases: [&[&str]; 4] = [
-        &["--scene", "five-piece", "--refine", "4"],
+    let cases: [&[&str]; 5] = [
+        &["--scene", "five-piece", "--refine", "6"],
         &["--scene", "five-piece", "--method", "linear", "--refine", "3"],
         &["--scene", "examples/furnished-room.toml", "--refine", "2"],
+        &["--scene", "examples/louvre-window.toml", "--refine", "4"],
         &["--scene", "city:4x4:lit", "--refine", "1"],
     ];
     for args in cases {
