@@ -183,8 +183,10 @@ pub fn solve_by_products_many(
     let rows = own_rows(k.dof(), k.ranks());
     let row_scale = row_scale.map(|s| s[rows.clone()].to_vec());
     let sys = ProductSystem { k, row_scale, rows };
-    // Each solve holds its Krylov basis: as many at once as fit in the budget.
-    let together = (SOLVES_BYTES / (8 * (RESTART + 2) * sys.rows.len()).max(1)).max(1);
+    // Each solve holds its Krylov basis: as many at once as fit in the budget. Counted for the
+    // longest share, so that every rank advances the same groups.
+    let longest = k.ranks().map_or(k.dof(), |ranks| k.dof().div_ceil(ranks.size()));
+    let together = (SOLVES_BYTES / (8 * (RESTART + 2) * longest).max(1)).max(1);
     let mut outcomes = Vec::with_capacity(rhs.len());
     for group in rhs.chunks(together) {
         outcomes.extend(solve_together(&sys, group, rho, options.tolerance)?);
