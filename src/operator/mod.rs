@@ -47,4 +47,6 @@ pub use stats::OperatorStats;
 pub use stored::{F32_FROM_TOLERANCE, Precision};
 
 #[cfg(test)]
+mod plan_tests;
+#[cfg(test)]
 mod tests;
