@@ -100,15 +100,27 @@ impl<'a> Rows<'a> {
         Self { ranks: Some(ranks) }
     }
 
-    /// The sum over the ranks of each of `values`, in rank order.
-    fn summed(&self, values: &[f64]) -> Vec<f64> {
+    /// Each of `values` combined over the ranks by `combine`, in rank order from `start`.
+    fn over_ranks(&self, values: &[f64], start: f64, combine: fn(f64, f64) -> f64) -> Vec<f64> {
         match self.ranks {
             None => values.to_vec(),
             Some(ranks) => {
                 let parts = ranks.gather_f64(values);
-                (0..values.len()).map(|k| parts.iter().map(|p| p[k]).sum()).collect()
+                (0..values.len())
+                    .map(|k| parts.iter().fold(start, |a, p| combine(a, p[k])))
+                    .collect()
             }
         }
+    }
+
+    /// The sum over the ranks of each of `values`, in rank order.
+    pub(super) fn summed(&self, values: &[f64]) -> Vec<f64> {
+        self.over_ranks(values, 0.0, |a, b| a + b)
+    }
+
+    /// The largest over the ranks of each of `values`.
+    pub(super) fn largest(&self, values: &[f64]) -> Vec<f64> {
+        self.over_ranks(values, 0.0, f64::max)
     }
 
     fn dot(&self, a: &[f64], b: &[f64]) -> f64 {
@@ -118,11 +130,7 @@ impl<'a> Rows<'a> {
     fn norm(&self, a: &[f64]) -> f64 {
         // Scaled so that neither large nor tiny entries over- or underflow; the scale is the
         // largest entry of all the ranks' rows.
-        let local = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let scale = match self.ranks {
-            None => local,
-            Some(ranks) => ranks.gather_f64(&[local]).iter().fold(0.0f64, |m, p| m.max(p[0])),
-        };
+        let scale = self.largest(&[a.iter().fold(0.0f64, |m, v| m.max(v.abs()))])[0];
         if scale == 0.0 || !scale.is_finite() {
             return scale;
         }

@@ -255,34 +255,25 @@ fn solve_together(
         let products = sys.apply_many(&us)?;
         // The residuals' largest entries and the rows eliminated, over the ranks' rows; the
         // solutions whole.
-        let mut counts = Vec::with_capacity(2 * group.len());
-        for ((_, _, fixed), au) in group.iter().zip(&products) {
-            let b = rhs[outcomes.len() + counts.len() / 2];
-            counts.push(b.iter().zip(au).fold(0.0f64, |m, (b, au)| m.max((b - au).abs())));
-            counts.push(*fixed as f64);
-        }
-        let counts = match ranks {
-            None => counts,
-            Some(ranks) => {
-                let all = ranks.gather_f64(&counts);
-                let over = |k: usize, add: bool| {
-                    all.iter().fold(0.0, |m: f64, p| if add { m + p[k] } else { m.max(p[k]) })
-                };
-                (0..counts.len()).map(|k| over(k, k % 2 == 1)).collect()
-            }
-        };
-        let us = whole_vectors(&us, sys.k.dof(), ranks);
-        for (at, ((u, iterations, _), found)) in group.iter().zip(counts.chunks(2)).enumerate() {
-            let b = whole_rhs[outcomes.len()];
+        let first = outcomes.len();
+        let largest: Vec<f64> = (rhs[first..].iter().zip(&products))
+            .map(|(b, au)| b.iter().zip(au).fold(0.0f64, |m, (b, au)| m.max((b - au).abs())))
+            .collect();
+        let fixed: Vec<f64> = group.iter().map(|(_, _, fixed)| *fixed as f64).collect();
+        let (largest, fixed) = (rows.largest(&largest), rows.summed(&fixed));
+        let whole = whole_vectors(&us, sys.k.dof(), ranks);
+        for (at, (u, iterations, _)) in group.iter().enumerate() {
+            let b = whole_rhs[first + at];
             let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
             outcomes.push(SolveOutcome {
-                residual: found[0] / scale,
-                u: us.get(at).unwrap_or(u).clone(),
+                residual: largest[at] / scale,
+                // In one process the rows are the whole.
+                u: whole.get(at).unwrap_or(u).clone(),
                 solver: "gmres",
                 iterations: *iterations,
                 condition_estimate: None,
                 refinement_steps: 0,
-                rows_eliminated: found[1] as usize,
+                rows_eliminated: fixed[at] as usize,
             });
         }
     }

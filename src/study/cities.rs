@@ -15,7 +15,6 @@ use crate::mesh::{Mesh, MeshKind};
 use crate::operator::OperatorChoice;
 use crate::pipeline::{self, RunOptions, SceneSource};
 use crate::progress::Progress;
-use crate::scene::SurfaceParameters;
 
 /// The sizes N run by default (`city:NxN:lit`), as far as `max_n` allows.
 pub const SIZES: [usize; 6] = [4, 8, 12, 16, 24, 32];
@@ -81,8 +80,7 @@ pub fn run_cities(series: &CitySeries, progress: &dyn Progress) -> Result<CitySt
     progress.start("cities", sizes.len());
     let mut rows: Vec<CityRow> = Vec::new();
     for size in sizes {
-        let scene = SceneSource::parse(&format!("city:{size}x{size}:lit"))?
-            .build(SurfaceParameters::default())?;
+        let scene = crate::scene::lit_city(size, size)?;
         // Refine 0: an unknown per triangle of the faces.
         let n = Mesh::new(&scene, &MeshKind::Uniform, 0)?.len();
         if series.max_n.is_some_and(|max| n > max) {
