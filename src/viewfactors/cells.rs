@@ -21,9 +21,10 @@ impl Context<'_> {
     /// edge; its error [`kept_error`](super::outer::kept_error) of its last levels, to be split
     /// further if the pair needs it); where T_j is seen whole, Gauss of the order that the
     /// patch's separation asks for (settled, as the bound is trusted); otherwise that order and
-    /// one more, the higher one's value with their difference as the error (which also catches
-    /// what the separation does not: the curved events of three skew edges), to be split
-    /// further if the pair needs it.
+    /// one more, the higher one's value with their difference as the error, and where a curved
+    /// event of three skew edges crosses the patch (which the separation does not see) the
+    /// rule over its quarters ([`Context::two_orders`]), to be split further if the pair needs
+    /// it.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn cell(
         &self,
@@ -261,10 +262,9 @@ impl Context<'_> {
         let rim = (0..m).flat_map(|k| [corners[k], 0.5 * (corners[k] + corners[(k + 1) % m])]);
         let mut band = 0.0f64;
         for at in rim {
-            // Its view's shape first: the integrand only where it differs.
             let probe = [(at + RIM_INSET * (centre - at), area)];
-            if matches!(shapes.and(self.shapes_at(i, j, part.sight, &probe)), Shapes::Many) {
-                let (g, _) = self.weighted_sum(i, j, part.sight, &probe);
+            let (g, shape) = self.weighted_sum(i, j, part.sight, &probe);
+            if matches!(shapes.and(shape), Shapes::Many) {
                 band = band.max(BAND_SHARE * (g - integral).abs());
             }
         }
