@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::cluster::{Cluster, ClusterTree};
 use super::options::{CompressionOptions, ShadowedBlocks};
+use super::sight::ClusterSight;
 use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
 use crate::geometry::box_corners;
@@ -42,6 +43,8 @@ pub(super) struct FacePairs<'a> {
     /// Whether elements across the nodes' tangent planes make a block shadowed (a shadowed
     /// block can take them) rather than mixed.
     planes_shadow: bool,
+    /// Where found, the faces each node cluster may see: a block of none of them is empty.
+    pub(super) sight: Option<&'a ClusterSight>,
 }
 
 impl<'a> FacePairs<'a> {
@@ -49,8 +52,10 @@ impl<'a> FacePairs<'a> {
         scene: &'a Scene,
         planner: &'a PairPlanner,
         options: &CompressionOptions,
+        sight: Option<&'a ClusterSight>,
     ) -> Self {
-        Self { scene, planner, planes_shadow: options.shadowed_blocks == ShadowedBlocks::On }
+        let planes_shadow = options.shadowed_blocks == ShadowedBlocks::On;
+        Self { scene, planner, planes_shadow, sight }
     }
 
     fn class(
@@ -502,6 +507,9 @@ impl Walk<'_> {
     /// both follow.
     fn settle<'b>(&self, t: usize, s: usize, within: Option<&'b [OccluderUnit]>) -> Settled<'b> {
         let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        if self.faces.sight.is_some_and(|sight| !sight.sees_any(t, &sc.faces)) {
+            return Settled::Empty;
+        }
         let between = Between::new(within);
         let class = classify(self.faces, tc, sc, &between);
         if class == PairClass::Nothing {

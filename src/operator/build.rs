@@ -11,6 +11,7 @@ use super::entries::{Entries, FaceTally};
 use super::guard::MemoryGuard;
 use super::options::{CompressionOptions, ProblemShape};
 use super::sampling::{build_list_bytes, estimate_memory};
+use super::sight::ClusterSight;
 use super::stats::{order_bytes, summed_over};
 use super::stored::Precision;
 use super::{batched, shadowed, share};
@@ -77,9 +78,15 @@ impl CompressedOperator {
             Precision::F32 => PairIntegrator::for_single_precision(disc.method, assembly),
             Precision::F64 => PairIntegrator::new(disc.method, assembly),
         };
-        let faces = FacePairs::new(scene, planner, options);
         let (nodes, elements) =
             in_stage(progress, "clusters", || cluster_trees(mesh, disc, options));
+        let sight = options.face_culling.decide(scene.faces.len()).then(|| {
+            in_stage(progress, "faces in sight", || ClusterSight::new(planner, disc, &nodes))
+        });
+        if let Some(sight) = &sight {
+            progress.note(&sight.note());
+        }
+        let faces = FacePairs::new(scene, planner, options, sight.as_ref());
         let entries = Entries {
             mesh,
             disc,
@@ -90,6 +97,7 @@ impl CompressedOperator {
             per,
             precision,
             faces: FaceTally::default(),
+            sight: sight.as_ref(),
         };
         // Before the plan is walked and its blocks built, what they will hold is estimated from
         // a sample of it, and a run that cannot fit is refused now rather than after minutes.
@@ -100,6 +108,8 @@ impl CompressedOperator {
         if batches.is_some() {
             estimate.rounds = batched::ROUND_BYTES;
         }
+        // What each cluster and node may see is held beside the trees, the same on every rank.
+        estimate.trees += sight.as_ref().map_or(0, |s| s.bytes() as u64);
         progress.note(&estimate.note());
         guard.estimate = Some(estimate);
         let refusal = guard.refusal(&estimate, options.refine);
@@ -159,6 +169,7 @@ impl CompressedOperator {
         let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty.blocks, per);
         stats.empty_block_pairs = plan.empty.pairs;
         stats.faces_viewed = entries.faces.viewed();
+        stats.faces_culled = entries.faces.culled();
         stats.operator_bytes += order_bytes(disc.dof(), per);
         let share = ranks.map(|ranks| {
             let operator_bytes = stats.operator_bytes;

@@ -9,6 +9,7 @@ use super::blocks::FacePairs;
 use super::built::Built;
 use super::cluster::ClusterTree;
 use super::compressed::Block;
+use super::sight::ClusterSight;
 use super::stored::{self, BlockData, Precision};
 use crate::assembly::PairIntegrator;
 use crate::discretization::Discretization;
@@ -32,16 +33,23 @@ pub(super) struct NodeViews<'a> {
     /// The occluders that last hid a face from one of the cluster's nodes.
     pub(super) hiders: RecentHiders,
     tally: Option<&'a FaceTally>,
+    /// Where found, the faces each node cluster may see (the others hidden without a view).
+    sight: Option<&'a ClusterSight>,
 }
 
 impl NodeViews<'_> {
-    /// Ready for node cluster `t` of `m` nodes (cleared when it is another cluster).
-    pub(super) fn prepare(&mut self, t: usize, m: usize) {
+    /// Ready for node cluster `t` of `nodes` (cleared when it is another cluster).
+    pub(super) fn prepare(&mut self, t: usize, nodes: &[usize]) {
         if self.cluster != Some(t) {
             self.cluster = Some(t);
             self.count();
             self.rows.clear();
-            self.rows.resize_with(m, KeptViews::default);
+            match self.sight {
+                Some(sight) => self.rows.extend(
+                    nodes.iter().map(|&i| KeptViews::limited_to(sight.faces_of_node(i).to_vec())),
+                ),
+                None => self.rows.resize_with(nodes.len(), KeptViews::default),
+            }
         }
     }
 
@@ -49,6 +57,8 @@ impl NodeViews<'_> {
         if let Some(tally) = self.tally {
             let viewed = self.rows.iter().map(KeptViews::faces_viewed).sum();
             tally.viewed.fetch_add(viewed, Ordering::Relaxed);
+            let culled = self.rows.iter().map(KeptViews::faces_culled).sum();
+            tally.culled.fetch_add(culled, Ordering::Relaxed);
         }
     }
 }
@@ -64,12 +74,18 @@ impl Drop for NodeViews<'_> {
 #[derive(Debug, Default)]
 pub(super) struct FaceTally {
     viewed: AtomicU64,
+    culled: AtomicU64,
 }
 
 impl FaceTally {
     /// Views computed.
     pub(super) fn viewed(&self) -> u64 {
         self.viewed.load(Ordering::Relaxed)
+    }
+
+    /// Faces taken as hidden without a view, outside what their nodes' cluster may see.
+    pub(super) fn culled(&self) -> u64 {
+        self.culled.load(Ordering::Relaxed)
     }
 }
 
@@ -86,6 +102,8 @@ pub(super) struct Entries<'a> {
     pub(super) precision: Precision,
     /// What the row walks' views of faces cost.
     pub(super) faces: FaceTally,
+    /// Where found, the faces each node cluster may see.
+    pub(super) sight: Option<&'a ClusterSight>,
 }
 
 impl Entries<'_> {
@@ -93,6 +111,7 @@ impl Entries<'_> {
     pub(super) fn node_views(&self) -> NodeViews<'_> {
         let mut views = NodeViews::default();
         views.tally = Some(&self.faces);
+        views.sight = self.sight;
         views
     }
 
@@ -122,7 +141,7 @@ impl Entries<'_> {
             })
             .collect();
         let mut stats = PairStats::default();
-        views.prepare(t, tc.len());
+        views.prepare(t, &self.nodes.order[tc.start..tc.end]);
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
             let viewer = self.disc.nodes[i].viewer();
             let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));

@@ -33,14 +33,16 @@ mod sampling;
 mod saved;
 mod shadowed;
 mod share;
+mod sight;
 mod stats;
 mod stored;
 
 pub use compressed::{CompressedOperator, RankShare};
 pub use estimate::MemoryEstimate;
 pub use options::{
-    AUTO_COMPRESSED_ABOVE, CompressionOptions, DEFAULT_TOLERANCE, MIN_ELEMENTS_PER_FACE,
-    OperatorChoice, ProblemShape, SHADOWED_FROM_ELEMENTS_PER_FACE, ShadowedBlocks,
+    AUTO_COMPRESSED_ABOVE, CULLING_FROM_FACES, CompressionOptions, DEFAULT_TOLERANCE, FaceCulling,
+    MIN_ELEMENTS_PER_FACE, OperatorChoice, ProblemShape, SHADOWED_FROM_ELEMENTS_PER_FACE,
+    ShadowedBlocks,
 };
 pub use saved::{BinaryReader, BinaryWriter};
 pub use stats::OperatorStats;

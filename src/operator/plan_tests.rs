@@ -17,7 +17,7 @@ use crate::scene::{SurfaceParameters, baffled_box, cube, five_piece};
 fn a_plan_whose_lists_pass_its_budget_stops_its_walk() {
     let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 3);
     let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
-    let faces = FacePairs::new(&c.scene, &c.planner, &options);
+    let faces = FacePairs::new(&c.scene, &c.planner, &options, None);
     let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
     let whole = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
     let roomy = blocks::PlanBudget::new(1 << 30);
@@ -48,7 +48,7 @@ fn a_pair_is_located_in_the_block_of_the_plan_that_holds_it() {
                 shadowed_blocks,
                 ..Default::default()
             };
-            let faces = FacePairs::new(&c.scene, &c.planner, &options);
+            let faces = FacePairs::new(&c.scene, &c.planner, &options, None);
             let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
             let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
             let holds = |t: usize, s: usize, (k, l): (usize, usize)| {
@@ -107,7 +107,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
             mixed_leaf_size: 8,
             ..Default::default()
         };
-        let faces = FacePairs::new(&c.scene, &c.planner, &options);
+        let faces = FacePairs::new(&c.scene, &c.planner, &options, None);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
         let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
         let reflects = |i: usize| c.disc.nodes[i].rho != 0.0;
@@ -122,6 +122,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
             per: 1,
             precision: Precision::F64,
             faces: Default::default(),
+            sight: None,
         };
         let mut views = NodeViews::default();
         let (mut whole, mut mixed) = (0, 0);
@@ -171,7 +172,7 @@ fn the_plan_settles_every_pair_once_and_counts_the_culled_ones() {
                 shadowed_blocks,
                 ..Default::default()
             };
-            let faces = FacePairs::new(&c.scene, &c.planner, &options);
+            let faces = FacePairs::new(&c.scene, &c.planner, &options, None);
             let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
             let steps = Steps(Default::default());
             let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &steps);
@@ -196,6 +197,38 @@ fn the_plan_settles_every_pair_once_and_counts_the_culled_ones() {
             assert!(plan.empty.pairs > 0, "{label}");
             let on = shadowed_blocks == ShadowedBlocks::On;
             assert_eq!(!plan.shadowed.is_empty(), on, "{label}");
+        }
+    }
+}
+
+#[test]
+fn culling_what_no_node_of_a_cluster_sees_changes_no_product() {
+    use crate::scene::{generated, lit_city};
+    let linear = Method::linear(1.0 / 6.0).unwrap();
+    let cases = [
+        (lit_city(4, 4).unwrap(), Method::Centroid, 1),
+        (lit_city(4, 4).unwrap(), linear, 0),
+        (generated::city(3), Method::Centroid, 1),
+        (generated::louvre(1), Method::Centroid, 1),
+    ];
+    for (scene, method, refine) in cases {
+        let label = format!("{} faces, {method:?}, refine {refine}", scene.faces.len());
+        let c = case(scene, method, refine);
+        let with = |face_culling: FaceCulling, batched: bool| {
+            let options = CompressionOptions { face_culling, ..Default::default() };
+            build_with(&c, &options, batched)
+        };
+        let x: Vec<f64> = (0..c.disc.dof()).map(|k| ((k * 7919) % 101) as f64 / 101.0).collect();
+        let off = with(FaceCulling::Off, false);
+        for batched in [false, true] {
+            let on = with(FaceCulling::On, batched);
+            let (a, b) = (on.apply(&x), off.apply(&x));
+            let worst = a.iter().zip(&b).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+            assert!(a == b, "{label}, batched {batched}: products differ by up to {worst:e}");
+            let (a, b) = (on.stats, off.stats);
+            assert_eq!((a.near_entries, a.far_blocks), (b.near_entries, b.far_blocks), "{label}");
+            assert!(a.faces_viewed < b.faces_viewed && a.faces_culled > 0, "{label}: {a:?}");
+            assert_eq!(b.faces_culled, 0);
         }
     }
 }

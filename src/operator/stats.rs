@@ -41,6 +41,10 @@ pub struct OperatorStats {
     /// behind it): over the unknowns, the faces examined per node. Not among
     /// [`OperatorStats::counts`] (none in a loaded operator).
     pub faces_viewed: u64,
+    /// Faces that the exact blocks' row walks took as hidden without a view, being outside
+    /// what their node may see (`operator/sight.rs`; each time a block asked). Not among
+    /// [`OperatorStats::counts`] (none in a loaded operator).
+    pub faces_culled: u64,
     /// (Node, element) pairs in the blocks found to hold nothing: pairs the plan culled whole,
     /// without a test of their own. Not among [`OperatorStats::counts`] (none in a loaded
     /// operator).
@@ -92,6 +96,7 @@ impl OperatorStats {
             low_rank_bytes: 0,
             shadowed_blocks: 0,
             faces_viewed: 0,
+            faces_culled: 0,
             empty_block_pairs: 0,
         }
     }
@@ -112,6 +117,7 @@ impl std::ops::AddAssign for OperatorStats {
         self.low_rank_bytes += o.low_rank_bytes;
         self.shadowed_blocks += o.shadowed_blocks;
         self.faces_viewed += o.faces_viewed;
+        self.faces_culled += o.faces_culled;
         self.empty_block_pairs += o.empty_block_pairs;
     }
 }
@@ -127,8 +133,13 @@ pub(super) fn summed_over(
     stats: OperatorStats,
     pairs: PairStats,
 ) -> (OperatorStats, PairStats) {
-    let more =
-        [stats.low_rank_bytes, stats.shadowed_blocks, stats.faces_viewed, stats.empty_block_pairs];
+    let more = [
+        stats.low_rank_bytes,
+        stats.shadowed_blocks,
+        stats.faces_viewed,
+        stats.empty_block_pairs,
+        stats.faces_culled,
+    ];
     let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).chain(more).collect();
     let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
     for counts in ranks.gather(&mine) {
@@ -139,6 +150,7 @@ pub(super) fn summed_over(
             shadowed_blocks: more[1],
             faces_viewed: more[2],
             empty_block_pairs: more[3],
+            faces_culled: more[4],
             ..OperatorStats::from_counts(s.try_into().expect("a rank's statistics"))
         };
         pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));

@@ -350,7 +350,7 @@ fn far_blocks_whose_boxes_clear_the_planes_have_no_pair_that_gives_nothing() {
     for (scene, refine) in scenes {
         let c = case(scene, Method::Centroid, refine);
         let options = CompressionOptions { leaf_size: 8, mixed_leaf_size: 8, ..Default::default() };
-        let faces = FacePairs::new(&c.scene, &c.planner, &options);
+        let faces = FacePairs::new(&c.scene, &c.planner, &options, None);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
         let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
         let (mut clear, mut not) = (0, 0);
@@ -462,7 +462,8 @@ fn a_written_operator_reads_back_block_for_block() {
         assert!(op.stats.low_rank_bytes < op.stats.operator_bytes);
         let (read, bytes) = written_and_read(&op);
         // What the build's walks cost is not saved.
-        let stats = OperatorStats { faces_viewed: 0, empty_block_pairs: 0, ..op.stats };
+        let stats =
+            OperatorStats { faces_viewed: 0, faces_culled: 0, empty_block_pairs: 0, ..op.stats };
         assert_eq!((read.stats, read.pairs, read.zero_rows), (stats, op.pairs, op.zero_rows));
         assert_eq!(kinds(&read), kinds(&op));
         let x: Vec<f64> = (0..op.dof()).map(|i| (i as f64 * 0.7).sin()).collect();

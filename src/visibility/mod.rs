@@ -25,10 +25,12 @@
 mod face_view;
 mod hiders;
 mod occluders;
+mod occlusion_cube;
 mod part_view;
 mod planner;
 mod projection;
 mod row;
+mod seen_faces;
 mod shaft;
 mod solids;
 mod stats;
@@ -37,9 +39,11 @@ mod visible_part;
 
 pub use hiders::RecentHiders;
 pub use occluders::{Acceleration, Occluder, OccluderUnit};
+pub use occlusion_cube::OcclusionCube;
 pub use part_view::Caster;
 pub use planner::PairPlanner;
 pub use row::{ElementBoxes, FaceSight, KeptViews, PartSight, Viewer, Views, by_face};
+pub use seen_faces::{FaceHierarchy, FaceSet, SightCount};
 pub use shaft::Shaft;
 pub use stats::PairStats;
 pub use view::{FaceView, Shadows, SkipReason, Visibility};

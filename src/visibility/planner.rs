@@ -81,6 +81,11 @@ impl PairPlanner {
         planner
     }
 
+    /// Faces of the scene.
+    pub fn face_count(&self) -> usize {
+        self.faces.len()
+    }
+
     /// Whether any pair of faces can have an occluder between them (one query per pair of faces).
     pub fn has_occlusion(&self) -> bool {
         let n = self.faces.len();

@@ -53,9 +53,20 @@ pub struct KeptViews {
     views: FxHashMap<usize, FaceView>,
     /// Faces viewed, beside those that the planes tell.
     viewed: u64,
+    /// Where known, the faces the viewer may see, sorted ([`super::FaceHierarchy::seen_from`]):
+    /// any other is hidden without a view.
+    seen: Option<Vec<u32>>,
+    /// Faces found hidden so, without a view.
+    culled: u64,
 }
 
 impl KeptViews {
+    /// Views of a viewer that may see only the faces of `seen` (a superset of those it sees
+    /// anything of): the others are hidden without a view.
+    pub fn limited_to(seen: Vec<u32>) -> Self {
+        Self { seen: Some(seen), ..Self::default() }
+    }
+
     fn view(
         &mut self,
         planner: &PairPlanner,
@@ -72,6 +83,11 @@ impl KeptViews {
             Some(_) => return &FACING_AWAY,
             None => {}
         }
+        const HIDDEN: FaceView = FaceView::Skip(SkipReason::Hidden);
+        if self.seen.as_ref().is_some_and(|seen| seen.binary_search(&(face as u32)).is_err()) {
+            self.culled += 1;
+            return &HIDDEN;
+        }
         let viewed = &mut self.viewed;
         self.views.entry(face).or_insert_with(|| {
             *viewed += 1;
@@ -83,6 +99,11 @@ impl KeptViews {
     /// Faces this viewer has viewed (each once), besides those that the planes told.
     pub fn faces_viewed(&self) -> u64 {
         self.viewed
+    }
+
+    /// Faces found hidden without a view (outside the faces it may see), each time asked.
+    pub fn faces_culled(&self) -> u64 {
+        self.culled
     }
 }
 
