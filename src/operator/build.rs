@@ -80,7 +80,7 @@ impl CompressedOperator {
         };
         let (nodes, elements) =
             in_stage(progress, "clusters", || cluster_trees(mesh, disc, options));
-        let sight = options.face_culling.decide(scene.faces.len()).then(|| {
+        let sight = options.face_culling.decide(ProblemShape::of(problem)).then(|| {
             in_stage(progress, "faces in sight", || ClusterSight::new(planner, disc, &nodes))
         });
         if let Some(sight) = &sight {

@@ -40,9 +40,9 @@ mod stored;
 pub use compressed::{CompressedOperator, RankShare};
 pub use estimate::MemoryEstimate;
 pub use options::{
-    AUTO_COMPRESSED_ABOVE, CULLING_FROM_FACES, CompressionOptions, DEFAULT_TOLERANCE, FaceCulling,
-    MIN_ELEMENTS_PER_FACE, OperatorChoice, ProblemShape, SHADOWED_FROM_ELEMENTS_PER_FACE,
-    ShadowedBlocks,
+    AUTO_COMPRESSED_ABOVE, CULLING_FROM_FACES, CULLING_UP_TO_DOF, CompressionOptions,
+    DEFAULT_TOLERANCE, FaceCulling, MIN_ELEMENTS_PER_FACE, OperatorChoice, ProblemShape,
+    SHADOWED_FROM_ELEMENTS_PER_FACE, ShadowedBlocks,
 };
 pub use saved::{BinaryReader, BinaryWriter};
 pub use stats::OperatorStats;

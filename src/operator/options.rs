@@ -173,7 +173,8 @@ impl From<bool> for ShadowedBlocks {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FaceCulling {
-    /// On scenes of at least [`CULLING_FROM_FACES`] faces.
+    /// On scenes of at least [`CULLING_FROM_FACES`] faces and at most [`CULLING_UP_TO_DOF`]
+    /// unknowns.
     #[default]
     Auto,
     /// Always.
@@ -183,12 +184,12 @@ pub enum FaceCulling {
 }
 
 impl FaceCulling {
-    /// Whether a scene of `faces` faces is culled.
-    pub fn decide(self, faces: usize) -> bool {
+    /// Whether a problem of this shape is culled.
+    pub fn decide(self, shape: ProblemShape) -> bool {
         match self {
             Self::On => true,
             Self::Off => false,
-            Self::Auto => faces >= CULLING_FROM_FACES,
+            Self::Auto => shape.faces >= CULLING_FROM_FACES && shape.dof <= CULLING_UP_TO_DOF,
         }
     }
 }
@@ -205,6 +206,12 @@ impl From<bool> for FaceCulling {
 /// of 3 406 (24 x 24: 0.87 times as long), where the plan's blocks hidden by many houses
 /// together, which the walks prune, grow like n²; the two break even between them.
 pub const CULLING_FROM_FACES: usize = 2048;
+
+/// Unknowns up to which [`FaceCulling::Auto`] culls. The nodes' walks come before the memory
+/// estimate (which counts the blocks they settle), at 0.3–0.6 ms a node on one core: beyond
+/// this a run that cannot fit (`city:200x200`, 641 602 unknowns) would take minutes to be
+/// refused instead of seconds.
+pub const CULLING_UP_TO_DOF: usize = 1 << 18;
 
 /// Mean elements per face from which [`ShadowedBlocks::Auto`] makes shadowed blocks. On large
 /// faces a shadowed block's one factorisation stands for the many small blocks its shadows

@@ -232,3 +232,16 @@ fn culling_what_no_node_of_a_cluster_sees_changes_no_product() {
         }
     }
 }
+
+#[test]
+fn faces_in_sight_are_found_on_scenes_of_many_faces_and_moderate_size() {
+    let shape = |dof, faces| ProblemShape { dof, elements: dof, faces };
+    assert!(!FaceCulling::Auto.decide(shape(23_812, 842)));
+    assert!(FaceCulling::Auto.decide(shape(93_380, 3_406)));
+    // city:200x200: its walks would delay the memory estimate's refusal by minutes.
+    assert!(!FaceCulling::Auto.decide(shape(641_602, 240_001)));
+    assert!(
+        FaceCulling::On.decide(shape(100, 5)) && !FaceCulling::Off.decide(shape(93_380, 3_406))
+    );
+    assert_eq!(FaceCulling::from(true), FaceCulling::On);
+}
