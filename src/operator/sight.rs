@@ -69,31 +69,24 @@ impl ClusterSight {
         }
         // The clusters with a set of their own: the root, and both halves of such a cluster
         // where each has at least `smallest` nodes (parents come before their children).
-        let mut index = vec![usize::MAX; clusters.len()];
-        let mut own = Vec::new();
+        let mut has_set = vec![false; clusters.len()];
+        has_set[0] = true;
         for c in 0..clusters.len() {
-            let halved = (c == 0 || index[c] != usize::MAX)
-                .then_some(clusters[c].children)
-                .flatten()
-                .filter(|&(a, b)| clusters[a].len().min(clusters[b].len()) >= smallest);
-            if c == 0 {
-                index[0] = 0;
-                own.push(0);
-            }
-            if let Some((a, b)) = halved {
-                for child in [a, b] {
-                    index[child] = usize::MAX - 1;
-                }
-            }
-            if index[c] == usize::MAX - 1 {
-                index[c] = own.len();
-                own.push(c);
+            if let (true, Some((a, b))) = (has_set[c], clusters[c].children)
+                && clusters[a].len().min(clusters[b].len()) >= smallest
+            {
+                has_set[a] = true;
+                has_set[b] = true;
             }
         }
-        // Its bottom clusters (halves without sets of their own) hold every node once: their
-        // sets come from the nodes, the others' from their halves.
-        let has_own = |c: usize| index[c] != usize::MAX;
-        let bottom = |c: usize| clusters[c].children.is_none_or(|(a, _)| !has_own(a));
+        let own: Vec<usize> = (0..clusters.len()).filter(|&c| has_set[c]).collect();
+        let mut index = vec![usize::MAX; clusters.len()];
+        for (k, &c) in own.iter().enumerate() {
+            index[c] = k;
+        }
+        // Its bottom clusters (whose halves have no sets of their own) hold every node once:
+        // their sets come from the nodes, the others' from their halves.
+        let bottom = |c: usize| clusters[c].children.is_none_or(|(a, _)| !has_set[a]);
         let from_nodes: Vec<(usize, FaceSet, Vec<Vec<u32>>, SightCount)> = own
             .par_iter()
             .filter(|&&c| bottom(c))
@@ -111,8 +104,7 @@ impl ClusterSight {
                     });
                     list.sort_unstable();
                     lists.push(list);
-                    count.faces_reached += walked.faces_reached;
-                    count.boxes_hidden += walked.boxes_hidden;
+                    count += walked;
                 }
                 (c, set, lists, count)
             })
@@ -126,8 +118,7 @@ impl ClusterSight {
             for (&i, list) in nodes.order[cluster.start..cluster.end].iter().zip(lists) {
                 per_node[i] = list;
             }
-            count.faces_reached += walked.faces_reached;
-            count.boxes_hidden += walked.boxes_hidden;
+            count += walked;
         }
         let mut node_start = Vec::with_capacity(per_node.len() + 1);
         node_start.push(0);
@@ -151,7 +142,7 @@ impl ClusterSight {
         }
         let mut set_of = vec![0; clusters.len()];
         for c in 0..clusters.len() {
-            set_of[c] = if has_own(c) { index[c] } else { set_of[parent[c]] };
+            set_of[c] = if has_set[c] { index[c] } else { set_of[parent[c]] };
         }
         let sets = sets.into_iter().map(|s| Arc::new(s.expect("every set is made"))).collect();
         let seconds = start.elapsed().as_secs_f64();

@@ -70,6 +70,13 @@ pub struct SightCount {
     pub boxes_hidden: u64,
 }
 
+impl std::ops::AddAssign for SightCount {
+    fn add_assign(&mut self, other: Self) {
+        self.faces_reached += other.faces_reached;
+        self.boxes_hidden += other.boxes_hidden;
+    }
+}
+
 impl PairPlanner {
     /// The hierarchy of this scene's faces for [`FaceHierarchy::seen_from`].
     pub fn face_hierarchy(&self) -> FaceHierarchy {
