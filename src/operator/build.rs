@@ -80,9 +80,10 @@ impl CompressedOperator {
         };
         let (nodes, elements) =
             in_stage(progress, "clusters", || cluster_trees(mesh, disc, options));
-        let sight = options.face_culling.decide(ProblemShape::of(problem)).then(|| {
-            in_stage(progress, "faces in sight", || ClusterSight::new(planner, disc, &nodes))
-        });
+        let sight = options
+            .face_culling
+            .decide(ProblemShape::of(problem))
+            .then(|| ClusterSight::new(planner, disc, &nodes, progress));
         if let Some(sight) = &sight {
             progress.note(&sight.note());
         }

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use super::cluster::ClusterTree;
 use crate::discretization::Discretization;
+use crate::progress::Progress;
 use crate::visibility::{FaceSet, OcclusionCube, PairPlanner, SightCount};
 
 /// Clusters of fewer nodes share their parent's set (the smallest size doubles until the sets
@@ -46,9 +47,15 @@ pub(super) struct ClusterSight {
 
 impl ClusterSight {
     /// The sets of the clusters of `nodes` (a tree over the nodes of `disc`) on the scene that
-    /// `planner` plans.
-    pub(super) fn new(planner: &PairPlanner, disc: &Discretization, nodes: &ClusterTree) -> Self {
+    /// `planner` plans, reporting the nodes walked to `progress` (a stage of its own).
+    pub(super) fn new(
+        planner: &PairPlanner,
+        disc: &Discretization,
+        nodes: &ClusterTree,
+        progress: &dyn Progress,
+    ) -> Self {
         let start = Instant::now();
+        progress.start("faces in sight", nodes.order.len());
         let faces = planner.face_count();
         let hierarchy = planner.face_hierarchy();
         let clusters = &nodes.clusters;
@@ -106,6 +113,7 @@ impl ClusterSight {
                     lists.push(list);
                     count += walked;
                 }
+                progress.advance(cluster.len());
                 (c, set, lists, count)
             })
             .collect();
@@ -145,6 +153,7 @@ impl ClusterSight {
             set_of[c] = if has_set[c] { index[c] } else { set_of[parent[c]] };
         }
         let sets = sets.into_iter().map(|s| Arc::new(s.expect("every set is made"))).collect();
+        progress.finish();
         let seconds = start.elapsed().as_secs_f64();
         Self { set_of, sets, node_start, node_faces, faces, count, seconds }
     }
