@@ -12,7 +12,8 @@
 // Bindings (group 0):
 //   0 params      uniform  tile description
 //   1 views       storage  VIEW_STRIDE reals per (row, face) of the tile: the node in the face's
-//                          frame (x, y, z, i, j, k) and rho/pi, or 0 where it sees nothing of the face
+//                          frame (x, y, z, i, j, k) and rho/pi, or 0 where it sees nothing of the
+//                          face; then 1 where `assemble_cuts` writes the face's pairs, else 0
 //   2 elements    storage  ELEMENT_STRIDE reals per element: centroid (face coordinates), 3 vertices
 //                          and 3 affine basis functions (c0, cx, cy) relative to the centroid, face
 //                          (relative coordinates keep the basis well conditioned, as on the CPU)
@@ -23,11 +24,15 @@
 //   4 exceptions  storage  4 u32 per exception (row, element, first piece, piece count), then
 //                          2 u32 per piece (first vertex, vertex count) from params.piece_offset;
 //                          for `assemble_pairs`, 4 u32 per listed pair (view, element, first
-//                          piece, piece count or WHOLE_ELEMENT)
-//   5 vertices    storage  x, y per vertex of the visible pieces, relative to their element's centroid
+//                          piece, piece count or WHOLE_ELEMENT); for `assemble_cuts` its cut
+//                          records (clip.wgsl)
+//   5 vertices    storage  x, y per vertex of the visible pieces, relative to their element's
+//                          centroid; for `assemble_cuts` the views of the faces seen in part
+//                          (clip.wgsl)
 //   6 out         storage  rows x dof of K (rho/pi included), row-major
-//   7 near        storage  the deferred pairs: an atomic count, indirect dispatch arguments, then
-//                          (row, element) of up to params.near_capacity pairs
+//   7 near        storage  the deferred pairs: an atomic count, indirect dispatch arguments, the
+//                          tallies of `assemble_cuts`, then (row, element) of up to
+//                          params.near_capacity pairs, then the pairs `assemble_cuts` left to the host
 //
 // Invocation contract: `assemble_full` runs on a grid of (element, row) with 64-wide workgroups
 // along the elements, and writes every entry of the tile, evaluating the whole element wherever the
@@ -35,7 +40,8 @@
 // which it appends to the near list: those few pairs lie scattered among cheap ones, and a SIMD
 // batch with one of them would run the IMT loop for all its lanes. `prepare_near` (one invocation)
 // writes the indirect dispatch arguments, and `assemble_near` evaluates the listed pairs, one per
-// invocation. `assemble_pieces` then runs one invocation per exception (1-D index linearised by
+// invocation; it leaves the pairs of faces seen in part to `assemble_cuts` (clip.wgsl), which
+// clips them on the device. `assemble_pieces` then runs one invocation per exception (1-D index linearised by
 // params.stride) and overwrites that pair's entries with the integral over its visible pieces
 // (zero pieces: a hidden pair).
 //
@@ -64,10 +70,15 @@ struct Params {
     piece_offset: u32,
     stride: u32,
     near_capacity: u32,
+    cut_records: u32,
+    piece_limit: u32,
     _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
-// The deferred pairs of `assemble_full` and the indirect dispatch of `assemble_near`.
+// The deferred pairs of `assemble_full` and the indirect dispatch of `assemble_near`; the pairs
+// `assemble_cuts` classified, by class, and those it left to the host (listed after the near pairs).
 struct NearList {
     count: atomic<u32>,
     _pad0: u32,
@@ -77,6 +88,14 @@ struct NearList {
     dispatch_y: u32,
     dispatch_z: u32,
     _pad3: u32,
+    hidden: atomic<u32>,
+    facing_away: atomic<u32>,
+    full: atomic<u32>,
+    partial: atomic<u32>,
+    overflow: atomic<u32>,
+    _pad4: u32,
+    _pad5: u32,
+    _pad6: u32,
     pairs: array<u32>,
 }
 
@@ -379,6 +398,9 @@ fn assemble_full(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
             out[base + l] = 0.0;
         }
+        return;
+    }
+    if (views[(row * params.faces + element_face(el)) * VIEW_STRIDE + 7u] != 0.0) {
         return;
     }
     let obs = relative_to(seen, el);

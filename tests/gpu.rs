@@ -219,28 +219,30 @@ fn tiles_are_sized_by_the_views_of_a_scene_of_many_faces() {
 
 #[test]
 fn tiles_whose_visible_pieces_outgrow_a_binding_are_split() {
-    // The occluded box has many partly visible pairs: the visible pieces of a tile are known only
-    // once it is planned, and with a 24 KiB binding several tiles sized by their output rows hold
-    // more pieces than that. They are split and planned again instead of refused.
+    // The occluded box has many partly visible pairs: the visible pieces of a tile (the f32
+    // kernels take the host's) are known only once it is planned, and with a 12 KiB binding
+    // several tiles sized by their output rows hold more pieces than that. They are split and
+    // planned again instead of refused.
     let Some(ctx) = gpu() else { return };
     let scene = radiosity::scene::load(std::path::Path::new("examples/occluded-box.toml")).unwrap();
     let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
     let disc = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
     let problem = Problem::new(scene.clone(), mesh.clone(), disc.clone());
     let opts = AssemblyOptions::default();
-    let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, Method::Centroid).unwrap();
-    let binding: u64 = 24 << 10;
+    let assembler = gpu::GpuAssembler::new(ctx, Precision::F32, Method::Centroid).unwrap();
+    let binding: u64 = 12 << 10;
     let limits = gpu::TileLimits { binding_bytes: binding, ..Default::default() };
     let gpu = assembler
         .assemble_with_limits(&problem, &opts, limits, &radiosity::progress::Silent)
         .unwrap();
     // Tiles sized by their output alone: 5 rows of 576 entries each.
-    let by_output = disc.dof().div_ceil((binding / (8 * disc.dof() as u64)) as usize);
+    let by_output = disc.dof().div_ceil((binding / (4 * disc.dof() as u64)) as usize);
     let tiles = assembler.last_timings().tiles;
     assert!(tiles > by_output, "{tiles} tiles, as many as the output alone needs ({by_output})");
-    let cpu = assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
-    let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
-    assert!(d <= 1e-12, "{d:e}");
+    let whole = assembler.assemble(&problem, &opts, &radiosity::progress::Silent).unwrap();
+    let (d, _, _) = max_row_relative_diff(&whole.matrix, &gpu.matrix);
+    assert_eq!(d, 0.0, "split tiles give other values than whole ones");
+    assert!(assembler.last_timings().pairs_clipped_on_host > 0);
 }
 
 /// `radiosity bench` of `scene` at refine `refine`, one repetition, with `extra` options, as JSON.
@@ -648,5 +650,94 @@ fn generated_scenes_assemble_on_the_gpu_as_on_the_cpu() {
                 gpu.matrix.get(i, j)
             );
         }
+    }
+}
+
+/// The scenes of the clipping checks at a refinement: occluders of every kind (slats, furniture,
+/// baffles, stairs, houses, a box), the tangent plane cutting faces, shadows cutting elements.
+fn occluded_cases(refine: u32) -> Vec<(String, radiosity::scene::Scene, u32)> {
+    let file = |name: &str| radiosity::scene::load(std::path::Path::new(name)).unwrap();
+    let p = SurfaceParameters::default();
+    vec![
+        ("louvre window".into(), file("examples/louvre-window.toml"), refine),
+        ("furnished room".into(), file("examples/furnished-room.toml"), refine.saturating_sub(1)),
+        ("baffled box".into(), BuiltinScene::BaffledBox.build(p).unwrap(), refine),
+        ("staircase hall".into(), file("examples/staircase-hall.toml"), refine.saturating_sub(1)),
+        (
+            "city:4x4:lit".into(),
+            radiosity::scene::lit_city(4, 4).unwrap(),
+            refine.saturating_sub(1),
+        ),
+        ("occluded box".into(), file("examples/occluded-box.toml"), refine),
+    ]
+}
+
+/// The GPU assembly of `problem` within `limits`, against the CPU's: the largest entry
+/// difference relative to its row's largest entry, the pair classes, and the assembler's timings.
+fn clipped_against_cpu(
+    ctx: &GpuContext,
+    problem: &Problem,
+    limits: gpu::TileLimits,
+) -> (f64, radiosity::visibility::PairStats, radiosity::visibility::PairStats, gpu::GpuTimings) {
+    let opts = AssemblyOptions::default();
+    let silent = &radiosity::progress::Silent;
+    let cpu = assemble(problem, &opts, silent).unwrap();
+    let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, problem.disc.method).unwrap();
+    let gpu = assembler.assemble_with_limits(problem, &opts, limits, silent).unwrap();
+    let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
+    (d, cpu.stats, gpu.stats, assembler.last_timings())
+}
+
+#[test]
+fn the_device_clips_elements_of_faces_seen_in_part_as_the_host_does() {
+    // Host planning per (node, face): each element of a face seen in part is clipped and
+    // integrated on the device (shaders/clip.wgsl). Same pair classes as the CPU, entries to
+    // 1e-12 of their row's largest, and hardly a pair left to the host.
+    let Some(ctx) = gpu() else { return };
+    let linear = Method::linear(Method::PAPER_ALPHA).unwrap();
+    for (method, refine) in [(Method::Centroid, 3), (linear, 2)] {
+        for (name, scene, refine) in occluded_cases(refine) {
+            let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
+            let disc = Discretization::new(&scene, &mesh, method).unwrap();
+            let problem = Problem::new(scene, mesh, disc);
+            let (d, cpu, gpu, timings) =
+                clipped_against_cpu(ctx, &problem, gpu::TileLimits::default());
+            let what = format!("{name} refine {refine} {method}");
+            println!(
+                "{what}: {d:.2e}, {} pairs clipped on the device",
+                timings.pairs_clipped_on_device
+            );
+            assert_eq!(cpu, gpu, "{what}");
+            assert!(d <= 1e-12, "{what}: {d:e}");
+            assert!(timings.pairs_clipped_on_device >= cpu.partial, "{what}: {timings:?}");
+            // A pair whose pieces outgrow the kernel's stack is the host's: rare.
+            let on_host = timings.pairs_clipped_on_host;
+            assert!(on_host * 1000 <= timings.pairs_clipped_on_device, "{what}: {timings:?}");
+        }
+    }
+}
+
+#[test]
+fn pairs_the_clipping_kernel_cannot_hold_are_clipped_on_the_host() {
+    // A stack of one piece leaves every element that a shadow cuts in two to the host, a stack
+    // of none every element that a shadow's box and sides may cut; a near list of a few pairs
+    // (linear method) holds fewer than are left, so the host clips all of the tile's. The
+    // matrix and the pair classes stay the CPU's.
+    let Some(ctx) = gpu() else { return };
+    let linear = Method::linear(Method::PAPER_ALPHA).unwrap();
+    let cases = [(Method::Centroid, 1, u64::MAX), (Method::Centroid, 0, u64::MAX), (linear, 1, 64)];
+    for (method, pieces_on_device, near_pairs) in cases {
+        let scene =
+            radiosity::scene::load(std::path::Path::new("examples/louvre-window.toml")).unwrap();
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
+        let disc = Discretization::new(&scene, &mesh, method).unwrap();
+        let problem = Problem::new(scene, mesh, disc);
+        let limits =
+            gpu::TileLimits { pieces_on_device, near_pairs, rows: 64, ..Default::default() };
+        let (d, cpu, gpu, timings) = clipped_against_cpu(ctx, &problem, limits);
+        let what = format!("{method}, {pieces_on_device} pieces");
+        assert_eq!(cpu, gpu, "{what}");
+        assert!(d <= 1e-12, "{what}: {d:e}");
+        assert!(timings.pairs_clipped_on_host > 0, "{what}: {timings:?}");
     }
 }

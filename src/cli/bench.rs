@@ -81,6 +81,10 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
                     b.readback_seconds,
                     b.read_back_gb_per_second
                 );
+                println!(
+                    "    pairs of faces seen in part clipped on the device {}, on the host {}",
+                    b.pairs_clipped_on_device, b.pairs_clipped_on_host
+                );
             }
         }
     }

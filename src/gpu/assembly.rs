@@ -1,24 +1,23 @@
 //! Assembly of the collocation matrix on the GPU, in row tiles.
 //!
-//! Per tile the host computes, for every (node, face), whether the node sees the face and the
-//! node's coordinates in the face's frame; for faces where visibility varies (clipped or shadowed)
-//! it lists the elements that are not fully visible: hidden ones, and partial ones with their exact
-//! visible pieces, from the same pair plan as the CPU path. Fully visible and skipped pairs need no
-//! list: the first pass evaluates every element of every face the node sees, the second overwrites
-//! the exceptions. Tiles are sized so no binding exceeds the device's limits, and the next tile is
-//! planned while the device works on the current one.
+//! Per tile the host computes ([`super::tile_plan`]), for every (node, face), whether the node
+//! sees the face and the node's coordinates in the face's frame, and for a face seen in part
+//! (clipped or shadowed) its view: the first pass evaluates every element of every face the node
+//! sees whole, the clipping pass (f64) clips each element of a face seen in part on the device and
+//! integrates its pieces. A pair the clipping kernel cannot hold is left to the host, which clips
+//! it and has `assemble_pieces` write it (counted in [`GpuTimings`]). The f32 kernels take the
+//! host's pieces of every element not fully visible instead. Tiles are sized so no binding exceeds
+//! the device's limits, and the next tile is planned while the device works on the current one.
 
 use std::collections::VecDeque;
 use std::ops::Range;
-
-use glam::DVec2;
-use rayon::prelude::*;
 
 use super::GpuContext;
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::shaders::{self, Precision};
 use super::storage::{Narrowing, StorageError};
+use super::tile_plan::{Clipping, Geometry, TilePlan, host_pieces, plan_tile};
 use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem, face_boxes};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
@@ -27,26 +26,34 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::quadrature::ImtRule;
 use crate::scene::Scene;
-use crate::visibility::{
-    ElementBoxes, FaceSight, PairPlanner, PairStats, RecentHiders, Views, Visibility,
-};
+use crate::visibility::{ElementBoxes, PairStats};
 
 /// Upper bounds on the work of one tile, below what the device allows (for tests and tuning).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TileLimits {
     /// Rows per tile.
     pub rows: usize,
-    /// Pairs the near list may hold; pairs beyond it are evaluated in the first pass.
+    /// Pairs the near list may hold; pairs beyond it are evaluated in the first pass. As many
+    /// of those the clipping kernel leaves to the host may be listed; past that, the host clips
+    /// every pair of the tile's faces seen in part.
     pub near_pairs: u64,
     /// Bytes one storage binding may hold (the device's `max_storage_buffer_binding_size` when
     /// smaller): lets tests drive the tiling of a small scene as a device would a large one.
     pub binding_bytes: u64,
+    /// Pieces the clipping kernel holds at once (at most [`layout::MAX_PIECES`]); a pair that
+    /// needs more is clipped on the host. Fewer drive that fallback in tests.
+    pub pieces_on_device: u32,
 }
 
 impl Default for TileLimits {
     /// No bounds beyond the device's.
     fn default() -> Self {
-        Self { rows: usize::MAX, near_pairs: u64::MAX, binding_bytes: u64::MAX }
+        Self {
+            rows: usize::MAX,
+            near_pairs: u64::MAX,
+            binding_bytes: u64::MAX,
+            pieces_on_device: layout::MAX_PIECES,
+        }
     }
 }
 
@@ -67,6 +74,11 @@ pub struct GpuTimings {
     pub bytes_read_back: u64,
     /// Those bytes over the time of copying them out of the mapped staging buffers.
     pub read_back_gb_per_second: f64,
+    /// Pairs of faces seen in part that the device clipped.
+    pub pairs_clipped_on_device: u64,
+    /// Pairs of faces seen in part clipped on the host: where the kernels are f32, or where a
+    /// pair outgrew the clipping kernel's limits.
+    pub pairs_clipped_on_host: u64,
 }
 
 impl GpuTimings {
@@ -93,123 +105,9 @@ pub struct GpuAssembler<'a> {
     pieces: wgpu::ComputePipeline,
     /// `assemble_pairs`: listed pairs (src/gpu/pairs.rs).
     pub(super) pairs: wgpu::ComputePipeline,
+    /// `assemble_cuts`: the elements of faces seen in part, clipped on the device (f64 only).
+    cuts: Option<wgpu::ComputePipeline>,
     timings: std::sync::Mutex<GpuTimings>,
-}
-
-/// The host's plan of one tile of rows.
-struct TilePlan {
-    rows: Range<usize>,
-    /// VIEW_STRIDE reals per (row, face).
-    views: Vec<f64>,
-    /// (row in tile, element, first piece, piece count), then (first vertex, count) per piece.
-    exceptions: Vec<u32>,
-    exception_count: u32,
-    piece_offset: u32,
-    /// Piece vertices relative to their element's centroid.
-    vertices: Vec<f64>,
-    stats: PairStats,
-}
-
-struct RowPlan {
-    views: Vec<f64>,
-    exceptions: Vec<(u32, Vec<Vec<DVec2>>)>,
-    stats: PairStats,
-}
-
-fn plan_row(
-    unit: f64,
-    i: usize,
-    scene: &Scene,
-    (mesh, disc, boxes): (&Mesh, &Discretization, &[ElementBoxes]),
-    planner: &PairPlanner,
-    hiders: &mut RecentHiders,
-) -> RowPlan {
-    let node = &disc.nodes[i];
-    let faces = mesh.face_count();
-    let mut plan = RowPlan {
-        views: vec![0.0; faces * VIEW_STRIDE],
-        exceptions: Vec::new(),
-        stats: PairStats::default(),
-    };
-    // A row that reflects nothing keeps every view "skipped" (all zeros): nothing is evaluated.
-    let faces = (0..faces).map(|face| (face, mesh.face_range(face)));
-    plan.stats =
-        planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |face, range, sight| {
-            if let FaceSight::Hidden(_) = sight {
-                return;
-            }
-            let frame = &scene.faces[face].frame;
-            let (p, n) = (frame.to_local(node.position) * unit, frame.dir_to_local(node.normal));
-            let scale = node.rho / std::f64::consts::PI;
-            plan.views[face * VIEW_STRIDE..face * VIEW_STRIDE + 7]
-                .copy_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, scale]);
-            let FaceSight::Part(mut part) = sight else { return };
-            part.elements(&boxes[face], |k, visibility| {
-                let j = range.start + k;
-                match visibility {
-                    Visibility::Full => {}
-                    Visibility::Skip(_) => plan.exceptions.push((j as u32, Vec::new())),
-                    Visibility::Partial(pieces) => {
-                        let c = disc.elements[j].centroid_in_face;
-                        let local = pieces
-                            .into_iter()
-                            .map(|p| p.into_iter().map(|q| (q - c) * unit).collect())
-                            .collect();
-                        plan.exceptions.push((j as u32, local));
-                    }
-                }
-            });
-        });
-    plan
-}
-
-fn plan_tile(
-    unit: f64,
-    rows: Range<usize>,
-    scene: &Scene,
-    (mesh, disc, boxes): (&Mesh, &Discretization, &[ElementBoxes]),
-    planner: &PairPlanner,
-) -> TilePlan {
-    let row_plans: Vec<RowPlan> = rows
-        .clone()
-        .into_par_iter()
-        .map_init(RecentHiders::default, |hiders, i| {
-            plan_row(unit, i, scene, (mesh, disc, boxes), planner, hiders)
-        })
-        .collect();
-    let mut views = Vec::with_capacity(rows.len() * mesh.face_count() * VIEW_STRIDE);
-    let mut records = Vec::new();
-    let mut piece_records = Vec::new();
-    let mut vertices = Vec::new();
-    let mut stats = PairStats::default();
-    for (r, plan) in row_plans.into_iter().enumerate() {
-        views.extend_from_slice(&plan.views);
-        stats += plan.stats;
-        for (el, pieces) in plan.exceptions {
-            records.extend_from_slice(&[
-                r as u32,
-                el,
-                (piece_records.len() / 2) as u32,
-                pieces.len() as u32,
-            ]);
-            for piece in pieces {
-                piece_records.extend_from_slice(&[(vertices.len() / 2) as u32, piece.len() as u32]);
-                vertices.extend(piece.iter().flat_map(|q| [q.x, q.y]));
-            }
-        }
-    }
-    let exception_count = (records.len() / 4) as u32;
-    let piece_offset = records.len() as u32;
-    records.extend(piece_records);
-    TilePlan { rows, views, exceptions: records, exception_count, piece_offset, vertices, stats }
-}
-
-impl TilePlan {
-    /// Whether each of its per-tile buffers fits in one binding of `max_binding` bytes.
-    fn fits(&self, max_binding: u64, precision: Precision) -> bool {
-        let reals = self.views.len().max(self.vertices.len()) * precision.bytes();
-        reals.max(self.exceptions.len() * 4) as u64 <= max_binding
-    }
 }
 
 /// Where the rules array's parts start and how long they are.
@@ -286,6 +184,8 @@ pub(super) struct Uploaded {
     pub(super) tables: wgpu::Buffer,
     /// Where the tables' parts start.
     pub(super) counts: RuleCounts,
+    /// Where each face's element box tree starts in `elements` (none uploaded: empty).
+    pub(super) tree_offsets: Vec<u32>,
 }
 
 struct InFlight {
@@ -295,19 +195,32 @@ struct InFlight {
     /// Their copy for the host; none when the tile stays on the device.
     staging: Option<wgpu::Buffer>,
     size: u64,
-    _buffers: Vec<wgpu::Buffer>,
+    /// What the host needs to finish the clipping pass; none without one.
+    cuts: Option<CutsInFlight>,
+}
+
+/// A tile's clipping pass in flight: its tallies and the pairs it leaves to the host are in
+/// `near`; those pairs are written over the same views.
+struct CutsInFlight {
+    params: Params,
+    views: wgpu::Buffer,
+    near: wgpu::Buffer,
+    /// Pairs left to the host that the near list holds.
+    overflow_capacity: u64,
+    /// The tile's cut records, and how many.
+    records: Vec<u32>,
+    cut_records: u32,
 }
 
 /// Tiles submitted and not yet collected, at most: while the host copies the oldest out of its
 /// staging buffer, the device computes the next ones and the host plans the one after.
 const TILES_IN_FLIGHT: usize = 3;
 
-/// Whether a submitted tile is copied out for the host, kept, or narrowed and kept.
+/// Whether a submitted tile is copied out for the host or kept on the device.
 #[derive(Clone, Copy)]
-enum Keep<'n> {
+enum Keep {
     Host,
     Device,
-    Narrowed(&'n Narrowing),
 }
 
 /// Tiles of K kept on the device: rows, and their entries row-major.
@@ -335,12 +248,23 @@ impl<'a> GpuAssembler<'a> {
             method.nodes_per_element() as u32,
             far_field_rule(precision, method, true).is_some(),
         );
-        let entries =
-            ["assemble_full", "prepare_near", "assemble_near", "assemble_pieces", "assemble_pairs"];
-        let (layout, pipelines) = compute::pipeline(ctx, &source, &entries, 8, &[0, 3], &[6, 7])?;
+        let mut entries = vec![
+            "assemble_full",
+            "prepare_near",
+            "assemble_near",
+            "assemble_pieces",
+            "assemble_pairs",
+        ];
+        if precision == Precision::F64 {
+            entries.push("assemble_cuts");
+        }
+        let (layout, mut pipelines) =
+            compute::pipeline(ctx, &source, &entries, 8, &[0, 3], &[6, 7])?;
+        let cuts = (precision == Precision::F64).then(|| pipelines.pop().expect("a cut pipeline"));
         let [full, prepare_near, near, pieces, pairs]: [wgpu::ComputePipeline; 5] =
             pipelines.try_into().expect("five pipelines");
         Ok(Self {
+            cuts,
             ctx,
             precision,
             method,
@@ -372,20 +296,23 @@ impl<'a> GpuAssembler<'a> {
     /// The elements of `disc` and the rule tables on the device, lengths in units of the
     /// scene's size (a power of two, exact), so that no square or fourth power of a length
     /// under- or overflows, in f32 least of all.
+    /// With `trees`, the faces' element box trees follow the elements, for the clipping kernel.
     pub(super) fn upload(
         &self,
         scene: &Scene,
         disc: &Discretization,
         options: &AssemblyOptions,
+        trees: &[ElementBoxes],
     ) -> Result<Uploaded> {
         let (ctx, p) = (self.ctx, self.precision);
         let largest_face = scene.faces.iter().map(|f| f.size()).fold(0.0, f64::max);
         let unit = crate::geometry::power_of_two_unit(largest_face);
-        let elements =
-            compute::storage(ctx, &layout::real_bytes(&layout::pack_elements(disc, unit), p));
+        let mut packed = layout::pack_elements(disc, unit);
+        let tree_offsets = layout::pack_box_trees(trees, unit, &mut packed);
+        let elements = compute::storage(ctx, &layout::real_bytes(&packed, p));
         let (table_values, counts) = tables(options, self.method, p)?;
         let tables = compute::uniform(ctx, &layout::real_bytes(&table_values, p));
-        Ok(Uploaded { unit, elements, tables, counts })
+        Ok(Uploaded { unit, elements, tables, counts, tree_offsets })
     }
 
     /// Assembles K like [`crate::assembly::assemble`]. `progress` advances by the rows finished.
@@ -470,8 +397,9 @@ impl<'a> GpuAssembler<'a> {
         let ctx = self.ctx;
         let dof = disc.dof();
         let p = self.precision;
-        let uploaded = self.upload(scene, disc, options)?;
-        let unit = uploaded.unit;
+        let boxes = face_boxes(mesh, disc);
+        let trees = if self.cuts.is_some() { &boxes[..] } else { &[] };
+        let uploaded = self.upload(scene, disc, options, trees)?;
         let max_binding = ctx.max_binding().min(limits.binding_bytes);
         // Per row of a tile: its output and its views of every face (a scene of 10 000 faces has
         // 5 MB of views per row in f64, more than its output row).
@@ -492,12 +420,18 @@ impl<'a> GpuAssembler<'a> {
             bytes_uploaded: uploaded.elements.size() + uploaded.tables.size(),
             ..Default::default()
         };
-        let boxes = face_boxes(mesh, disc);
+        let unit = uploaded.unit;
+        let trees = &uploaded.tree_offsets;
+        let geometry = Geometry { scene, mesh, disc, boxes: &boxes, planner, unit, trees };
+        let clipping = if self.cuts.is_some() { Clipping::Device } else { Clipping::Host };
         let timed_plan = |t: &Range<usize>| {
             let started = std::time::Instant::now();
-            let plan = plan_tile(unit, t.clone(), scene, (mesh, disc, &boxes), planner);
-            self.timings.lock().expect("timings lock").planning_seconds +=
-                started.elapsed().as_secs_f64();
+            let plan = plan_tile(t.clone(), geometry, clipping);
+            let mut timings = self.timings.lock().expect("timings lock");
+            timings.planning_seconds += started.elapsed().as_secs_f64();
+            if clipping == Clipping::Host {
+                timings.pairs_clipped_on_host += plan.stats.partial + plan.stats.hidden;
+            }
             plan
         };
         // The visible pieces of a tile are known only once it is planned: a tile whose pieces or
@@ -517,26 +451,25 @@ impl<'a> GpuAssembler<'a> {
         };
         let keep = match &destination {
             Destination::Host(_) => Keep::Host,
-            Destination::Device(_, None) => Keep::Device,
-            Destination::Device(_, Some(n)) => Keep::Narrowed(n),
+            Destination::Device(..) => Keep::Device,
         };
+        let device_limits = (max_binding, limits.near_pairs, limits.pieces_on_device);
         let mut in_flight: VecDeque<InFlight> = VecDeque::with_capacity(TILES_IN_FLIGHT);
         let mut next_plan = plan_next();
         while let Some(plan) = next_plan.take() {
             self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
-            let submitted =
-                self.submit(&plan, disc, mesh, &uploaded, (max_binding, limits.near_pairs), keep)?;
+            let submitted = self.submit(plan, disc, mesh, &uploaded, device_limits, keep)?;
             in_flight.push_back(submitted);
             if in_flight.len() == TILES_IN_FLIGHT {
                 let done = in_flight.pop_front().expect("a tile in flight");
-                self.finish(done, &mut destination, progress)?;
+                stats += self.finish(done, &mut destination, (geometry, &uploaded), progress)?;
             }
             // Plan the next tile while the device works on those in flight.
             next_plan = plan_next();
         }
         while let Some(done) = in_flight.pop_front() {
-            self.finish(done, &mut destination, progress)?;
+            stats += self.finish(done, &mut destination, (geometry, &uploaded), progress)?;
         }
         let mut t = self.timings.lock().expect("timings lock");
         if t.readback_seconds > 0.0 {
@@ -557,11 +490,11 @@ impl<'a> GpuAssembler<'a> {
     /// Sends the tile `plan` to the device over the `uploaded` elements and tables.
     fn submit(
         &self,
-        plan: &TilePlan,
+        plan: TilePlan,
         disc: &Discretization,
         mesh: &Mesh,
         uploaded: &Uploaded,
-        (max_binding, max_near_pairs): (u64, u64),
+        (max_binding, max_near_pairs, piece_limit): (u64, u64, u32),
         keep: Keep,
     ) -> Result<InFlight> {
         let Uploaded { elements, tables, counts, .. } = uploaded;
@@ -589,6 +522,14 @@ impl<'a> GpuAssembler<'a> {
             let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
             let pairs = (rows * disc.element_count()) as u64;
             let near_capacity = self.near_capacity(pairs, max_binding, max_near_pairs);
+            // The pairs the clipping kernel leaves to the host are listed after the near pairs,
+            // as many as the binding holds (past that, the host clips all the tile's).
+            let overflow_capacity = plan
+                .cut_pairs
+                .min((max_binding - layout::NEAR_HEADER_BYTES) / 8 - near_capacity)
+                .min(max_near_pairs)
+                .min(1 << 20);
+            let (cut_x, cut_y, cut_stride) = compute::grid(ctx, plan.cut_pairs);
             let params = Params {
                 rows: rows as u32,
                 elements: disc.element_count() as u32,
@@ -599,14 +540,16 @@ impl<'a> GpuAssembler<'a> {
                 band_count: counts.bands as u32,
                 exception_count: plan.exception_count,
                 piece_offset: plan.piece_offset,
-                stride,
+                stride: if plan.cut_records > 0 { cut_stride } else { stride },
                 near_capacity: near_capacity as u32,
-                _pad: 0,
+                cut_records: plan.cut_records,
+                piece_limit: piece_limit.min(layout::MAX_PIECES),
+                ..Default::default()
             };
-            let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+            let params_buffer = compute::uniform(ctx, bytemuck::bytes_of(&params));
             let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("near"),
-                size: layout::NEAR_HEADER_BYTES + 8 * near_capacity.max(1),
+                size: layout::NEAR_HEADER_BYTES + 8 * (near_capacity + overflow_capacity).max(1),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
@@ -628,7 +571,7 @@ impl<'a> GpuAssembler<'a> {
             let vertices = compute::storage(ctx, &vertex_bytes);
             let size = (rows * dof * p.bytes()) as u64;
             let (out, staging) = match keep {
-                Keep::Device | Keep::Narrowed(_) => (compute::writable(ctx, size), None),
+                Keep::Device => (compute::writable(ctx, size), None),
                 Keep::Host => {
                     let (out, staging) = compute::output(ctx, size);
                     (out, Some(staging))
@@ -637,40 +580,35 @@ impl<'a> GpuAssembler<'a> {
             let group = compute::bind_group(
                 ctx,
                 &self.layout,
-                &[&params, &views, elements, tables, &exceptions, &vertices, &out, &near],
+                &[&params_buffer, &views, elements, tables, &exceptions, &vertices, &out, &near],
             );
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             let groups_x = (disc.element_count() as u32).div_ceil(layout::WORKGROUP);
             let deferred = (near_capacity > 0).then_some((&near, &near_args));
             self.encode_passes(&mut encoder, &group, (groups_x, rows as u32), deferred);
+            // Second passes, ordered after the first, which leaves them the faces seen in part.
             if plan.exception_count > 0 {
-                // A second pass: ordered after the first, which it partly overwrites.
+                self.encode_pieces(&mut encoder, &group, (exc_x, exc_y));
+            }
+            if let (Some(cuts), true) = (&self.cuts, plan.cut_records > 0) {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pieces);
+                pass.set_pipeline(cuts);
                 pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(exc_x, exc_y, 1);
+                pass.dispatch_workgroups(cut_x, cut_y, 1);
             }
             if let Some(staging) = &staging {
                 encoder.copy_buffer_to_buffer(&out, 0, staging, 0, size.max(16));
             }
-            let mut buffers = vec![params, views, exceptions, vertices, near, near_args];
-            let out = match keep {
-                Keep::Narrowed(narrowing) => {
-                    let (narrow, params) =
-                        narrowing.encode(ctx, &mut encoder, plan.rows.clone(), &out);
-                    buffers.extend([out, params]);
-                    narrow
-                }
-                Keep::Host | Keep::Device => out,
-            };
             ctx.queue.submit([encoder.finish()]);
-            Ok::<_, Error>(InFlight {
-                rows: plan.rows.clone(),
-                out,
-                staging,
-                size,
-                _buffers: buffers,
-            })
+            let cuts = (plan.cut_records > 0).then(|| CutsInFlight {
+                params,
+                views,
+                near,
+                overflow_capacity,
+                records: plan.exceptions.clone(),
+                cut_records: plan.cut_records,
+            });
+            Ok::<_, Error>(InFlight { rows: plan.rows, out, staging, size, cuts })
         })?
     }
 
@@ -717,18 +655,121 @@ impl<'a> GpuAssembler<'a> {
         }
     }
 
-    /// Collects a submitted tile: copied into the host's matrix, or its buffer kept.
+    /// `assemble_pieces` over the exceptions bound in `group`.
+    fn encode_pieces(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        (x, y): (u32, u32),
+    ) {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.pieces);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// The clipping pass's tallies of a submitted tile, once it is done, and the pairs it left
+    /// to the host clipped there and written by `assemble_pieces` (then copied out again for
+    /// the host). Past the list's capacity every pair of the tile's faces seen in part is.
+    fn collect_cuts(
+        &self,
+        done: &InFlight,
+        cuts: &CutsInFlight,
+        (g, uploaded): (Geometry, &Uploaded),
+    ) -> Result<PairStats> {
+        let ctx = self.ctx;
+        let started = std::time::Instant::now();
+        let header =
+            compute::read_u32s(ctx, &cuts.near, 0, layout::NEAR_HEADER_BYTES as usize / 4)?;
+        self.timings.lock().expect("timings lock").device_wait_seconds +=
+            started.elapsed().as_secs_f64();
+        let [hidden, facing_away, full, partial, left] =
+            std::array::from_fn(|k| header[layout::CUT_TALLY_INDEX + k] as u64);
+        let mut stats = PairStats::default();
+        let mut pairs = if left <= cuts.overflow_capacity {
+            stats.hidden = hidden;
+            stats.facing_away = facing_away;
+            stats.full = full;
+            stats.partial = partial;
+            stats.total = hidden + facing_away + full + partial;
+            let first = layout::NEAR_HEADER_BYTES + 8 * cuts.params.near_capacity as u64;
+            let listed = compute::read_u32s(ctx, &cuts.near, first, 2 * left as usize)?;
+            listed.chunks_exact(2).map(|p| (p[0], p[1])).collect()
+        } else {
+            let records = &cuts.records[..4 * cuts.cut_records as usize];
+            super::tile_plan::record_pairs(records, g.mesh, g.disc)
+        };
+        self.timings.lock().expect("timings lock").pairs_clipped_on_device += stats.total;
+        if pairs.is_empty() {
+            return Ok(stats);
+        }
+        let started = std::time::Instant::now();
+        let (lists, host_stats) = host_pieces(done.rows.start, &mut pairs, g);
+        stats += host_stats;
+        let (records, count, piece_offset, vertices) = lists.finish();
+        let mut t = self.timings.lock().expect("timings lock");
+        t.planning_seconds += started.elapsed().as_secs_f64();
+        t.pairs_clipped_on_host += pairs.len() as u64;
+        drop(t);
+        compute::checked(ctx, "GPU assembly of the pairs left to the host", || {
+            let (x, y, stride) = compute::grid(ctx, count as u64);
+            let params = Params {
+                exception_count: count,
+                piece_offset,
+                stride,
+                near_capacity: 0,
+                cut_records: 0,
+                ..cuts.params
+            };
+            let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+            let exceptions = compute::storage(ctx, bytemuck::cast_slice(&records));
+            let vertices = compute::storage(ctx, &layout::real_bytes(&vertices, self.precision));
+            let near = compute::storage(ctx, &[0u8; layout::NEAR_HEADER_BYTES as usize + 8]);
+            let (elements, tables) = (&uploaded.elements, &uploaded.tables);
+            let group = compute::bind_group(
+                ctx,
+                &self.layout,
+                &[&params, &cuts.views, elements, tables, &exceptions, &vertices, &done.out, &near],
+            );
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            self.encode_pieces(&mut encoder, &group, (x, y));
+            if let Some(staging) = &done.staging {
+                encoder.copy_buffer_to_buffer(&done.out, 0, staging, 0, done.size.max(16));
+            }
+            ctx.queue.submit([encoder.finish()]);
+        })?;
+        Ok(stats)
+    }
+
+    /// Collects a submitted tile: copied into the host's matrix, or its buffer kept (narrowed
+    /// first where asked); returns the pairs classified on the device.
     fn finish(
         &self,
-        done: InFlight,
+        mut done: InFlight,
         destination: &mut Destination,
+        geometry: (Geometry, &Uploaded),
         progress: &dyn Progress,
-    ) -> Result<()> {
+    ) -> Result<PairStats> {
+        let stats = match done.cuts.take() {
+            Some(cuts) => self.collect_cuts(&done, &cuts, geometry)?,
+            None => PairStats::default(),
+        };
         let (matrix, staging) = match (destination, &done.staging) {
-            (Destination::Device(tiles, _), _) => {
+            (Destination::Device(tiles, narrowing), _) => {
                 progress.advance(done.rows.len());
-                tiles.push((done.rows, done.out));
-                return Ok(());
+                let out = match narrowing {
+                    Some(narrowing) => {
+                        let mut encoder =
+                            self.ctx.device.create_command_encoder(&Default::default());
+                        let (narrow, _params) =
+                            narrowing.encode(self.ctx, &mut encoder, done.rows.clone(), &done.out);
+                        self.ctx.queue.submit([encoder.finish()]);
+                        narrow
+                    }
+                    None => done.out,
+                };
+                tiles.push((done.rows, out));
+                return Ok(stats);
             }
             (Destination::Host(matrix), Some(staging)) => (matrix, staging),
             (Destination::Host(_), None) => unreachable!("host tiles are staged"),
@@ -751,6 +792,6 @@ impl<'a> GpuAssembler<'a> {
         drop(t);
         debug_assert_eq!(done.size as usize, done.rows.len() * dof * self.precision.bytes());
         progress.advance(done.rows.len());
-        Ok(())
+        Ok(stats)
     }
 }

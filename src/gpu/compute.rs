@@ -231,3 +231,36 @@ pub fn read_back(
     copy_mapped(staging, size, precision, &mut out)?;
     Ok(out)
 }
+
+/// `count` u32 of `buffer` from byte `offset`, once the work before is done (a copy, submitted
+/// and waited for).
+pub fn read_u32s(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    count: usize,
+) -> Result<Vec<u32>> {
+    if count == 0 {
+        return Ok(Vec::new());
+    }
+    let size = 4 * count as u64;
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("staging"),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    wait(ctx, &staging, size)?;
+    let values = {
+        let view = staging
+            .slice(..size.max(16))
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
+        bytemuck::pod_collect_to_vec::<u8, u32>(&view[..size as usize])
+    };
+    staging.unmap();
+    Ok(values)
+}

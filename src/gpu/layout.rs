@@ -7,7 +7,8 @@ use super::shaders::Precision;
 use crate::discretization::Discretization;
 
 /// Reals per (row, face) view: the node in the face's frame (x, y, z, i, j, k), rho/π (0 where
-/// the node sees nothing of the face), padding.
+/// the node sees nothing of the face), and 1 where the device clips the face's elements
+/// (`assemble_cuts`), else 0.
 pub const VIEW_STRIDE: usize = 8;
 /// Reals per element: centroid in the face's frame, three vertices and three affine basis
 /// functions relative to the centroid, face.
@@ -43,16 +44,55 @@ pub struct Params {
     pub stride: u32,
     /// Pairs the near list can hold.
     pub near_capacity: u32,
+    /// Cut records in the tile (shaders/clip.wgsl), not counting the last, which holds only the
+    /// pass's pair count.
+    pub cut_records: u32,
+    /// Pieces the clipping kernel's stack may hold (at most [`MAX_PIECES`]): a pair that needs
+    /// more is left to the host.
+    pub piece_limit: u32,
     /// Padding to a multiple of 16 bytes.
-    pub _pad: u32,
+    pub _pad: [u32; 3],
 }
 
-/// Bytes of the near list before its pairs: count, padding, indirect dispatch arguments, padding.
-pub const NEAR_HEADER_BYTES: u64 = 32;
+/// Bytes of the near list before its pairs: count, padding, indirect dispatch arguments, padding,
+/// the clipping kernel's tallies (hidden, facing away, full, partial, left to the host), padding.
+pub const NEAR_HEADER_BYTES: u64 = 64;
 /// Byte offset of the indirect dispatch arguments in the near list.
 pub const NEAR_DISPATCH_OFFSET: u64 = 16;
+/// Index (in u32) of the clipping kernel's first tally in the near list.
+pub const CUT_TALLY_INDEX: usize = 8;
+/// The clipping kernel's stack of pieces (`MAX_PIECES` of shaders/clip.wgsl).
+pub const MAX_PIECES: u32 = 8;
+/// Reals of a cut view before its shadows (clip.wgsl).
+pub const CUT_VIEW_HEADER: usize = 6;
+/// Reals of a shadow before its corners in a cut view (clip.wgsl).
+pub const SHADOW_HEADER: usize = 5;
+/// Reals per node of a face's element box tree (clip.wgsl).
+pub const BOX_NODE_STRIDE: usize = 7;
 
-const _: () = assert!(std::mem::size_of::<Params>() == 48);
+/// The element box trees of every face after `packed` (as [`pack_elements`] leaves it), lengths
+/// times `unit`, BOX_NODE_STRIDE reals per node: box (lo x, lo y, hi x, hi y), first position,
+/// positions, index of the node past its subtree (in the face's tree); returns where each
+/// face's tree starts.
+pub fn pack_box_trees(
+    trees: &[crate::visibility::ElementBoxes],
+    unit: f64,
+    packed: &mut Vec<f64>,
+) -> Vec<u32> {
+    trees
+        .iter()
+        .map(|tree| {
+            let start = packed.len() as u32;
+            for (range, (lo, hi), past) in tree.nodes() {
+                packed.extend_from_slice(&[lo.x * unit, lo.y * unit, hi.x * unit, hi.y * unit]);
+                packed.extend_from_slice(&[range.start as f64, range.len() as f64, past as f64]);
+            }
+            start
+        })
+        .collect()
+}
+
+const _: () = assert!(std::mem::size_of::<Params>() == 64);
 
 /// Elements, ELEMENT_STRIDE reals each: the discretization's element-local data and the centroid,
 /// lengths in units of `1 / unit` (a power of two; basis gradients scaled inversely).

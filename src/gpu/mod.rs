@@ -11,6 +11,7 @@ mod pairs;
 mod resident;
 pub mod shaders;
 mod storage;
+mod tile_plan;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};
 pub use blocks::{BlockArrays, DeviceBlocks};

@@ -85,7 +85,8 @@ impl<'a> PairEvaluator<'a> {
                 disc.method.name()
             )));
         }
-        let Uploaded { unit, elements, tables, counts } = assembler.upload(scene, disc, options)?;
+        let Uploaded { unit, elements, tables, counts, .. } =
+            assembler.upload(scene, disc, options, &[])?;
         let budget = assembler.ctx.max_binding().min(BATCH_BYTES);
         let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
         let uploaded = elements.size() + tables.size();
@@ -168,7 +169,7 @@ impl<'a> PairEvaluator<'a> {
                 piece_offset,
                 stride,
                 near_capacity: 0,
-                _pad: 0,
+                ..Default::default()
             };
             let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
             let BatchBuffers { views: v, records: r, vertices: w, output: o } = &mut *buffers;

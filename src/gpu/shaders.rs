@@ -27,6 +27,7 @@ impl Precision {
 const MATH_F64: &str = include_str!("../../shaders/math_f64.wgsl");
 const MATH_F32: &str = include_str!("../../shaders/math_f32.wgsl");
 const COLLOCATION: &str = include_str!("../../shaders/collocation.wgsl");
+const CLIP: &str = include_str!("../../shaders/clip.wgsl");
 const MATH_TEST: &str = include_str!("../../shaders/math_test.wgsl");
 const MATVEC: &str = include_str!("../../shaders/matvec.wgsl");
 const BLOCKS: &str = include_str!("../../shaders/blocks.wgsl");
@@ -40,7 +41,8 @@ fn with_math(precision: Precision, body: &str) -> String {
     format!("{alias}{math}\n{body}")
 }
 
-/// The collocation kernels (entry points `assemble_full`, `assemble_pieces`) for elements with
+/// The collocation kernels (entry points `assemble_full`, `assemble_pieces`, and
+/// `assemble_cuts`, which clips elements on the device: shaders/clip.wgsl) for elements with
 /// `per_element` basis functions (1 or 3); `far_field` keeps the far-field rule's code. Both are
 /// written into the source rather than passed as pipeline-overridable constants: with wgpu 30 an
 /// `override` set at pipeline creation left the linear kernel computing wrong values on lavapipe.
@@ -48,7 +50,7 @@ pub fn collocation(precision: Precision, per_element: u32, far_field: bool) -> S
     with_math(
         precision,
         &format!(
-            "const PER_ELEMENT: u32 = {per_element}u;\nconst FAR_FIELD: bool = {far_field};\n{COLLOCATION}"
+            "const PER_ELEMENT: u32 = {per_element}u;\nconst FAR_FIELD: bool = {far_field};\n{COLLOCATION}\n{CLIP}"
         ),
     )
 }
@@ -136,6 +138,12 @@ mod tests {
         assert_eq!(wgsl_u32_constant(&module, "WORKGROUP"), layout::WORKGROUP);
         assert_eq!(wgsl_u32_constant(&module, "TABLE_SIZE") as usize, layout::TABLE_SIZE);
         assert_eq!(wgsl_u32_constant(&module, "PER_ELEMENT"), 3);
+        assert_eq!(wgsl_u32_constant(&module, "MAX_PIECES"), layout::MAX_PIECES);
+        assert_eq!(wgsl_u32_constant(&module, "CUT_VIEW_HEADER") as usize, layout::CUT_VIEW_HEADER);
+        assert_eq!(wgsl_u32_constant(&module, "SHADOW_HEADER") as usize, layout::SHADOW_HEADER);
+        assert_eq!(wgsl_u32_constant(&module, "BOX_NODE_STRIDE") as usize, layout::BOX_NODE_STRIDE);
+        let leaf = crate::visibility::ElementBoxes::LEAF;
+        assert_eq!(wgsl_u32_constant(&module, "BOX_LEAF") as usize, leaf);
         // The IMT panels of the log moment, as on the CPU.
         let (_, c) = module
             .constants

@@ -127,6 +127,12 @@ pub struct PartSight<'a> {
 }
 
 impl PartSight<'_> {
+    /// The view of the face: the tangent plane's clip and the shadows, for a consumer that
+    /// classifies the elements itself (the device's clipping kernel), counting them as it does.
+    pub fn view(&self) -> &FaceView {
+        self.view
+    }
+
     /// What the viewer sees of the element `polygon` (convex, counter-clockwise, face
     /// coordinates), counted.
     pub fn element(&mut self, polygon: &[DVec2]) -> Visibility {
@@ -182,7 +188,19 @@ struct BoxNode {
 
 impl ElementBoxes {
     /// Most elements of a half classified one by one rather than halved again.
-    const LEAF: usize = 4;
+    pub const LEAF: usize = 4;
+
+    /// The tree's nodes depth first, each node before its halves: the positions it holds, its
+    /// box, and the index of the node after its subtree (its second half's, if it has halves:
+    /// they split its positions at the middle, down to [`ElementBoxes::LEAF`] or fewer).
+    pub fn nodes(&self) -> impl Iterator<Item = (Range<usize>, (DVec2, DVec2), usize)> + '_ {
+        self.nodes.iter().map(|n| (n.range.clone(), n.bounds, n.past))
+    }
+
+    /// The element at position `k` of the list (convex, counter-clockwise, face coordinates).
+    pub fn polygon(&self, k: usize) -> &[DVec2] {
+        &self.polygons[k]
+    }
 
     /// The tree over the elements `polygons` (convex, counter-clockwise, face coordinates).
     pub fn new(polygons: Vec<[DVec2; 3]>) -> Self {
