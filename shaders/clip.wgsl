@@ -19,10 +19,10 @@
 // of the leaves it does not are clipped one by one.
 //
 // `assemble_cuts` runs one invocation per (record, element of the face) and writes that pair's
-// entries. The visible part is element ∩ clip minus each shadow in turn; the pieces a shadow cuts
-// are kept on a stack with the next shadow to try, depth first, and each piece that no later
-// shadow cuts is integrated as it is found. A piece with more than MAX_VERTICES corners or a stack
-// deeper than params.piece_limit (at most MAX_PIECES) is left to the host: the pair goes on the
+// entries. The visible part is element ∩ clip minus each shadow in turn; a piece a shadow cuts
+// is integrated at once where no later shadow may cut it, and kept on a stack with the first that
+// may otherwise, depth first. A pair with a piece of more than MAX_VERTICES corners or more pieces
+// kept than params.piece_limit (at most MAX_PIECES) is left to the host: the pair goes on the
 // overflow list after the near pairs, with zero entries, and the host writes it from its own
 // pieces. The pass tallies the pairs it classifies in the near list's header.
 
@@ -232,10 +232,15 @@ fn push_piece(stack: ptr<function, Stack>, p: ptr<function, Polygon>, next: u32)
 }
 
 // polygon::subtract_convex: the pieces of `piece` outside the shadow pushed, each with `next`.
-fn subtract_shadow(stack: ptr<function, Stack>, piece: ptr<function, Polygon>, shadow: u32, next: u32) {
+// polygon::subtract_convex: the pieces of `piece` outside the shadow handed to `emit_piece`, each
+// with `next`, the shadow after this one. Returns false where it leaves `piece` as it is (one
+// piece, equal to it: nothing is handed on), true otherwise (also where nothing is left). The
+// last piece cut is held back until the next is cut or the end: until then it may be the only one.
+fn subtract_shadow(stack: ptr<function, Stack>, piece: ptr<function, Polygon>, shadow: u32, next: u32) -> bool {
     var current = *piece;
     var inside_part: Polygon;
-    var outside_part: Polygon;
+    var held: Polygon;
+    var held_count = 0u;
     var d: array<real, MAX_VERTICES>;
     var kept = false;
     for (var k = 0u; k < shadow_corners(shadow); k = k + 1u) {
@@ -256,15 +261,67 @@ fn subtract_shadow(stack: ptr<function, Stack>, piece: ptr<function, Polygon>, s
         if (kept && all_in) {
             continue;
         }
-        if (keep_side(&current, &d, -1.0, scale2, &outside_part)) {
-            push_piece(stack, &outside_part, next);
+        // A second cutting line: the piece held is not the only one (the only piece equal to
+        // `piece` leaves nothing inside the line, and the walk ends there).
+        if (held.n > 0u) {
+            emit_piece(stack, &held, next);
+        }
+        if (keep_side(&current, &d, -1.0, scale2, &held)) {
+            held_count = held_count + 1u;
+        } else {
+            held.n = 0u;
         }
         if (!keep_side(&current, &d, 1.0, scale2, &inside_part)) {
-            return;
+            break;
         }
         current = inside_part;
         kept = true;
     }
+    if (held_count == 1u && held.n > 0u && same_polygon(&held, piece)) {
+        return false;
+    }
+    if (held.n > 0u) {
+        emit_piece(stack, &held, next);
+    }
+    return true;
+}
+
+// What the pass knows of the pair it clips: the node, the element and its centroid, the
+// far-field band, whether the log moment is needed, the end of the view's shadows; the pieces
+// integrated so far and their count.
+struct CutContext {
+    obs: Observer,
+    el: u32,
+    c: vec2<real>,
+    band: u32,
+    need_log: bool,
+    end: u32,
+}
+
+var<private> cut_context: CutContext;
+var<private> cut_integral: Integral;
+var<private> cut_piece_count: u32;
+
+// A piece that no shadow from `next` on may cut is integrated at once (the host's walk keeps it
+// past each of them); another goes on the stack with the first that may.
+fn emit_piece(stack: ptr<function, Stack>, p: ptr<function, Polygon>, next: u32) {
+    let bounds = polygon_box(p);
+    var shadow = next;
+    while (shadow < cut_context.end) {
+        if (boxes_overlap(bounds, shadow_box(shadow)) && !convex_apart(p, shadow)) {
+            break;
+        }
+        shadow = shadow + SHADOW_HEADER + 2u * shadow_corners(shadow);
+    }
+    if (shadow < cut_context.end) {
+        push_piece(stack, p, shadow);
+        return;
+    }
+    cut_piece_count = cut_piece_count + 1u;
+    let cx = cut_context;
+    var acc = cut_integral;
+    add_piece(&acc, p, cx.obs, cx.el, cx.c, cx.band, cx.need_log);
+    cut_integral = acc;
 }
 
 fn same_polygon(a: ptr<function, Polygon>, b: ptr<function, Polygon>) -> bool {
@@ -286,6 +343,7 @@ const CUT_FULL: u32 = 2u;
 const CUT_PARTIAL: u32 = 3u;
 const CUT_OVERFLOW: u32 = 4u;
 const CUT_UNKNOWN: u32 = 5u;
+const CUT_DEFERRED: u32 = 6u;
 
 // PairPlanner::visible_in_box: the class of every polygon in the box (lo, hi) under the view at
 // `view`, where the box alone tells; CUT_UNKNOWN otherwise.
@@ -393,18 +451,17 @@ fn write_integral(base: u32, el: u32, acc: ptr<function, Integral>, obs: Observe
 // The pieces of `one` (face coordinates) left by the shadows from `first` (the first that may cut
 // it) to `end`, depth first: integrated into out[base..]; the pair's class.
 fn cut_pieces(base: u32, el: u32, obs: Observer, one: ptr<function, Polygon>, first: u32, end: u32, clipped: bool) -> u32 {
-    let c = element_centroid(el);
     let band = far_field_band(obs, el);
-    let need_log = needs_log(obs, el);
-    var acc: Integral;
+    cut_context = CutContext(obs, el, element_centroid(el), band, needs_log(obs, el), end);
+    cut_integral = Integral();
+    cut_piece_count = 0u;
     var stack: Stack;
-    var pieces = 0u;
     var cut = false;
-    push_piece(&stack, one, first);
-    while (stack.top > 0u && !overflowed) {
-        stack.top = stack.top - 1u;
-        var piece = stack.pieces[stack.top];
-        var shadow = stack.next[stack.top];
+    // The element's part first, then the pieces on the stack, each from the first shadow that
+    // may cut it.
+    var piece = *one;
+    var shadow = first;
+    loop {
         let bounds = polygon_box(&piece);
         var gone = false;
         while (shadow < end) {
@@ -417,11 +474,7 @@ fn cut_pieces(base: u32, el: u32, obs: Observer, one: ptr<function, Polygon>, fi
                 gone = true;
                 break;
             }
-            let before = stack.top;
-            subtract_shadow(&stack, &piece, shadow, next);
-            var first_cut = stack.pieces[min(before, MAX_PIECES - 1u)];
-            if (stack.top == before + 1u && same_polygon(&first_cut, &piece)) {
-                stack.top = before;
+            if (!subtract_shadow(&stack, &piece, shadow, next)) {
                 shadow = next;
                 continue;
             }
@@ -430,20 +483,29 @@ fn cut_pieces(base: u32, el: u32, obs: Observer, one: ptr<function, Polygon>, fi
             break;
         }
         if (!gone) {
-            pieces = pieces + 1u;
-            add_piece(&acc, &piece, obs, el, c, band, need_log);
+            cut_piece_count = cut_piece_count + 1u;
+            var acc = cut_integral;
+            add_piece(&acc, &piece, obs, el, cut_context.c, band, cut_context.need_log);
+            cut_integral = acc;
         }
+        if (stack.top == 0u || overflowed) {
+            break;
+        }
+        stack.top = stack.top - 1u;
+        piece = stack.pieces[stack.top];
+        shadow = stack.next[stack.top];
     }
     if (overflowed) {
         return CUT_OVERFLOW;
     }
-    if (pieces == 0u) {
+    if (cut_piece_count == 0u) {
         return CUT_HIDDEN;
     }
     if (!cut && !clipped) {
         whole_element(base, el, obs);
         return CUT_FULL;
     }
+    var acc = cut_integral;
     write_integral(base, el, &acc, obs, band);
     return CUT_PARTIAL;
 }
@@ -451,7 +513,7 @@ fn cut_pieces(base: u32, el: u32, obs: Observer, one: ptr<function, Polygon>, fi
 // The pair (row, el) under the view at `view`: its entries to out[base..], and its class. Most
 // elements of a face seen in part are seen whole or not at all, which the shadows' boxes and
 // sides tell before any piece is cut.
-fn cut_pair(base: u32, row: u32, el: u32, position: u32, view: u32) -> u32 {
+fn cut_pair(base: u32, row: u32, el: u32, position: u32, view: u32, index: u32, defer: bool) -> u32 {
     overflowed = false;
     let obs = relative_to(observer(row, element_face(el)), el);
     let by_boxes = class_by_boxes(view, position);
@@ -507,6 +569,15 @@ fn cut_pair(base: u32, row: u32, el: u32, position: u32, view: u32) -> u32 {
         if (convex_contains(shadow, &one)) {
             return CUT_HIDDEN;
         }
+        // Few pairs are cut, scattered among many that are not: a SIMD batch with one of them
+        // would clip for all its lanes. They are listed for a pass of their own.
+        if (defer) {
+            let slot = atomicAdd(&near.deep_count, 1u);
+            if (slot < params.deep_capacity) {
+                near.pairs[2u * (params.near_capacity + params.overflow_capacity) + slot] = index;
+                return CUT_DEFERRED;
+            }
+        }
         return cut_pieces(base, el, obs, &one, shadow, end, clipped);
     }
     if (!clipped) {
@@ -535,45 +606,84 @@ fn cut_record(index: u32) -> u32 {
     return lo;
 }
 
-@compute @workgroup_size(64)
-fn assemble_cuts(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+// Pair `index` of the pass: clipped (or listed for `assemble_deep_cuts` where `defer`), written,
+// and tallied in the workgroup's counts.
+fn cut_and_tally(index: u32, defer: bool) {
+    let r = cut_record(index);
+    let row = exceptions[4u * r + 1u];
+    let position = index - exceptions[4u * r];
+    let el = exceptions[4u * r + 2u] + position;
+    let base = row * params.dof + el * PER_ELEMENT;
+    let found = cut_pair(base, row, el, position, exceptions[4u * r + 3u], index, defer);
+    if (found == CUT_DEFERRED) {
+        return;
+    }
+    if (found != CUT_FULL && found != CUT_PARTIAL) {
+        for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
+            out[base + l] = 0.0;
+        }
+    }
+    switch found {
+        case CUT_HIDDEN: { atomicAdd(&tally_hidden, 1u); }
+        case CUT_FACING_AWAY: { atomicAdd(&tally_facing_away, 1u); }
+        case CUT_FULL: { atomicAdd(&tally_full, 1u); }
+        case CUT_PARTIAL: { atomicAdd(&tally_partial, 1u); }
+        default: {
+            let slot = atomicAdd(&near.overflow, 1u);
+            if (slot < params.overflow_capacity) {
+                near.pairs[2u * (params.near_capacity + slot)] = row;
+                near.pairs[2u * (params.near_capacity + slot) + 1u] = el;
+            }
+        }
+    }
+}
+
+fn clear_tallies(lane: u32) {
     if (lane == 0u) {
         atomicStore(&tally_hidden, 0u);
         atomicStore(&tally_facing_away, 0u);
         atomicStore(&tally_full, 0u);
         atomicStore(&tally_partial, 0u);
     }
-    workgroupBarrier();
-    let index = gid.x + gid.y * params.stride;
-    if (index < exceptions[4u * params.cut_records]) {
-        let r = cut_record(index);
-        let row = exceptions[4u * r + 1u];
-        let position = index - exceptions[4u * r];
-        let el = exceptions[4u * r + 2u] + position;
-        let base = row * params.dof + el * PER_ELEMENT;
-        let found = cut_pair(base, row, el, position, exceptions[4u * r + 3u]);
-        if (found != CUT_FULL && found != CUT_PARTIAL) {
-            for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
-                out[base + l] = 0.0;
-            }
-        }
-        switch found {
-            case CUT_HIDDEN: { atomicAdd(&tally_hidden, 1u); }
-            case CUT_FACING_AWAY: { atomicAdd(&tally_facing_away, 1u); }
-            case CUT_FULL: { atomicAdd(&tally_full, 1u); }
-            case CUT_PARTIAL: { atomicAdd(&tally_partial, 1u); }
-            default: {
-                let slot = atomicAdd(&near.overflow, 1u);
-                near.pairs[2u * (params.near_capacity + slot)] = row;
-                near.pairs[2u * (params.near_capacity + slot) + 1u] = el;
-            }
-        }
-    }
-    workgroupBarrier();
+}
+
+fn add_tallies(lane: u32) {
     if (lane == 0u) {
         atomicAdd(&near.hidden, atomicLoad(&tally_hidden));
         atomicAdd(&near.facing_away, atomicLoad(&tally_facing_away));
         atomicAdd(&near.full, atomicLoad(&tally_full));
         atomicAdd(&near.partial, atomicLoad(&tally_partial));
     }
+}
+
+@compute @workgroup_size(64)
+fn assemble_cuts(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    clear_tallies(lane);
+    workgroupBarrier();
+    let index = gid.x + gid.y * params.stride;
+    if (index < exceptions[4u * params.cut_records]) {
+        cut_and_tally(index, true);
+    }
+    workgroupBarrier();
+    add_tallies(lane);
+}
+
+@compute @workgroup_size(1)
+fn prepare_deep_cuts() {
+    let count = min(atomicLoad(&near.deep_count), params.deep_capacity);
+    near.deep_dispatch_x = (count + WORKGROUP - 1u) / WORKGROUP;
+    near.deep_dispatch_y = 1u;
+    near.deep_dispatch_z = 1u;
+}
+
+// The pairs `assemble_cuts` listed, one per invocation.
+@compute @workgroup_size(64)
+fn assemble_deep_cuts(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    clear_tallies(lane);
+    workgroupBarrier();
+    if (gid.x < min(atomicLoad(&near.deep_count), params.deep_capacity)) {
+        cut_and_tally(near.pairs[2u * (params.near_capacity + params.overflow_capacity) + gid.x], false);
+    }
+    workgroupBarrier();
+    add_tallies(lane);
 }

@@ -31,8 +31,10 @@
 //                          (clip.wgsl)
 //   6 out         storage  rows x dof of K (rho/pi included), row-major
 //   7 near        storage  the deferred pairs: an atomic count, indirect dispatch arguments, the
-//                          tallies of `assemble_cuts`, then (row, element) of up to
-//                          params.near_capacity pairs, then the pairs `assemble_cuts` left to the host
+//                          tallies of `assemble_cuts`, the count and dispatch of the pairs it
+//                          defers to `assemble_deep_cuts`; then (row, element) of up to
+//                          params.near_capacity near pairs, of the pairs `assemble_cuts` left to the
+//                          host, and the pass indices of those it deferred
 //
 // Invocation contract: `assemble_full` runs on a grid of (element, row) with 64-wide workgroups
 // along the elements, and writes every entry of the tile, evaluating the whole element wherever the
@@ -72,9 +74,9 @@ struct Params {
     near_capacity: u32,
     cut_records: u32,
     piece_limit: u32,
+    overflow_capacity: u32,
+    deep_capacity: u32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 // The deferred pairs of `assemble_full` and the indirect dispatch of `assemble_near`; the pairs
@@ -96,6 +98,14 @@ struct NearList {
     _pad4: u32,
     _pad5: u32,
     _pad6: u32,
+    deep_count: atomic<u32>,
+    _pad7: u32,
+    _pad8: u32,
+    _pad9: u32,
+    deep_dispatch_x: u32,
+    deep_dispatch_y: u32,
+    deep_dispatch_z: u32,
+    _pad10: u32,
     pairs: array<u32>,
 }
 

@@ -105,9 +105,18 @@ pub struct GpuAssembler<'a> {
     pieces: wgpu::ComputePipeline,
     /// `assemble_pairs`: listed pairs (src/gpu/pairs.rs).
     pub(super) pairs: wgpu::ComputePipeline,
-    /// `assemble_cuts`: the elements of faces seen in part, clipped on the device (f64 only).
-    cuts: Option<wgpu::ComputePipeline>,
+    /// The elements of faces seen in part, clipped on the device (f64 only).
+    cuts: Option<CutPipelines>,
     timings: std::sync::Mutex<GpuTimings>,
+}
+
+/// The clipping kernels (shaders/clip.wgsl): `assemble_cuts` over every pair of the faces seen in
+/// part, `prepare_deep_cuts` and `assemble_deep_cuts` over those a shadow cuts, which the first
+/// lists.
+struct CutPipelines {
+    cuts: wgpu::ComputePipeline,
+    prepare_deep: wgpu::ComputePipeline,
+    deep: wgpu::ComputePipeline,
 }
 
 /// Where the rules array's parts start and how long they are.
@@ -256,11 +265,15 @@ impl<'a> GpuAssembler<'a> {
             "assemble_pairs",
         ];
         if precision == Precision::F64 {
-            entries.push("assemble_cuts");
+            entries.extend(["assemble_cuts", "prepare_deep_cuts", "assemble_deep_cuts"]);
         }
         let (layout, mut pipelines) =
             compute::pipeline(ctx, &source, &entries, 8, &[0, 3], &[6, 7])?;
-        let cuts = (precision == Precision::F64).then(|| pipelines.pop().expect("a cut pipeline"));
+        let cuts = (precision == Precision::F64).then(|| {
+            let [cuts, prepare_deep, deep]: [wgpu::ComputePipeline; 3] =
+                pipelines.split_off(5).try_into().expect("three cut pipelines");
+            CutPipelines { cuts, prepare_deep, deep }
+        });
         let [full, prepare_near, near, pieces, pairs]: [wgpu::ComputePipeline; 5] =
             pipelines.try_into().expect("five pipelines");
         Ok(Self {
@@ -529,6 +542,13 @@ impl<'a> GpuAssembler<'a> {
                 .min((max_binding - layout::NEAR_HEADER_BYTES) / 8 - near_capacity)
                 .min(max_near_pairs)
                 .min(1 << 20);
+            // The pairs a shadow cuts, listed for a pass of their own, as many as the binding and
+            // one dispatch hold (past that, the first pass clips them in place).
+            let grid_limit =
+                ctx.limits.max_compute_workgroups_per_dimension as u64 * layout::WORKGROUP as u64;
+            let room = (max_binding - layout::NEAR_HEADER_BYTES) / 4;
+            let deep_capacity =
+                plan.cut_pairs.min(room - 2 * (near_capacity + overflow_capacity)).min(grid_limit);
             let (cut_x, cut_y, cut_stride) = compute::grid(ctx, plan.cut_pairs);
             let params = Params {
                 rows: rows as u32,
@@ -544,12 +564,16 @@ impl<'a> GpuAssembler<'a> {
                 near_capacity: near_capacity as u32,
                 cut_records: plan.cut_records,
                 piece_limit: piece_limit.min(layout::MAX_PIECES),
+                overflow_capacity: overflow_capacity as u32,
+                deep_capacity: deep_capacity as u32,
                 ..Default::default()
             };
             let params_buffer = compute::uniform(ctx, bytemuck::bytes_of(&params));
             let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("near"),
-                size: layout::NEAR_HEADER_BYTES + 8 * (near_capacity + overflow_capacity).max(1),
+                size: layout::NEAR_HEADER_BYTES
+                    + 8 * (near_capacity + overflow_capacity).max(1)
+                    + 4 * deep_capacity.next_multiple_of(2),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
@@ -591,10 +615,8 @@ impl<'a> GpuAssembler<'a> {
                 self.encode_pieces(&mut encoder, &group, (exc_x, exc_y));
             }
             if let (Some(cuts), true) = (&self.cuts, plan.cut_records > 0) {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(cuts);
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(cut_x, cut_y, 1);
+                let deferred = (deep_capacity > 0).then_some((&near, &near_args));
+                self.encode_cuts(cuts, &mut encoder, &group, (cut_x, cut_y), deferred);
             }
             if let Some(staging) = &staging {
                 encoder.copy_buffer_to_buffer(&out, 0, staging, 0, size.max(16));
@@ -653,6 +675,34 @@ impl<'a> GpuAssembler<'a> {
             pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups_indirect(near_args, 0);
         }
+    }
+
+    /// The clipping passes: every pair of the faces seen in part, then, with the near list and
+    /// a buffer for their dispatch arguments, the pairs a shadow cuts, which the first lists.
+    fn encode_cuts(
+        &self,
+        cuts: &CutPipelines,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        (x, y): (u32, u32),
+        deferred: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&cuts.cuts);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        drop(pass);
+        let Some((near, args)) = deferred else { return };
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&cuts.prepare_deep);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        drop(pass);
+        encoder.copy_buffer_to_buffer(near, layout::DEEP_DISPATCH_OFFSET, args, 0, 12);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&cuts.deep);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups_indirect(args, 0);
     }
 
     /// `assemble_pieces` over the exceptions bound in `group`.

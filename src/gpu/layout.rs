@@ -50,13 +50,20 @@ pub struct Params {
     /// Pieces the clipping kernel's stack may hold (at most [`MAX_PIECES`]): a pair that needs
     /// more is left to the host.
     pub piece_limit: u32,
+    /// Pairs left to the host that the near list holds after its near pairs.
+    pub overflow_capacity: u32,
+    /// Pairs a shadow cuts that the near list holds after those, for `assemble_deep_cuts`.
+    pub deep_capacity: u32,
     /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: u32,
 }
 
 /// Bytes of the near list before its pairs: count, padding, indirect dispatch arguments, padding,
-/// the clipping kernel's tallies (hidden, facing away, full, partial, left to the host), padding.
-pub const NEAR_HEADER_BYTES: u64 = 64;
+/// the clipping kernel's tallies (hidden, facing away, full, partial, left to the host), padding,
+/// the count of the pairs it defers, padding, their dispatch's arguments, padding.
+pub const NEAR_HEADER_BYTES: u64 = 96;
+/// Byte offset of the deferred cut pairs' indirect dispatch arguments in the near list.
+pub const DEEP_DISPATCH_OFFSET: u64 = 80;
 /// Byte offset of the indirect dispatch arguments in the near list.
 pub const NEAR_DISPATCH_OFFSET: u64 = 16;
 /// Index (in u32) of the clipping kernel's first tally in the near list.
