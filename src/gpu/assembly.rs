@@ -442,9 +442,7 @@ impl<'a> GpuAssembler<'a> {
             let plan = plan_tile(t.clone(), geometry, clipping);
             let mut timings = self.timings.lock().expect("timings lock");
             timings.planning_seconds += started.elapsed().as_secs_f64();
-            if clipping == Clipping::Host {
-                timings.pairs_clipped_on_host += plan.stats.partial + plan.stats.hidden;
-            }
+            timings.pairs_clipped_on_host += plan.clipped_on_host;
             plan
         };
         // The visible pieces of a tile are known only once it is planned: a tile whose pieces or

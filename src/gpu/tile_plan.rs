@@ -60,6 +60,8 @@ pub(super) struct TilePlan {
     pub(super) cut_records: u32,
     /// (row, element) pairs the device clips.
     pub(super) cut_pairs: u64,
+    /// Pairs of faces seen in part that the host clipped.
+    pub(super) clipped_on_host: u64,
     /// The pairs classified on the host (those the device clips are counted by the device).
     pub(super) stats: PairStats,
 }
@@ -162,6 +164,8 @@ struct RowPlan {
     /// `cut_views`.
     cuts: Vec<(usize, usize)>,
     cut_views: Vec<f64>,
+    /// Pairs of faces seen in part clipped here, element by element.
+    clipped_here: u64,
     stats: PairStats,
 }
 
@@ -174,6 +178,7 @@ fn plan_row(i: usize, g: Geometry, clipping: Clipping, hiders: &mut RecentHiders
         pieces: Vec::new(),
         cuts: Vec::new(),
         cut_views: Vec::new(),
+        clipped_here: 0,
         stats: PairStats::default(),
     };
     // A row that reflects nothing keeps every view "skipped" (all zeros): nothing is evaluated.
@@ -195,6 +200,7 @@ fn plan_row(i: usize, g: Geometry, clipping: Clipping, hiders: &mut RecentHiders
                 push_cut_view(part.view(), unit, trees[face], &mut plan.cut_views);
                 return;
             }
+            plan.clipped_here += range.len() as u64;
             part.elements(&boxes[face], |k, visibility| {
                 let j = range.start + k;
                 if visibility != Visibility::Full {
@@ -216,10 +222,12 @@ pub(super) fn plan_tile(rows: Range<usize>, g: Geometry, clipping: Clipping) -> 
     let mut lists = PieceLists::default();
     let mut cut_records = Vec::new();
     let mut cut_pairs = 0u64;
+    let mut clipped_on_host = 0;
     let mut stats = PairStats::default();
     for (r, plan) in row_plans.into_iter().enumerate() {
         views.extend_from_slice(&plan.views);
         stats += plan.stats;
+        clipped_on_host += plan.clipped_here;
         for (el, pieces) in &plan.pieces {
             lists.push(r as u32, *el, pieces);
         }
@@ -247,6 +255,7 @@ pub(super) fn plan_tile(rows: Range<usize>, g: Geometry, clipping: Clipping) -> 
         vertices,
         cut_records: records,
         cut_pairs,
+        clipped_on_host,
         stats,
     }
 }
