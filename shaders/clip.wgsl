@@ -235,10 +235,12 @@ fn push_piece(stack: ptr<function, Stack>, p: ptr<function, Polygon>, next: u32)
 // polygon::subtract_convex: the pieces of `piece` outside the shadow handed to `emit_piece`, each
 // with `next`, the shadow after this one. Returns false where it leaves `piece` as it is (one
 // piece, equal to it: nothing is handed on), true otherwise (also where nothing is left). The
-// last piece cut is held back until the next is cut or the end: until then it may be the only one.
+// last piece cut is held back until another is cut or the walk ends: until then it may be the
+// only one.
 fn subtract_shadow(stack: ptr<function, Stack>, piece: ptr<function, Polygon>, shadow: u32, next: u32) -> bool {
     var current = *piece;
     var inside_part: Polygon;
+    var outside_part: Polygon;
     var held: Polygon;
     var held_count = 0u;
     var d: array<real, MAX_VERTICES>;
@@ -261,15 +263,13 @@ fn subtract_shadow(stack: ptr<function, Stack>, piece: ptr<function, Polygon>, s
         if (kept && all_in) {
             continue;
         }
-        // A second cutting line: the piece held is not the only one (the only piece equal to
-        // `piece` leaves nothing inside the line, and the walk ends there).
-        if (held.n > 0u) {
-            emit_piece(stack, &held, next);
-        }
-        if (keep_side(&current, &d, -1.0, scale2, &held)) {
+        if (keep_side(&current, &d, -1.0, scale2, &outside_part)) {
+            // A second piece: the one held is not the only one.
+            if (held_count > 0u) {
+                emit_piece(stack, &held, next);
+            }
+            held = outside_part;
             held_count = held_count + 1u;
-        } else {
-            held.n = 0u;
         }
         if (!keep_side(&current, &d, 1.0, scale2, &inside_part)) {
             break;
@@ -277,10 +277,10 @@ fn subtract_shadow(stack: ptr<function, Stack>, piece: ptr<function, Polygon>, s
         current = inside_part;
         kept = true;
     }
-    if (held_count == 1u && held.n > 0u && same_polygon(&held, piece)) {
+    if (held_count == 1u && same_polygon(&held, piece)) {
         return false;
     }
-    if (held.n > 0u) {
+    if (held_count > 0u) {
         emit_piece(stack, &held, next);
     }
     return true;

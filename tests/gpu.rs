@@ -721,19 +721,22 @@ fn the_device_clips_elements_of_faces_seen_in_part_as_the_host_does() {
 fn pairs_the_clipping_kernel_cannot_hold_are_clipped_on_the_host() {
     // A stack of one piece leaves every element that a shadow cuts in two to the host, a stack
     // of none every element that a shadow's box and sides may cut; a near list of a few pairs
-    // (linear method) holds fewer than are left, so the host clips all of the tile's. The
-    // matrix and the pair classes stay the CPU's.
+    // holds fewer than are left, so the host clips all of the tile's (with a small binding, in
+    // parts). The matrix and the pair classes stay the CPU's.
     let Some(ctx) = gpu() else { return };
     let linear = Method::linear(Method::PAPER_ALPHA).unwrap();
-    let cases = [(Method::Centroid, 1, u64::MAX), (Method::Centroid, 0, u64::MAX), (linear, 1, 64)];
-    for (method, pieces_on_device, near_pairs) in cases {
+    let cases = [
+        (Method::Centroid, 1, u64::MAX, u64::MAX),
+        (Method::Centroid, 0, 8, 16 << 10),
+        (linear, 1, 64, u64::MAX),
+    ];
+    for (method, pieces_on_device, near_pairs, binding_bytes) in cases {
         let scene =
             radiosity::scene::load(std::path::Path::new("examples/louvre-window.toml")).unwrap();
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 2).unwrap();
         let disc = Discretization::new(&scene, &mesh, method).unwrap();
         let problem = Problem::new(scene, mesh, disc);
-        let limits =
-            gpu::TileLimits { pieces_on_device, near_pairs, rows: 64, ..Default::default() };
+        let limits = gpu::TileLimits { pieces_on_device, near_pairs, rows: 64, binding_bytes };
         let (d, cpu, gpu, timings) = clipped_against_cpu(ctx, &problem, limits);
         let what = format!("{method}, {pieces_on_device} pieces");
         assert_eq!(cpu, gpu, "{what}");

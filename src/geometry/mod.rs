@@ -8,6 +8,8 @@
 mod distance;
 mod frame;
 mod polygon;
+#[cfg(test)]
+pub(crate) use polygon::ON_LINE;
 
 pub use distance::convex_polygons_distance;
 pub use frame::PlaneFrame;

@@ -18,7 +18,7 @@ const INLINE_VERTICES: usize = 6;
 pub type SmallPolygon<P> = SmallVec<[P; INLINE_VERTICES]>;
 
 /// Relative tolerance (of a polygon's size) under which a vertex counts as lying on a clipping line.
-const ON_LINE: f64 = 1e-13;
+pub(crate) const ON_LINE: f64 = 1e-13;
 
 /// The closed half-plane `{ x : normal·x + offset >= 0 }`.
 #[derive(Clone, Copy, Debug, PartialEq)]

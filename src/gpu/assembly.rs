@@ -14,10 +14,11 @@ use std::ops::Range;
 
 use super::GpuContext;
 use super::compute;
+use super::cuts::{CutPipelines, CutsInFlight};
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::shaders::{self, Precision};
 use super::storage::{Narrowing, StorageError};
-use super::tile_plan::{Clipping, Geometry, TilePlan, host_pieces, plan_tile};
+use super::tile_plan::{Clipping, Geometry, TilePlan, plan_tile};
 use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem, face_boxes};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
@@ -107,16 +108,7 @@ pub struct GpuAssembler<'a> {
     pub(super) pairs: wgpu::ComputePipeline,
     /// The elements of faces seen in part, clipped on the device (f64 only).
     cuts: Option<CutPipelines>,
-    timings: std::sync::Mutex<GpuTimings>,
-}
-
-/// The clipping kernels (shaders/clip.wgsl): `assemble_cuts` over every pair of the faces seen in
-/// part, `prepare_deep_cuts` and `assemble_deep_cuts` over those a shadow cuts, which the first
-/// lists.
-struct CutPipelines {
-    cuts: wgpu::ComputePipeline,
-    prepare_deep: wgpu::ComputePipeline,
-    deep: wgpu::ComputePipeline,
+    pub(super) timings: std::sync::Mutex<GpuTimings>,
 }
 
 /// Where the rules array's parts start and how long they are.
@@ -197,28 +189,15 @@ pub(super) struct Uploaded {
     pub(super) tree_offsets: Vec<u32>,
 }
 
-struct InFlight {
-    rows: Range<usize>,
+pub(super) struct InFlight {
+    pub(super) rows: Range<usize>,
     /// The tile's entries on the device.
-    out: wgpu::Buffer,
+    pub(super) out: wgpu::Buffer,
     /// Their copy for the host; none when the tile stays on the device.
-    staging: Option<wgpu::Buffer>,
-    size: u64,
+    pub(super) staging: Option<wgpu::Buffer>,
+    pub(super) size: u64,
     /// What the host needs to finish the clipping pass; none without one.
     cuts: Option<CutsInFlight>,
-}
-
-/// A tile's clipping pass in flight: its tallies and the pairs it leaves to the host are in
-/// `near`; those pairs are written over the same views.
-struct CutsInFlight {
-    params: Params,
-    views: wgpu::Buffer,
-    near: wgpu::Buffer,
-    /// Pairs left to the host that the near list holds.
-    overflow_capacity: u64,
-    /// The tile's cut records, and how many.
-    records: Vec<u32>,
-    cut_records: u32,
 }
 
 /// Tiles submitted and not yet collected, at most: while the host copies the oldest out of its
@@ -269,11 +248,7 @@ impl<'a> GpuAssembler<'a> {
         }
         let (layout, mut pipelines) =
             compute::pipeline(ctx, &source, &entries, 8, &[0, 3], &[6, 7])?;
-        let cuts = (precision == Precision::F64).then(|| {
-            let [cuts, prepare_deep, deep]: [wgpu::ComputePipeline; 3] =
-                pipelines.split_off(5).try_into().expect("three cut pipelines");
-            CutPipelines { cuts, prepare_deep, deep }
-        });
+        let cuts = (precision == Precision::F64).then(|| CutPipelines::new(pipelines.split_off(5)));
         let [full, prepare_near, near, pieces, pairs]: [wgpu::ComputePipeline; 5] =
             pipelines.try_into().expect("five pipelines");
         Ok(Self {
@@ -442,7 +417,6 @@ impl<'a> GpuAssembler<'a> {
             let plan = plan_tile(t.clone(), geometry, clipping);
             let mut timings = self.timings.lock().expect("timings lock");
             timings.planning_seconds += started.elapsed().as_secs_f64();
-            timings.pairs_clipped_on_host += plan.clipped_on_host;
             plan
         };
         // The visible pieces of a tile are known only once it is planned: a tile whose pieces or
@@ -470,6 +444,8 @@ impl<'a> GpuAssembler<'a> {
         while let Some(plan) = next_plan.take() {
             self.timings.lock().expect("timings lock").tiles += 1;
             stats += plan.stats;
+            self.timings.lock().expect("timings lock").pairs_clipped_on_host +=
+                plan.clipped_on_host;
             let submitted = self.submit(plan, disc, mesh, &uploaded, device_limits, keep)?;
             in_flight.push_back(submitted);
             if in_flight.len() == TILES_IN_FLIGHT {
@@ -537,14 +513,14 @@ impl<'a> GpuAssembler<'a> {
             // as many as the binding holds (past that, the host clips all the tile's).
             let overflow_capacity = plan
                 .cut_pairs
-                .min((max_binding - layout::NEAR_HEADER_BYTES) / 8 - near_capacity)
+                .min(max_binding.saturating_sub(layout::NEAR_HEADER_BYTES) / 8 - near_capacity)
                 .min(max_near_pairs)
                 .min(1 << 20);
             // The pairs a shadow cuts, listed for a pass of their own, as many as the binding and
             // one dispatch hold (past that, the first pass clips them in place).
             let grid_limit =
                 ctx.limits.max_compute_workgroups_per_dimension as u64 * layout::WORKGROUP as u64;
-            let room = (max_binding - layout::NEAR_HEADER_BYTES) / 4;
+            let room = max_binding.saturating_sub(layout::NEAR_HEADER_BYTES) / 4;
             let deep_capacity =
                 plan.cut_pairs.min(room - 2 * (near_capacity + overflow_capacity)).min(grid_limit);
             let (cut_x, cut_y, cut_stride) = compute::grid(ctx, plan.cut_pairs);
@@ -627,6 +603,7 @@ impl<'a> GpuAssembler<'a> {
                 overflow_capacity,
                 records: plan.exceptions.clone(),
                 cut_records: plan.cut_records,
+                max_binding,
             });
             Ok::<_, Error>(InFlight { rows: plan.rows, out, staging, size, cuts })
         })?
@@ -642,7 +619,7 @@ impl<'a> GpuAssembler<'a> {
         let limits = &self.ctx.limits;
         let grid_limit =
             limits.max_compute_workgroups_per_dimension as u64 * layout::WORKGROUP as u64;
-        let binding_limit = (max_binding - layout::NEAR_HEADER_BYTES) / 8;
+        let binding_limit = max_binding.saturating_sub(layout::NEAR_HEADER_BYTES) / 8;
         pairs.min(grid_limit).min(binding_limit).min(max_near_pairs)
     }
 
@@ -675,36 +652,8 @@ impl<'a> GpuAssembler<'a> {
         }
     }
 
-    /// The clipping passes: every pair of the faces seen in part, then, with the near list and
-    /// a buffer for their dispatch arguments, the pairs a shadow cuts, which the first lists.
-    fn encode_cuts(
-        &self,
-        cuts: &CutPipelines,
-        encoder: &mut wgpu::CommandEncoder,
-        group: &wgpu::BindGroup,
-        (x, y): (u32, u32),
-        deferred: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
-    ) {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&cuts.cuts);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        drop(pass);
-        let Some((near, args)) = deferred else { return };
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&cuts.prepare_deep);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        drop(pass);
-        encoder.copy_buffer_to_buffer(near, layout::DEEP_DISPATCH_OFFSET, args, 0, 12);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&cuts.deep);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups_indirect(args, 0);
-    }
-
     /// `assemble_pieces` over the exceptions bound in `group`.
-    fn encode_pieces(
+    pub(super) fn encode_pieces(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         group: &wgpu::BindGroup,
@@ -714,79 +663,6 @@ impl<'a> GpuAssembler<'a> {
         pass.set_pipeline(&self.pieces);
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(x, y, 1);
-    }
-
-    /// The clipping pass's tallies of a submitted tile, once it is done, and the pairs it left
-    /// to the host clipped there and written by `assemble_pieces` (then copied out again for
-    /// the host). Past the list's capacity every pair of the tile's faces seen in part is.
-    fn collect_cuts(
-        &self,
-        done: &InFlight,
-        cuts: &CutsInFlight,
-        (g, uploaded): (Geometry, &Uploaded),
-    ) -> Result<PairStats> {
-        let ctx = self.ctx;
-        let started = std::time::Instant::now();
-        let header =
-            compute::read_u32s(ctx, &cuts.near, 0, layout::NEAR_HEADER_BYTES as usize / 4)?;
-        self.timings.lock().expect("timings lock").device_wait_seconds +=
-            started.elapsed().as_secs_f64();
-        let [hidden, facing_away, full, partial, left] =
-            std::array::from_fn(|k| header[layout::CUT_TALLY_INDEX + k] as u64);
-        let mut stats = PairStats::default();
-        let mut pairs = if left <= cuts.overflow_capacity {
-            stats.hidden = hidden;
-            stats.facing_away = facing_away;
-            stats.full = full;
-            stats.partial = partial;
-            stats.total = hidden + facing_away + full + partial;
-            let first = layout::NEAR_HEADER_BYTES + 8 * cuts.params.near_capacity as u64;
-            let listed = compute::read_u32s(ctx, &cuts.near, first, 2 * left as usize)?;
-            listed.chunks_exact(2).map(|p| (p[0], p[1])).collect()
-        } else {
-            let records = &cuts.records[..4 * cuts.cut_records as usize];
-            super::tile_plan::record_pairs(records, g.mesh, g.disc)
-        };
-        self.timings.lock().expect("timings lock").pairs_clipped_on_device += stats.total;
-        if pairs.is_empty() {
-            return Ok(stats);
-        }
-        let started = std::time::Instant::now();
-        let (lists, host_stats) = host_pieces(done.rows.start, &mut pairs, g);
-        stats += host_stats;
-        let (records, count, piece_offset, vertices) = lists.finish();
-        let mut t = self.timings.lock().expect("timings lock");
-        t.planning_seconds += started.elapsed().as_secs_f64();
-        t.pairs_clipped_on_host += pairs.len() as u64;
-        drop(t);
-        compute::checked(ctx, "GPU assembly of the pairs left to the host", || {
-            let (x, y, stride) = compute::grid(ctx, count as u64);
-            let params = Params {
-                exception_count: count,
-                piece_offset,
-                stride,
-                near_capacity: 0,
-                cut_records: 0,
-                ..cuts.params
-            };
-            let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
-            let exceptions = compute::storage(ctx, bytemuck::cast_slice(&records));
-            let vertices = compute::storage(ctx, &layout::real_bytes(&vertices, self.precision));
-            let near = compute::storage(ctx, &[0u8; layout::NEAR_HEADER_BYTES as usize + 8]);
-            let (elements, tables) = (&uploaded.elements, &uploaded.tables);
-            let group = compute::bind_group(
-                ctx,
-                &self.layout,
-                &[&params, &cuts.views, elements, tables, &exceptions, &vertices, &done.out, &near],
-            );
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            self.encode_pieces(&mut encoder, &group, (x, y));
-            if let Some(staging) = &done.staging {
-                encoder.copy_buffer_to_buffer(&done.out, 0, staging, 0, done.size.max(16));
-            }
-            ctx.queue.submit([encoder.finish()]);
-        })?;
-        Ok(stats)
     }
 
     /// Collects a submitted tile: copied into the host's matrix, or its buffer kept (narrowed
@@ -806,14 +682,14 @@ impl<'a> GpuAssembler<'a> {
             (Destination::Device(tiles, narrowing), _) => {
                 progress.advance(done.rows.len());
                 let out = match narrowing {
-                    Some(narrowing) => {
+                    Some(narrowing) => compute::checked(self.ctx, "narrowing K to f32", || {
                         let mut encoder =
                             self.ctx.device.create_command_encoder(&Default::default());
                         let (narrow, _params) =
                             narrowing.encode(self.ctx, &mut encoder, done.rows.clone(), &done.out);
                         self.ctx.queue.submit([encoder.finish()]);
                         narrow
-                    }
+                    })?,
                     None => done.out,
                 };
                 tiles.push((done.rows, out));

@@ -5,6 +5,7 @@ mod assembly;
 mod blocks;
 mod compute;
 mod context;
+mod cuts;
 pub mod layout;
 pub mod math;
 mod pairs;

@@ -156,6 +156,30 @@ mod tests {
             }
             ref other => panic!("LOG_PANEL_WIDTH is not an f64 literal: {other:?}"),
         }
+        // The clipping kernel's tolerances, and the near list's header, as on the host.
+        let f64_constant = |name: &str| {
+            let (_, c) =
+                module.constants.iter().find(|(_, c)| c.name.as_deref() == Some(name)).expect(name);
+            match module.global_expressions[c.init] {
+                naga::Expression::Literal(naga::Literal::F64(v)) => v,
+                ref other => panic!("{name} is not an f64 literal: {other:?}"),
+            }
+        };
+        assert_eq!(f64_constant("ON_LINE"), crate::geometry::ON_LINE);
+        assert_eq!(f64_constant("PLANE_TOLERANCE"), crate::visibility::PLANE_TOLERANCE);
+        let (_, near) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("NearList"))
+            .expect("struct NearList");
+        let naga::TypeInner::Struct { members, .. } = &near.inner else { panic!("NearList") };
+        let offset = |name: &str| {
+            members.iter().find(|m| m.name.as_deref() == Some(name)).expect(name).offset as u64
+        };
+        assert_eq!(offset("dispatch_x"), layout::NEAR_DISPATCH_OFFSET);
+        assert_eq!(offset("hidden"), 4 * layout::CUT_TALLY_INDEX as u64);
+        assert_eq!(offset("deep_dispatch_x"), layout::DEEP_DISPATCH_OFFSET);
+        assert_eq!(offset("pairs"), layout::NEAR_HEADER_BYTES);
         let (_, params) = module
             .types
             .iter()

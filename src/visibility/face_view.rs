@@ -17,7 +17,7 @@ use super::view::{FaceView, Shadows, SkipReason};
 use crate::geometry::{HalfPlane, PlaneFrame, clip_convex};
 
 /// Relative tolerance for "on the line" decisions when clipping by a tangent plane (no slivers).
-pub(super) const PLANE_TOLERANCE: f64 = 1e-12;
+pub(crate) const PLANE_TOLERANCE: f64 = 1e-12;
 
 /// Candidate occluders of a view taken in the search's order before the rest are sorted nearest
 /// first ([`PairPlanner::face_view_with`]).

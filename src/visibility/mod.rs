@@ -23,6 +23,8 @@
 //! pair ([`Acceleration`]).
 
 mod face_view;
+#[cfg(test)]
+pub(crate) use face_view::PLANE_TOLERANCE;
 mod hiders;
 mod occluders;
 mod occlusion_cube;
