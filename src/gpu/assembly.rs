@@ -18,14 +18,13 @@ use super::cuts::{CutPipelines, CutsInFlight};
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::shaders::{self, Precision};
 use super::storage::{Narrowing, StorageError};
-use super::tile_plan::{Clipping, Geometry, TilePlan, plan_tile};
+use super::tables::{RuleCounts, far_field_rule, tables};
+use super::tile_plan::{Clipping, Geometry, TilePlan, host_pieces, plan_tile, record_pairs};
 use crate::assembly::{Assembly, AssemblyOptions, CollocationMatrix, Problem, face_boxes};
 use crate::discretization::{Discretization, Method};
 use crate::error::{Error, Result};
-use crate::kernels::far_field::FarFieldRule;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::quadrature::ImtRule;
 use crate::scene::Scene;
 use crate::visibility::{ElementBoxes, PairStats};
 
@@ -109,70 +108,6 @@ pub struct GpuAssembler<'a> {
     /// The elements of faces seen in part, clipped on the device (f64 only).
     cuts: Option<CutPipelines>,
     pub(super) timings: std::sync::Mutex<GpuTimings>,
-}
-
-/// Where the rules array's parts start and how long they are.
-#[derive(Clone, Copy)]
-pub(super) struct RuleCounts {
-    pub(super) imt: usize,
-    pub(super) rule_offset: usize,
-    pub(super) bands: usize,
-}
-
-/// The far-field rule the kernels use: in f64 the CPU's for the method (when enabled); in f32 the
-/// single-precision one for both methods, where the closed forms' cancellation far from the node
-/// would cost most of f32's digits.
-fn far_field_rule(precision: Precision, method: Method, enabled: bool) -> Option<FarFieldRule> {
-    match precision {
-        Precision::F32 => Some(FarFieldRule::single_precision()),
-        Precision::F64 => enabled.then(|| FarFieldRule::for_weights(method.nodes_per_element())),
-    }
-}
-
-/// The uniform tables (TABLE_SIZE entries of 4 reals): IMT nodes (x, w), then one header per
-/// far-field band ((ratio + 1)², first entry, count) and the bands' points (u, v, w).
-fn tables(
-    options: &AssemblyOptions,
-    method: Method,
-    precision: Precision,
-) -> Result<(Vec<f64>, RuleCounts)> {
-    let imt = ImtRule::new(options.imt_nodes.max(2));
-    let mut entries: Vec<[f64; 4]> =
-        imt.nodes().iter().zip(imt.weights()).map(|(&x, &w)| [x, w, 0.0, 0.0]).collect();
-    let rule_offset = entries.len();
-    let mut bands = 0;
-    if let Some(rule) = far_field_rule(precision, method, options.far_field) {
-        bands = rule.bands.len();
-        let mut first = rule_offset + bands;
-        for band in &rule.bands {
-            entries.push([
-                (band.ratio + 1.0).powi(2),
-                first as f64,
-                band.rule.points().len() as f64,
-                0.0,
-            ]);
-            first += band.rule.points().len();
-        }
-        for band in &rule.bands {
-            entries.extend(band.rule.points().iter().map(|&[u, v, w]| [u, v, w, 0.0]));
-        }
-    }
-    if entries.len() > layout::TABLE_SIZE {
-        return Err(Error::InvalidParameter {
-            name: "imt-nodes",
-            value: options.imt_nodes.to_string(),
-            reason: format!(
-                "the GPU kernels' tables hold {} entries and the far-field rules take {}",
-                layout::TABLE_SIZE,
-                entries.len() - imt.nodes().len()
-            ),
-        });
-    }
-    entries.resize(layout::TABLE_SIZE, [0.0; 4]);
-    Ok((
-        entries.into_iter().flatten().collect(),
-        RuleCounts { imt: imt.nodes().len(), rule_offset, bands },
-    ))
 }
 
 /// What [`GpuAssembler::upload`] puts on the device.
@@ -650,6 +585,125 @@ impl<'a> GpuAssembler<'a> {
             pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups_indirect(near_args, 0);
         }
+    }
+
+    /// The clipping passes: every pair of the faces seen in part, then, with the near list and
+    /// a buffer for their dispatch arguments, the pairs a shadow cuts, which the first lists.
+    fn encode_cuts(
+        &self,
+        cuts: &CutPipelines,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        (x, y): (u32, u32),
+        deferred: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&cuts.cuts);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        drop(pass);
+        let Some((near, args)) = deferred else { return };
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&cuts.prepare_deep);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        drop(pass);
+        encoder.copy_buffer_to_buffer(near, layout::DEEP_DISPATCH_OFFSET, args, 0, 12);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&cuts.deep);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups_indirect(args, 0);
+    }
+
+    /// The clipping pass's tallies of a submitted tile, once it is done, and the pairs it left
+    /// to the host clipped there and written by `assemble_pieces` (then copied out again for
+    /// the host). Past the list's capacity every pair of the tile's faces seen in part is.
+    fn collect_cuts(
+        &self,
+        done: &InFlight,
+        cuts: &CutsInFlight,
+        (g, uploaded): (Geometry, &Uploaded),
+    ) -> Result<PairStats> {
+        let ctx = self.ctx;
+        let started = std::time::Instant::now();
+        let header =
+            compute::read_u32s(ctx, &cuts.near, 0, layout::NEAR_HEADER_BYTES as usize / 4)?;
+        self.timings.lock().expect("timings lock").device_wait_seconds +=
+            started.elapsed().as_secs_f64();
+        let [hidden, facing_away, full, partial, left] =
+            std::array::from_fn(|k| header[layout::CUT_TALLY_INDEX + k] as u64);
+        let mut stats = PairStats::default();
+        let mut pairs = if left <= cuts.overflow_capacity {
+            stats.hidden = hidden;
+            stats.facing_away = facing_away;
+            stats.full = full;
+            stats.partial = partial;
+            stats.total = hidden + facing_away + full + partial;
+            let first = layout::NEAR_HEADER_BYTES + 8 * cuts.params.near_capacity as u64;
+            let listed = compute::read_u32s(ctx, &cuts.near, first, 2 * left as usize)?;
+            listed.chunks_exact(2).map(|p| (p[0], p[1])).collect()
+        } else {
+            record_pairs(&cuts.records[..4 * cuts.cut_records as usize], g.mesh, g.disc)
+        };
+        self.timings.lock().expect("timings lock").pairs_clipped_on_device += stats.total;
+        if pairs.is_empty() {
+            return Ok(stats);
+        }
+        self.timings.lock().expect("timings lock").pairs_clipped_on_host += pairs.len() as u64;
+        // In parts whose pieces fit a binding: a part that turns out larger is halved.
+        let mut parts = Vec::new();
+        parts.push(0..pairs.len());
+        while let Some(part) = parts.pop() {
+            let started = std::time::Instant::now();
+            let (lists, part_stats) = host_pieces(done.rows.start, &mut pairs[part.clone()], g);
+            self.timings.lock().expect("timings lock").planning_seconds +=
+                started.elapsed().as_secs_f64();
+            let (records, count, piece_offset, vertices) = lists.finish();
+            let bytes = (4 * records.len()).max(vertices.len() * self.precision.bytes());
+            if bytes as u64 > cuts.max_binding && part.len() > 1 {
+                let middle = part.start + part.len() / 2;
+                parts.extend([part.start..middle, middle..part.end]);
+                continue;
+            }
+            stats += part_stats;
+            compute::checked(ctx, "GPU assembly of the pairs left to the host", || {
+                let (x, y, stride) = compute::grid(ctx, count as u64);
+                let params = Params {
+                    exception_count: count,
+                    piece_offset,
+                    stride,
+                    near_capacity: 0,
+                    cut_records: 0,
+                    ..cuts.params
+                };
+                let params = compute::uniform(ctx, bytemuck::bytes_of(&params));
+                let exceptions = compute::storage(ctx, bytemuck::cast_slice(&records));
+                let vertices =
+                    compute::storage(ctx, &layout::real_bytes(&vertices, self.precision));
+                let near = compute::storage(ctx, &[0u8; layout::NEAR_HEADER_BYTES as usize + 8]);
+                let (elements, tables) = (&uploaded.elements, &uploaded.tables);
+                let buffers = [
+                    &params,
+                    &cuts.views,
+                    elements,
+                    tables,
+                    &exceptions,
+                    &vertices,
+                    &done.out,
+                    &near,
+                ];
+                let group = compute::bind_group(ctx, &self.layout, &buffers);
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                self.encode_pieces(&mut encoder, &group, (x, y));
+                ctx.queue.submit([encoder.finish()]);
+            })?;
+        }
+        if let Some(staging) = &done.staging {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(&done.out, 0, staging, 0, done.size.max(16));
+            ctx.queue.submit([encoder.finish()]);
+        }
+        Ok(stats)
     }
 
     /// `assemble_pieces` over the exceptions bound in `group`.

@@ -12,6 +12,7 @@ mod pairs;
 mod resident;
 pub mod shaders;
 mod storage;
+mod tables;
 mod tile_plan;
 
 pub use assembly::{GpuAssembler, GpuTimings, TileLimits};

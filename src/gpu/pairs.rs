@@ -8,10 +8,11 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::assembly::{GpuAssembler, RuleCounts, Uploaded};
+use super::assembly::{GpuAssembler, Uploaded};
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
 use super::resident::DeviceTraffic;
+use super::tables::RuleCounts;
 use crate::assembly::{AssemblyOptions, CpuPairs, PairEvaluation, PairIntegrator, PairTask};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
