@@ -7,7 +7,10 @@
 // The host sends, per (row, face) of a tile that the row's node sees in part, a cut record of
 // 4 u32 in `exceptions`: (first pair of the record in the pass, row in the tile, first element of
 // the face, offset of the face's view in `vertices`); a last record holds only the pass's pair
-// count. A view in `vertices` (lengths times the tile's unit, face coordinates): a clip flag, the
+// count. For listed pairs (params.pair_cuts, src/gpu/pair_cuts.rs) a record is (first pair, index
+// of the node's view in `views`, offset in `exceptions` of the face's listed elements, offset of
+// the face's view), a pair's entries go to out[pair * PER_ELEMENT], and the box trees are in
+// `vertices`; an element listed as LEFT_TO_HOST is written as zeros and not tallied. A view in `vertices` (lengths times the tile's unit, face coordinates): a clip flag, the
 // tangent plane's half-plane (normal x, y, offset), the view's length in reals, where the face's
 // element box tree starts in `elements`, then per shadow its vertex count m, its box (lo x, lo y,
 // hi x, hi y) and m vertices (x, y), counter-clockwise. A box tree (ElementBoxes) holds
@@ -37,6 +40,8 @@ const SHADOW_HEADER: u32 = 5u;
 const BOX_NODE_STRIDE: u32 = 7u;
 // ElementBoxes::LEAF: most positions of a node without halves.
 const BOX_LEAF: u32 = 4u;
+// A listed element the host evaluates itself (a thin element's pair, src/gpu/pair_cuts.rs).
+const LEFT_TO_HOST: u32 = 0xffffffffu;
 
 struct Polygon {
     v: array<vec2<real>, MAX_VERTICES>,
@@ -396,23 +401,32 @@ fn class_by_boxes(view: u32, position: u32) -> u32 {
     var found = CUT_UNKNOWN;
     loop {
         let b = tree + BOX_NODE_STRIDE * node;
-        let lo = vec2<real>(elements[b], elements[b + 1u]);
-        let hi = vec2<real>(elements[b + 2u], elements[b + 3u]);
+        let lo = vec2<real>(tree_value(b), tree_value(b + 1u));
+        let hi = vec2<real>(tree_value(b + 2u), tree_value(b + 3u));
         found = visible_in_box(view, lo, hi);
-        let count = u32(elements[b + 5u]);
+        let count = u32(tree_value(b + 5u));
         if (found != CUT_UNKNOWN || count <= BOX_LEAF) {
             break;
         }
         // The halves split the node's positions at the middle; the second follows the first's
         // subtree.
-        let middle = u32(elements[b + 4u]) + count / 2u;
+        let middle = u32(tree_value(b + 4u)) + count / 2u;
         if (position < middle) {
             node = node + 1u;
         } else {
-            node = u32(elements[tree + BOX_NODE_STRIDE * (node + 1u) + 6u]);
+            node = u32(tree_value(tree + BOX_NODE_STRIDE * (node + 1u) + 6u));
         }
     }
     return found;
+}
+
+// A real of the box trees: uploaded after the elements for a tile's faces, or sent with the
+// views of listed pairs (whose trees hold the listed elements of a face only).
+fn tree_value(at: u32) -> real {
+    if (params.pair_cuts != 0u) {
+        return vertices[at];
+    }
+    return elements[at];
 }
 
 // The integral over the pieces found so far: moments, or the far-field rule's sums.
@@ -513,9 +527,9 @@ fn cut_pieces(base: u32, el: u32, obs: Observer, one: ptr<function, Polygon>, fi
 // The pair (row, el) under the view at `view`: its entries to out[base..], and its class. Most
 // elements of a face seen in part are seen whole or not at all, which the shadows' boxes and
 // sides tell before any piece is cut.
-fn cut_pair(base: u32, row: u32, el: u32, position: u32, view: u32, index: u32, defer: bool) -> u32 {
+fn cut_pair(base: u32, seen: Observer, el: u32, position: u32, view: u32, index: u32, defer: bool) -> u32 {
     overflowed = false;
-    let obs = relative_to(observer(row, element_face(el)), el);
+    let obs = relative_to(seen, el);
     let by_boxes = class_by_boxes(view, position);
     if (by_boxes == CUT_FULL) {
         whole_element(base, el, obs);
@@ -610,18 +624,34 @@ fn cut_record(index: u32) -> u32 {
 // and tallied in the workgroup's counts.
 fn cut_and_tally(index: u32, defer: bool) {
     let r = cut_record(index);
-    let row = exceptions[4u * r + 1u];
     let position = index - exceptions[4u * r];
-    let el = exceptions[4u * r + 2u] + position;
-    let base = row * params.dof + el * PER_ELEMENT;
-    let found = cut_pair(base, row, el, position, exceptions[4u * r + 3u], index, defer);
+    // The pair's element, the node's view of its face, where its entries go, and what names
+    // the pair on the list of those left to the host (with the element).
+    var el: u32;
+    var seen: Observer;
+    var base: u32;
+    var key: u32;
+    if (params.pair_cuts != 0u) {
+        el = exceptions[exceptions[4u * r + 2u] + position];
+        base = index * PER_ELEMENT;
+        key = index;
+        if (el == LEFT_TO_HOST) {
+            zero_pair(base);
+            return;
+        }
+        seen = view(exceptions[4u * r + 1u]);
+    } else {
+        key = exceptions[4u * r + 1u];
+        el = exceptions[4u * r + 2u] + position;
+        base = key * params.dof + el * PER_ELEMENT;
+        seen = observer(key, element_face(el));
+    }
+    let found = cut_pair(base, seen, el, position, exceptions[4u * r + 3u], index, defer);
     if (found == CUT_DEFERRED) {
         return;
     }
     if (found != CUT_FULL && found != CUT_PARTIAL) {
-        for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
-            out[base + l] = 0.0;
-        }
+        zero_pair(base);
     }
     switch found {
         case CUT_HIDDEN: { atomicAdd(&tally_hidden, 1u); }
@@ -631,10 +661,16 @@ fn cut_and_tally(index: u32, defer: bool) {
         default: {
             let slot = atomicAdd(&near.overflow, 1u);
             if (slot < params.overflow_capacity) {
-                near.pairs[2u * (params.near_capacity + slot)] = row;
+                near.pairs[2u * (params.near_capacity + slot)] = key;
                 near.pairs[2u * (params.near_capacity + slot) + 1u] = el;
             }
         }
+    }
+}
+
+fn zero_pair(base: u32) {
+    for (var l = 0u; l < PER_ELEMENT; l = l + 1u) {
+        out[base + l] = 0.0;
     }
 }
 

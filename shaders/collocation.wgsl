@@ -76,7 +76,7 @@ struct Params {
     piece_limit: u32,
     overflow_capacity: u32,
     deep_capacity: u32,
-    _pad0: u32,
+    pair_cuts: u32,
 }
 
 // The deferred pairs of `assemble_full` and the indirect dispatch of `assemble_near`; the pairs

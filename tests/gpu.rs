@@ -744,3 +744,123 @@ fn pairs_the_clipping_kernel_cannot_hold_are_clipped_on_the_host() {
         assert!(timings.pairs_clipped_on_host > 0, "{what}: {timings:?}");
     }
 }
+
+/// The entries of `op`, row-major, column by column from its products with unit vectors.
+fn operator_entries(op: &radiosity::operator::CompressedOperator) -> Vec<Vec<f64>> {
+    let n = op.dof();
+    let mut rows = vec![vec![0.0; n]; n];
+    let mut unit = vec![0.0; n];
+    for j in 0..n {
+        unit[j] = 1.0;
+        for (row, v) in rows.iter_mut().zip(op.apply(&unit)) {
+            row[j] = v;
+        }
+        unit[j] = 0.0;
+    }
+    rows
+}
+
+/// The largest entry difference of two matrices (rows), relative to its row's largest entry.
+fn max_entry_rel_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            let largest = p.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+            p.iter().zip(q).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / largest
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The compressed operator of `problem` with every block exact (admissible only where a
+/// cluster is a point), built on the CPU block by block and through the GPU's pair evaluator
+/// within `limits`: the two operators, and what the evaluator clipped where.
+fn exact_operators(
+    ctx: &GpuContext,
+    problem: &Problem,
+    limits: gpu::TileLimits,
+) -> (
+    radiosity::operator::CompressedOperator,
+    radiosity::operator::CompressedOperator,
+    gpu::DeviceTraffic,
+) {
+    use radiosity::assembly::PairEvaluation;
+    use radiosity::operator::{CompressedOperator, CompressionOptions};
+    let (options, silent) = (AssemblyOptions::default(), &radiosity::progress::Silent);
+    let compression = CompressionOptions { tolerance: 1e-12, eta: 1e-9, ..Default::default() };
+    let cpu = CompressedOperator::build(problem, &options, &compression, None, silent).unwrap();
+    let assembler = gpu::GpuAssembler::new(ctx, Precision::F64, problem.disc.method).unwrap();
+    let evaluator = gpu::PairEvaluator::new(&assembler, &problem.scene, &problem.disc, &options)
+        .unwrap()
+        .limited(limits);
+    let batches = Some(&evaluator as &dyn PairEvaluation);
+    let gpu = CompressedOperator::build(problem, &options, &compression, batches, silent).unwrap();
+    (cpu, gpu, evaluator.traffic())
+}
+
+#[test]
+fn the_compressed_operators_exact_blocks_are_clipped_on_the_device_as_on_the_host() {
+    // Each (node, face) of an exact block seen in part is handed to the device once, with the
+    // box tree over the block's elements of the face; the device classifies and clips them as
+    // the host's row walk does. Same pair classes as the CPU's build, entries to 1e-12 of their
+    // row's largest, hardly a pair left to the host.
+    let Some(ctx) = gpu() else { return };
+    let linear = Method::linear(Method::PAPER_ALPHA).unwrap();
+    for (method, refine) in [(Method::Centroid, 2), (linear, 1)] {
+        for (name, scene, refine) in occluded_cases(refine) {
+            let mesh = Mesh::new(&scene, &MeshKind::Uniform, refine).unwrap();
+            let disc = Discretization::new(&scene, &mesh, method).unwrap();
+            let problem = Problem::new(scene, mesh, disc);
+            let (cpu, gpu, traffic) = exact_operators(ctx, &problem, gpu::TileLimits::default());
+            let what = format!("{name} refine {refine} {method}");
+            let d = max_entry_rel_diff(&operator_entries(&cpu), &operator_entries(&gpu));
+            println!("{what}: {d:.2e}, {traffic:?}");
+            assert_eq!(cpu.pairs, gpu.pairs, "{what}");
+            assert!(d <= 1e-12, "{what}: {d:e}");
+            assert!(traffic.pairs_clipped_on_device >= cpu.pairs.partial, "{what}: {traffic:?}");
+            let on_host = traffic.pairs_clipped_on_host;
+            assert!(on_host * 1000 <= traffic.pairs_clipped_on_device, "{what}: {traffic:?}");
+        }
+    }
+}
+
+#[test]
+fn listed_pairs_the_clipping_kernel_cannot_hold_are_clipped_on_the_host() {
+    // As for the row tiles: a stack of one piece, of none with a list of a few pairs (the host
+    // takes every pair of a batch) in small bindings (many batches), and the linear method; then
+    // a sliver shelf in a plate's shadow, whose thin elements' pairs are the host's. Classes and
+    // entries stay the CPU's.
+    let Some(ctx) = gpu() else { return };
+    let linear = Method::linear(Method::PAPER_ALPHA).unwrap();
+    let louvre = || radiosity::scene::load(std::path::Path::new("examples/louvre-window.toml"));
+    // The sliver shelf, shadowed in part from the floor by a plate below it.
+    let dir = std::env::temp_dir().join(format!("radiosity-gpu-listed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let shelf = std::fs::read_to_string(sliver_scene("listed-cuts")).unwrap();
+    let plate = "[[faces]]\nname = \"plate\"\n\
+                 vertices = [[0.4, 0.3, 0.15], [0.4, 0.7, 0.15], [0.6, 0.7, 0.15], [0.6, 0.3, 0.15]]\n";
+    std::fs::write(dir.join("shadowed.toml"), shelf + plate).unwrap();
+    let sliver = radiosity::scene::load(&dir.join("shadowed.toml")).unwrap();
+    let limits = |pieces_on_device, near_pairs, binding_bytes| gpu::TileLimits {
+        pieces_on_device,
+        near_pairs,
+        binding_bytes,
+        ..Default::default()
+    };
+    let cases = [
+        ("louvre window", louvre().unwrap(), Method::Centroid, limits(1, u64::MAX, u64::MAX)),
+        ("louvre window", louvre().unwrap(), Method::Centroid, limits(0, 8, 16 << 10)),
+        ("louvre window", louvre().unwrap(), linear, limits(1, 64, u64::MAX)),
+        ("shadowed sliver shelf", sliver, linear, gpu::TileLimits::default()),
+    ];
+    for (name, scene, method, limits) in cases {
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        let disc = Discretization::new(&scene, &mesh, method).unwrap();
+        let problem = Problem::new(scene, mesh, disc);
+        let (cpu, gpu, traffic) = exact_operators(ctx, &problem, limits);
+        let what = format!("{name} {method} {limits:?}");
+        let d = max_entry_rel_diff(&operator_entries(&cpu), &operator_entries(&gpu));
+        assert_eq!(cpu.pairs, gpu.pairs, "{what}");
+        assert!(d <= 1e-12, "{what}: {d:e}");
+        assert!(traffic.pairs_clipped_on_host > 0, "{what}: {traffic:?}");
+    }
+}

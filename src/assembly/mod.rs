@@ -21,7 +21,7 @@ pub use memory::{
     memory_limit, resident_bytes, set_memory_limit, size_text,
 };
 pub use options::{AssemblyOptions, Quadrature, QuadratureRule};
-pub use pairs::{CpuPairs, PairEvaluation, PairTask};
+pub use pairs::{CpuPairs, CutEvaluation, CutValues, FaceCut, PairEvaluation, PairTask};
 pub use problem::Problem;
 pub(crate) use rows::face_boxes;
 pub use rows::{Assembly, apply_at, assemble};

@@ -246,6 +246,16 @@ pub struct CompressedGpuBench {
     /// Batches of pairs submitted to the GPU in its last build (the cross approximations
     /// advance together: about 2k rounds for rank k, not per block).
     pub gpu_submissions: u64,
+    /// Of its last build's time, the host's waits for the device (the rest is the host's own
+    /// work: plans, cross approximations, the blocks built on the CPU).
+    pub device_wait_seconds: f64,
+    /// Pairs of the exact blocks' faces seen in part that the device clipped.
+    pub pairs_clipped_on_device: u64,
+    /// Those left to the host: past the clipping kernel's limits, or thin elements (with f32
+    /// kernels the host clips every one, not counted here).
+    pub pairs_clipped_on_host: u64,
+    /// Whether the GPU-built operator has the CPU-built one's pair classes, exactly.
+    pub same_pair_classes: bool,
 }
 
 /// The dense reference of [`run_compressed`] runs up to this many unknowns (1.2 GB).
@@ -285,6 +295,10 @@ pub fn run_compressed(
         speedup: best / seconds,
         max_product_rel_diff: other_op.max_product_difference(&|x| op.apply(x)),
         gpu_submissions: traffic.map_or(0, |t| t.gpu_submissions),
+        device_wait_seconds: traffic.map_or(0.0, |t| t.device_wait_seconds),
+        pairs_clipped_on_device: traffic.map_or(0, |t| t.pairs_clipped_on_device),
+        pairs_clipped_on_host: traffic.map_or(0, |t| t.pairs_clipped_on_host),
+        same_pair_classes: other_op.pairs == op.pairs,
     });
     let dof = disc.dof();
     let (dense_setup_seconds, max_product_rel_diff) = if dof <= DENSE_BENCH_LIMIT {

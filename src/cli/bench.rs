@@ -151,14 +151,23 @@ fn compressed(
     }
     if let Some(g) = &r.gpu {
         println!(
-            "compressed on the gpu ({}, {}): setup {:.3} s in {} submissions; speedup (cpu / \
-             gpu) {:.2}; products differ from the cpu's by {:.2e} (relative)",
+            "compressed on the gpu ({}, {}): setup {:.3} s in {} submissions ({:.3} s waiting \
+             for the device); speedup (cpu / gpu) {:.2}; products differ from the cpu's by \
+             {:.2e} (relative)",
             g.device.as_deref().unwrap_or("?"),
             g.precision,
             g.setup_seconds,
             g.gpu_submissions,
+            g.device_wait_seconds,
             g.speedup,
             g.max_product_rel_diff
+        );
+        println!(
+            "    exact blocks' pairs of faces seen in part clipped on the device {}, on the host \
+             {}; pair classes {} the cpu's",
+            g.pairs_clipped_on_device,
+            g.pairs_clipped_on_host,
+            if g.same_pair_classes { "equal to" } else { "differ from" }
         );
     }
     Ok(())

@@ -14,8 +14,9 @@ use std::ops::Range;
 
 use super::GpuContext;
 use super::compute;
-use super::cuts::{CutPipelines, CutsInFlight};
+use super::cuts::{CutPipelines, CutsInFlight, tallies};
 use super::layout::{self, Params, VIEW_STRIDE};
+use super::passes::{Listed, dispatch, encode_listed};
 use super::shaders::{self, Precision};
 use super::storage::{Narrowing, StorageError};
 use super::tables::{RuleCounts, far_field_rule, tables};
@@ -89,6 +90,8 @@ impl GpuTimings {
             bytes_read_back: self.bytes_read_back,
             gpu_submissions: self.tiles as u64,
             device_wait_seconds: self.device_wait_seconds,
+            pairs_clipped_on_device: self.pairs_clipped_on_device,
+            pairs_clipped_on_host: self.pairs_clipped_on_host,
         }
     }
 }
@@ -209,6 +212,11 @@ impl<'a> GpuAssembler<'a> {
     /// The device the kernels run on.
     pub fn context(&self) -> &'a GpuContext {
         self.ctx
+    }
+
+    /// The clipping kernels (f64 only).
+    pub(super) fn cut_pipelines(&self) -> Option<&CutPipelines> {
+        self.cuts.as_ref()
     }
 
     /// Where the time of the last [`Self::assemble`] went.
@@ -440,7 +448,7 @@ impl<'a> GpuAssembler<'a> {
         }
         // Buffers, bindings and the submission inside error scopes: a device limit met here is
         // an error of this run, not a panic in wgpu's default handler.
-        compute::checked(ctx, "GPU assembly", || {
+        let submitted = compute::checked(ctx, "GPU assembly", || {
             let (exc_x, exc_y, stride) = compute::grid(ctx, plan.exception_count as u64);
             let pairs = (rows * disc.element_count()) as u64;
             let near_capacity = self.near_capacity(pairs, max_binding, max_near_pairs);
@@ -531,17 +539,18 @@ impl<'a> GpuAssembler<'a> {
                 encoder.copy_buffer_to_buffer(&out, 0, staging, 0, size.max(16));
             }
             ctx.queue.submit([encoder.finish()]);
-            let cuts = (plan.cut_records > 0).then(|| CutsInFlight {
-                params,
-                views,
-                near,
-                overflow_capacity,
-                records: plan.exceptions.clone(),
-                cut_records: plan.cut_records,
-                max_binding,
-            });
-            Ok::<_, Error>(InFlight { rows: plan.rows, out, staging, size, cuts })
-        })?
+            let cuts = (plan.cut_records > 0).then_some((params, views, near, overflow_capacity));
+            Ok::<_, Error>((out, staging, size, cuts))
+        })??;
+        let (out, staging, size, cuts) = submitted;
+        // The cut records are kept for the rare tile whose pairs left to the host outnumber
+        // the list: the host then clips every pair they hold.
+        let cuts = cuts.map(|(params, views, near, overflow_capacity)| {
+            let mut records = plan.exceptions;
+            records.truncate(4 * plan.cut_records as usize);
+            CutsInFlight { params, views, near, overflow_capacity, records, max_binding }
+        });
+        Ok(InFlight { rows: plan.rows, out, staging, size, cuts })
     }
 
     /// Pairs the near list of a tile of `pairs` holds: every pair of the tile (linear method),
@@ -567,52 +576,34 @@ impl<'a> GpuAssembler<'a> {
         (groups_x, rows): (u32, u32),
         deferred: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
     ) {
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.full);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(groups_x, rows, 1);
-        }
-        if let Some((near, near_args)) = deferred {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.prepare_near);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-            drop(pass);
-            encoder.copy_buffer_to_buffer(near, layout::NEAR_DISPATCH_OFFSET, near_args, 0, 12);
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.near);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups_indirect(near_args, 0);
-        }
+        let listed = deferred.map(|(near, args)| Listed {
+            prepare: &self.prepare_near,
+            pass: &self.near,
+            arguments_at: layout::NEAR_DISPATCH_OFFSET,
+            near,
+            args,
+        });
+        encode_listed(encoder, group, &self.full, (groups_x, rows), listed);
     }
 
     /// The clipping passes: every pair of the faces seen in part, then, with the near list and
     /// a buffer for their dispatch arguments, the pairs a shadow cuts, which the first lists.
-    fn encode_cuts(
+    pub(super) fn encode_cuts(
         &self,
         cuts: &CutPipelines,
         encoder: &mut wgpu::CommandEncoder,
         group: &wgpu::BindGroup,
-        (x, y): (u32, u32),
+        grid: (u32, u32),
         deferred: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
     ) {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&cuts.cuts);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        drop(pass);
-        let Some((near, args)) = deferred else { return };
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&cuts.prepare_deep);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        drop(pass);
-        encoder.copy_buffer_to_buffer(near, layout::DEEP_DISPATCH_OFFSET, args, 0, 12);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&cuts.deep);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups_indirect(args, 0);
+        let listed = deferred.map(|(near, args)| Listed {
+            prepare: &cuts.prepare_deep,
+            pass: &cuts.deep,
+            arguments_at: layout::DEEP_DISPATCH_OFFSET,
+            near,
+            args,
+        });
+        encode_listed(encoder, group, &cuts.cuts, grid, listed);
     }
 
     /// The clipping pass's tallies of a submitted tile, once it is done, and the pairs it left
@@ -630,20 +621,15 @@ impl<'a> GpuAssembler<'a> {
             compute::read_u32s(ctx, &cuts.near, 0, layout::NEAR_HEADER_BYTES as usize / 4)?;
         self.timings.lock().expect("timings lock").device_wait_seconds +=
             started.elapsed().as_secs_f64();
-        let [hidden, facing_away, full, partial, left] =
-            std::array::from_fn(|k| header[layout::CUT_TALLY_INDEX + k] as u64);
+        let (tallied, left) = tallies(&header);
         let mut stats = PairStats::default();
         let mut pairs = if left <= cuts.overflow_capacity {
-            stats.hidden = hidden;
-            stats.facing_away = facing_away;
-            stats.full = full;
-            stats.partial = partial;
-            stats.total = hidden + facing_away + full + partial;
+            stats = tallied;
             let first = layout::NEAR_HEADER_BYTES + 8 * cuts.params.near_capacity as u64;
             let listed = compute::read_u32s(ctx, &cuts.near, first, 2 * left as usize)?;
             listed.chunks_exact(2).map(|p| (p[0], p[1])).collect()
         } else {
-            record_pairs(&cuts.records[..4 * cuts.cut_records as usize], g.mesh, g.disc)
+            record_pairs(&cuts.records, g.mesh, g.disc)
         };
         self.timings.lock().expect("timings lock").pairs_clipped_on_device += stats.total;
         if pairs.is_empty() {
@@ -711,12 +697,9 @@ impl<'a> GpuAssembler<'a> {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         group: &wgpu::BindGroup,
-        (x, y): (u32, u32),
+        grid: (u32, u32),
     ) {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&self.pieces);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        dispatch(encoder, &self.pieces, group, grid);
     }
 
     /// Collects a submitted tile: copied into the host's matrix, or its buffer kept (narrowed

@@ -54,8 +54,9 @@ pub struct Params {
     pub overflow_capacity: u32,
     /// Pairs a shadow cuts that the near list holds after those, for `assemble_deep_cuts`.
     pub deep_capacity: u32,
-    /// Padding to a multiple of 16 bytes.
-    pub _pad: u32,
+    /// Non-zero where the clipping kernel's records are listed pairs' (src/gpu/pair_cuts.rs),
+    /// not a tile's rows.
+    pub pair_cuts: u32,
 }
 
 /// Bytes of the near list before its pairs: count, padding, indirect dispatch arguments, padding,
@@ -81,13 +82,13 @@ pub const BOX_NODE_STRIDE: usize = 7;
 /// times `unit`, BOX_NODE_STRIDE reals per node: box (lo x, lo y, hi x, hi y), first position,
 /// positions, index of the node past its subtree (in the face's tree); returns where each
 /// face's tree starts.
-pub fn pack_box_trees(
-    trees: &[crate::visibility::ElementBoxes],
+pub fn pack_box_trees<'t>(
+    trees: impl IntoIterator<Item = &'t crate::visibility::ElementBoxes>,
     unit: f64,
     packed: &mut Vec<f64>,
 ) -> Vec<u32> {
     trees
-        .iter()
+        .into_iter()
         .map(|tree| {
             let start = packed.len() as u32;
             for (range, (lo, hi), past) in tree.nodes() {

@@ -1,19 +1,24 @@
 //! Listed (node, element) pairs on the GPU: the compressed operator's exact blocks and the rows
 //! and columns its cross approximations sample (src/operator), evaluated in batches by the
 //! `assemble_pairs` kernel. Unlike the row tiles of [`super::assembly`], nothing here is n × n:
-//! a batch holds exactly the pairs asked for, each with its own view of the element's face.
+//! a batch holds exactly the pairs asked for, each with its own view of the element's face. The
+//! elements of faces seen in part are clipped on the device where the kernels are f64
+//! ([`super::pair_cuts`]).
 
 use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::assembly::{GpuAssembler, Uploaded};
+use super::assembly::{GpuAssembler, TileLimits, Uploaded};
 use super::compute;
 use super::layout::{self, Params, VIEW_STRIDE};
+use super::passes::dispatch;
 use super::resident::DeviceTraffic;
 use super::tables::RuleCounts;
-use crate::assembly::{AssemblyOptions, CpuPairs, PairEvaluation, PairIntegrator, PairTask};
+use crate::assembly::{
+    AssemblyOptions, CpuPairs, CutEvaluation, PairEvaluation, PairIntegrator, PairTask,
+};
 use crate::discretization::Discretization;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -27,18 +32,21 @@ const BATCH_BYTES: u64 = 64 << 20;
 
 /// The device's copy of a discretization, ready to evaluate listed pairs.
 pub struct PairEvaluator<'a> {
-    assembler: &'a GpuAssembler<'a>,
-    scene: &'a Scene,
-    disc: &'a Discretization,
+    pub(super) assembler: &'a GpuAssembler<'a>,
+    pub(super) scene: &'a Scene,
+    pub(super) disc: &'a Discretization,
     /// Thin elements ([`crate::discretization::ElementFrame::thin`]): their closed forms cancel, so their pairs are
     /// recomputed on the CPU, as the dense GPU path does.
-    thin: Vec<bool>,
+    pub(super) thin: Vec<bool>,
     integrator: PairIntegrator,
-    unit: f64,
-    elements: wgpu::Buffer,
-    tables: wgpu::Buffer,
-    counts: RuleCounts,
-    budget: u64,
+    pub(super) unit: f64,
+    pub(super) elements: wgpu::Buffer,
+    pub(super) tables: wgpu::Buffer,
+    pub(super) counts: RuleCounts,
+    /// Bytes one batch's buffer may hold.
+    pub(super) budget: u64,
+    /// Bounds below the device's on the clipping of listed cuts (src/gpu/pair_cuts.rs).
+    pub(super) limits: TileLimits,
     /// What crossed: the elements once, then each batch's records up and values down.
     traffic: Mutex<DeviceTraffic>,
     /// The batches' buffers, kept from one batch to the next.
@@ -88,6 +96,7 @@ impl<'a> PairEvaluator<'a> {
         }
         let Uploaded { unit, elements, tables, counts, .. } =
             assembler.upload(scene, disc, options, &[])?;
+        let limits = TileLimits::default();
         let budget = assembler.ctx.max_binding().min(BATCH_BYTES);
         let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
         let uploaded = elements.size() + tables.size();
@@ -103,9 +112,18 @@ impl<'a> PairEvaluator<'a> {
             tables,
             counts,
             budget,
+            limits,
             traffic: Mutex::new(traffic),
             buffers: Mutex::new(BatchBuffers::default()),
         })
+    }
+
+    /// Within `limits` below the device's (the clipping kernel's stack, the pairs it may leave
+    /// to the host, a binding's bytes): for tests of the fallbacks.
+    pub fn limited(mut self, limits: TileLimits) -> Self {
+        self.budget = self.budget.min(limits.binding_bytes);
+        self.limits = limits;
+        self
     }
 
     /// What has crossed so far, and how many batches were submitted.
@@ -113,21 +131,37 @@ impl<'a> PairEvaluator<'a> {
         *self.traffic.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// `bytes` up, `read_back` bytes down and `waited` seconds in one more submission.
+    pub(super) fn count_submission(&self, bytes: u64, read_back: u64, waited: f64) {
+        let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
+        t.bytes_uploaded += bytes;
+        t.bytes_read_back += read_back;
+        t.gpu_submissions += 1;
+        t.device_wait_seconds += waited;
+    }
+
+    /// Pairs of faces seen in part clipped on the device, and left to the host.
+    pub(super) fn count_clipping(&self, on_device: u64, on_host: u64) {
+        let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
+        t.pairs_clipped_on_device += on_device;
+        t.pairs_clipped_on_host += on_host;
+    }
+
+    /// Node `node` in the frame of face `face`, as `assemble_pairs` reads its view.
+    pub(super) fn view_of(&self, node: usize, face: usize) -> [f64; VIEW_STRIDE] {
+        let node = &self.disc.nodes[node];
+        let frame = &self.scene.faces[face].frame;
+        let (p, n) = (frame.to_local(node.position) * self.unit, frame.dir_to_local(node.normal));
+        [p.x, p.y, p.z, n.x, n.y, n.z, node.rho / std::f64::consts::PI, 0.0]
+    }
+
     /// One batch: views, records and pieces up, `assemble_pairs`, values back.
     fn batch(&self, tasks: &[PairTask], out: &mut [[f64; 3]]) -> Result<()> {
         let (disc, unit) = (self.disc, self.unit);
         // One array per task, so that the collect is indexed: each thread writes its part of
         // the vector in place (a flat map's collect gathers lists and copies them on one thread).
-        let views: Vec<[f64; VIEW_STRIDE]> = tasks
-            .par_iter()
-            .map(|t| {
-                let node = &disc.nodes[t.node];
-                let frame = &self.scene.faces[disc.elements[t.element].face].frame;
-                let (p, n) =
-                    (frame.to_local(node.position) * unit, frame.dir_to_local(node.normal));
-                [p.x, p.y, p.z, n.x, n.y, n.z, node.rho / std::f64::consts::PI, 0.0]
-            })
-            .collect();
+        let views: Vec<[f64; VIEW_STRIDE]> =
+            tasks.par_iter().map(|t| self.view_of(t.node, disc.elements[t.element].face)).collect();
         let mut records = Vec::with_capacity(4 * tasks.len());
         let mut piece_records = Vec::new();
         let mut vertices = Vec::new();
@@ -204,22 +238,13 @@ impl<'a> PairEvaluator<'a> {
                 &[&params, views, &self.elements, &self.tables, records, vertices, output, &near],
             );
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.assembler.pairs);
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(x, y, 1);
-            }
+            dispatch(&mut encoder, &self.assembler.pairs, &group, (x, y));
             encoder.copy_buffer_to_buffer(output, 0, staging, 0, size.max(16));
             ctx.queue.submit([encoder.finish()]);
             let started = Instant::now();
             let values = compute::read_back(ctx, staging, size, p);
             let waited = started.elapsed().as_secs_f64();
-            let mut t = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
-            t.bytes_uploaded += params.size() + up.iter().sum::<u64>();
-            t.bytes_read_back += size;
-            t.gpu_submissions += 1;
-            t.device_wait_seconds += waited;
+            self.count_submission(params.size() + up.iter().sum::<u64>(), size, waited);
             values
         })??;
         for (o, v) in out.iter_mut().zip(values.chunks_exact(per)) {
@@ -230,6 +255,12 @@ impl<'a> PairEvaluator<'a> {
 }
 
 impl PairEvaluation for PairEvaluator<'_> {
+    /// The f64 kernels clip the elements of faces seen in part (src/gpu/pair_cuts.rs); the f32
+    /// kernels take the host's pieces.
+    fn clipper(&self) -> Option<&dyn CutEvaluation> {
+        self.assembler.cut_pipelines().is_some().then_some(self as &dyn CutEvaluation)
+    }
+
     /// In batches that fit the device's bindings; thin elements' pairs on the CPU.
     fn evaluate(&self, tasks: &[PairTask]) -> Result<Vec<[f64; 3]>> {
         let mut out = vec![[0.0; 3]; tasks.len()];

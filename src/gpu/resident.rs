@@ -28,6 +28,11 @@ pub struct DeviceTraffic {
     pub gpu_submissions: u64,
     /// Host time spent waiting for the device: the device was busy at least that long.
     pub device_wait_seconds: f64,
+    /// Pairs of faces seen in part that the device clipped (listed pairs of a compressed
+    /// operator's exact blocks).
+    pub pairs_clipped_on_device: u64,
+    /// Those left to the host: past the clipping kernel's limits, or thin elements.
+    pub pairs_clipped_on_host: u64,
 }
 
 impl std::ops::Add for DeviceTraffic {
@@ -39,6 +44,8 @@ impl std::ops::Add for DeviceTraffic {
             bytes_read_back: self.bytes_read_back + other.bytes_read_back,
             gpu_submissions: self.gpu_submissions + other.gpu_submissions,
             device_wait_seconds: self.device_wait_seconds + other.device_wait_seconds,
+            pairs_clipped_on_device: self.pairs_clipped_on_device + other.pairs_clipped_on_device,
+            pairs_clipped_on_host: self.pairs_clipped_on_host + other.pairs_clipped_on_host,
         }
     }
 }

@@ -136,7 +136,7 @@ fn device_pieces(
 
 /// The view of a face seen in part as `assemble_cuts` reads it (lengths times `unit`), with
 /// where the face's element box tree starts.
-fn push_cut_view(view: &FaceView, unit: f64, tree: u32, out: &mut Vec<f64>) {
+pub(super) fn push_cut_view(view: &FaceView, unit: f64, tree: u32, out: &mut Vec<f64>) {
     let FaceView::Visible { clip, shadows } = view else {
         unreachable!("a face seen in part has a view")
     };

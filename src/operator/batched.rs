@@ -3,7 +3,9 @@
 //! machine): the rows and columns they all ask for next are listed and evaluated in one batch,
 //! so a block of rank k costs about 2k rounds for all blocks together, not 2k trips to the device
 //! per block. The exact blocks are planned on the host by the dense path's pair plan (in
-//! parallel, partly visible pairs with their exact visible pieces) and evaluated in batches.
+//! parallel) and evaluated in batches: partly visible pairs with their exact visible pieces, or,
+//! where the engine clips ([`crate::assembly::CutEvaluation`]), each face seen in part handed
+//! over once per node with its view.
 //! The pair lists hold what is evaluated and nothing else: no n × n work anywhere.
 
 use std::ops::Range;
@@ -14,11 +16,11 @@ use super::aca::{Aca, Request};
 use super::blocks::{BlockPlan, FacePairs};
 use super::built::{Built, by_node_cluster};
 use super::compressed::Block;
-use super::entries::Entries;
+use super::entries::{BlockFace, Entries, NodeViews, PartSeen};
 use super::guard::MemoryGuard;
 use super::shadowed;
 use super::stored::BlockData;
-use crate::assembly::{PairEvaluation, PairTask};
+use crate::assembly::{CutEvaluation, CutValues, FaceCut, PairEvaluation, PairTask};
 use crate::error::Result;
 use crate::progress::Progress;
 use crate::visibility::{PairStats, Visibility};
@@ -121,7 +123,9 @@ fn cross_approximate(
 }
 
 /// The `exact` blocks (with whether each is incompressible) into `built`, their pairs planned
-/// on the host by the row walk and evaluated by `device` in rounds.
+/// on the host by the row walk and evaluated by `device` in rounds. Where `device` clips the
+/// elements of faces seen in part itself, the host hands it each such face's view once per node
+/// instead of each element's visible pieces.
 fn exact_blocks(
     entries: &Entries,
     mut exact: Vec<(usize, usize, bool)>,
@@ -139,45 +143,55 @@ fn exact_blocks(
             m * c / entries.per
         })
         .collect();
+    let clipper = device.clipper();
+    let clips = clipper.is_some();
     for range in rounds(&sizes) {
         let blocks = &exact[range];
-        let mut planned: Vec<(Vec<PairTask>, Vec<usize>, PairStats)> = by_node_cluster(blocks)
+        let mut planned: Vec<PlannedBlock> = by_node_cluster(blocks)
             .into_par_iter()
             .flat_map_iter(|group| {
                 let mut views = entries.node_views();
                 group
                     .into_iter()
-                    .map(|(t, s, _)| {
-                        let width = entries.block_size(t, s).1;
-                        let (mut tasks, mut at) = (Vec::new(), Vec::new());
-                        let stats =
-                            entries.visible_pairs(t, s, &mut views, |r, k, i, j, visible| {
-                                tasks.push(PairTask { node: i, element: j, visible });
-                                at.push(r * width + k * entries.per);
-                            });
-                        (tasks, at, stats)
-                    })
+                    .map(|(t, s, _)| PlannedBlock::new(entries, t, s, &mut views, clips))
                     .collect::<Vec<_>>()
             })
             .collect();
-        let offsets = offsets(planned.iter().map(|p| p.0.len()));
-        let tasks: Vec<PairTask> = planned.iter_mut().flat_map(|p| p.0.drain(..)).collect();
+        let task_offsets = offsets(planned.iter().map(|p| p.tasks.len()));
+        let tasks: Vec<PairTask> = planned.iter_mut().flat_map(|p| p.tasks.drain(..)).collect();
         let values = device.evaluate(&tasks)?;
         drop(tasks);
+        let (cut_values, cut_offsets) = match clipper {
+            Some(clipper) => {
+                let (values, stats) = clipped_parts(entries, clipper, device, &planned)?;
+                built.add(stats, false);
+                let lengths = planned.iter().map(PlannedBlock::part_pairs);
+                (values, offsets(lengths))
+            }
+            None => (Vec::new(), vec![0; planned.len()]),
+        };
         let per = entries.per;
         let done: Vec<_> = blocks
             .par_iter()
             .zip(planned.par_iter())
-            .zip(offsets.par_iter())
-            .map(|((&(t, s, incompressible), (_, at, stats)), &offset)| {
+            .zip(task_offsets.par_iter().zip(&cut_offsets))
+            .map(|((&(t, s, incompressible), plan), (&offset, &cut_offset))| {
                 let (m, c) = entries.block_size(t, s);
                 let mut data = vec![0.0; m * c];
-                for (&a, v) in at.iter().zip(&values[offset..]) {
+                for (&a, v) in plan.at.iter().zip(&values[offset..]) {
                     data[a..a + per].copy_from_slice(&v[..per]);
+                }
+                let mut cut_values = cut_values[cut_offset..].iter();
+                for part in &plan.parts {
+                    let face = &plan.faces[part.face];
+                    for (&k, v) in face.columns.iter().zip(cut_values.by_ref()) {
+                        let a = part.row * c + k * per;
+                        data[a..a + per].copy_from_slice(&v[..per]);
+                    }
                 }
                 let mut block = entries.block(t, s, BlockData::exact(data));
                 block.compact(entries.precision);
-                (block, *stats, incompressible)
+                (block, plan.stats, incompressible)
             })
             .collect();
         progress.advance(done.len());
@@ -187,6 +201,75 @@ fn exact_blocks(
         guard.check(0)?;
     }
     Ok(())
+}
+
+/// One exact block's plan: the pairs the host lists and where their values go, the classes it
+/// met, and, where the engine clips, the block's faces and those of them its nodes see in part.
+struct PlannedBlock {
+    tasks: Vec<PairTask>,
+    at: Vec<usize>,
+    stats: PairStats,
+    faces: Vec<BlockFace>,
+    parts: Vec<PartSeen>,
+}
+
+impl PlannedBlock {
+    fn new(entries: &Entries, t: usize, s: usize, views: &mut NodeViews, clips: bool) -> Self {
+        let width = entries.block_size(t, s).1;
+        let mut faces = entries.block_faces(s);
+        let (mut tasks, mut at, mut parts) = (Vec::new(), Vec::new(), Vec::new());
+        let list = |r: usize, k: usize, i: usize, j: usize, visible| {
+            tasks.push(PairTask { node: i, element: j, visible });
+            at.push(r * width + k * entries.per);
+        };
+        let stats = entries.walk_block(t, &faces, views, list, clips.then_some(&mut parts));
+        if !clips {
+            faces.clear();
+        }
+        Self { tasks, at, stats, faces, parts }
+    }
+
+    /// Pairs of the faces its nodes see in part, listed for the engine.
+    fn part_pairs(&self) -> usize {
+        self.parts.iter().map(|p| self.faces[p.face].elements.len()).sum()
+    }
+}
+
+/// The values of the pairs of the faces seen in part in `planned`, block after block, part
+/// after part, clipped by `clipper`, with their classes; the pairs it leaves are clipped here
+/// as the row walk does and evaluated by `device`.
+fn clipped_parts(
+    entries: &Entries,
+    clipper: &dyn CutEvaluation,
+    device: &dyn PairEvaluation,
+    planned: &[PlannedBlock],
+) -> Result<(Vec<[f64; 3]>, PairStats)> {
+    let cuts: Vec<FaceCut> = planned
+        .iter()
+        .flat_map(|b| {
+            b.parts.iter().map(|p| {
+                let f = &b.faces[p.face];
+                FaceCut { node: p.node, view: &p.view, tree: &f.tree, elements: &f.elements }
+            })
+        })
+        .collect();
+    let CutValues { mut values, mut stats, left } = clipper.evaluate_cuts(&cuts)?;
+    let starts = offsets(cuts.iter().map(|c| c.elements.len()));
+    let (mut tasks, mut slots) = (Vec::new(), Vec::new());
+    for (c, position) in left {
+        let cut = &cuts[c];
+        let visible = entries.planner.visible(cut.view, cut.tree.polygon(position));
+        stats.record(&visible, 1);
+        values[starts[c] + position] = [0.0; 3];
+        if !matches!(visible, Visibility::Skip(_)) {
+            tasks.push(PairTask { node: cut.node, element: cut.elements[position], visible });
+            slots.push(starts[c] + position);
+        }
+    }
+    for (slot, v) in slots.into_iter().zip(device.evaluate(&tasks)?) {
+        values[slot] = v;
+    }
+    Ok((values, stats))
 }
 
 /// One step of every crossing in `crossings`: their requested rows and columns evaluated in one

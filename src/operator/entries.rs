@@ -16,8 +16,8 @@ use crate::discretization::Discretization;
 use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::visibility::{
-    ElementBoxes, FaceSight, KeptViews, PairPlanner, PairStats, RecentHiders, Views, Visibility,
-    by_face,
+    ElementBoxes, FaceSight, FaceView, KeptViews, PairPlanner, PairStats, RecentHiders, Views,
+    Visibility, by_face,
 };
 
 /// Admissible blocks whose break-even rank is below this are stored exactly.
@@ -106,6 +106,27 @@ pub(super) struct Entries<'a> {
     pub(super) sight: Option<&'a ClusterSight>,
 }
 
+/// The elements of one face in a block's element cluster.
+pub(super) struct BlockFace {
+    pub(super) face: usize,
+    /// Their columns in the block (positions in the cluster).
+    pub(super) columns: Vec<usize>,
+    /// Their indices.
+    pub(super) elements: Vec<usize>,
+    /// Their boxes, halved down to a few elements, for the nodes that see the face in part.
+    pub(super) tree: ElementBoxes,
+}
+
+/// A face of a block that a node sees in part, left to an engine that clips its elements.
+pub(super) struct PartSeen {
+    /// The node's row in the block, and its index.
+    pub(super) row: usize,
+    pub(super) node: usize,
+    /// The face's position in the block's [`BlockFace`]s.
+    pub(super) face: usize,
+    pub(super) view: FaceView,
+}
+
 impl Entries<'_> {
     /// Views for the row walks of one node cluster at a time, counted in this build's tally.
     pub(super) fn node_views(&self) -> NodeViews<'_> {
@@ -124,43 +145,70 @@ impl Entries<'_> {
         t: usize,
         s: usize,
         views: &mut NodeViews,
-        mut each: impl FnMut(usize, usize, usize, usize, Visibility),
+        each: impl FnMut(usize, usize, usize, usize, Visibility),
     ) -> PairStats {
-        let (tc, sc) = (&self.nodes.clusters[t], &self.elements.clusters[s]);
+        self.walk_block(t, &self.block_faces(s), views, each, None)
+    }
+
+    /// The elements of element cluster `s` face by face, as the row walk takes them.
+    pub(super) fn block_faces(&self, s: usize) -> Vec<BlockFace> {
+        let sc = &self.elements.clusters[s];
         let element_ids = &self.elements.order[sc.start..sc.end];
-        // The block's elements face by face (positions k in the block), as the walk takes them.
-        let by_face =
-            by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face, k)));
-        // Each face's elements in the block with the boxes of their halves, for the nodes
-        // that see the face in part.
-        let boxes: Vec<ElementBoxes> = by_face
-            .iter()
-            .map(|(_, list)| {
-                let element = |&k: &usize| self.disc.elements[element_ids[k]].in_face();
-                ElementBoxes::new(list.iter().map(element).collect())
+        by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face, k)))
+            .into_iter()
+            .map(|(face, columns)| {
+                let elements: Vec<usize> = columns.iter().map(|&k| element_ids[k]).collect();
+                let polygons = elements.iter().map(|&j| self.disc.elements[j].in_face()).collect();
+                BlockFace { face, columns, elements, tree: ElementBoxes::new(polygons) }
             })
-            .collect();
+            .collect()
+    }
+
+    /// [`Self::visible_pairs`] over the block's `faces` ([`Self::block_faces`] of its element
+    /// cluster). With `parts`, a face seen in part is not clipped here: (r, i, position of the
+    /// face in `faces`, the view) is listed for an engine that clips its elements itself
+    /// ([`crate::assembly::CutEvaluation`]), and its pairs are neither given to `each` nor
+    /// counted.
+    pub(super) fn walk_block(
+        &self,
+        t: usize,
+        faces: &[BlockFace],
+        views: &mut NodeViews,
+        mut each: impl FnMut(usize, usize, usize, usize, Visibility),
+        mut parts: Option<&mut Vec<PartSeen>>,
+    ) -> PairStats {
+        let tc = &self.nodes.clusters[t];
         let mut stats = PairStats::default();
         views.prepare(t, &self.nodes.order[tc.start..tc.end]);
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
             let viewer = self.disc.nodes[i].viewer();
-            let faces = by_face.iter().map(|(face, list)| (*face, list.iter().copied()));
+            let walked = faces.iter().map(|f| (f.face, f.columns.iter().zip(&f.elements)));
             let kept = Views::Kept(&mut views.rows[r], &mut views.hiders);
-            stats += self.planner.walk_row(&viewer, faces, kept, |face, list, sight| match sight {
-                FaceSight::Hidden(_) => {}
-                FaceSight::Whole => {
-                    list.for_each(|k| each(r, k, i, element_ids[k], Visibility::Full))
-                }
-                FaceSight::Part(mut part) => {
-                    let g = by_face.iter().position(|(f, _)| *f == face).expect("a block's face");
-                    part.elements(&boxes[g], |at, vis| {
-                        if !matches!(vis, Visibility::Skip(_)) {
-                            let k = by_face[g].1[at];
-                            each(r, k, i, element_ids[k], vis)
+            stats +=
+                self.planner.walk_row(&viewer, walked, kept, |face, list, sight| match sight {
+                    FaceSight::Hidden(_) => {}
+                    FaceSight::Whole => {
+                        list.for_each(|(&k, &j)| each(r, k, i, j, Visibility::Full))
+                    }
+                    FaceSight::Part(mut part) => {
+                        let g = faces.iter().position(|f| f.face == face).expect("a block's face");
+                        if let Some(parts) = parts.as_deref_mut() {
+                            parts.push(PartSeen {
+                                row: r,
+                                node: i,
+                                face: g,
+                                view: part.view().clone(),
+                            });
+                            return;
                         }
-                    });
-                }
-            });
+                        let f = &faces[g];
+                        part.elements(&f.tree, |at, vis| {
+                            if !matches!(vis, Visibility::Skip(_)) {
+                                each(r, f.columns[at], i, f.elements[at], vis)
+                            }
+                        });
+                    }
+                });
         }
         stats
     }
