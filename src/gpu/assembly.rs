@@ -486,22 +486,8 @@ impl<'a> GpuAssembler<'a> {
                 ..Default::default()
             };
             let params_buffer = compute::uniform(ctx, bytemuck::bytes_of(&params));
-            let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("near"),
-                size: layout::NEAR_HEADER_BYTES
-                    + 8 * (near_capacity + overflow_capacity).max(1)
-                    + 4 * deep_capacity.next_multiple_of(2),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            // The indirect arguments, copied out of the near list: a buffer bound read-write cannot
-            // also drive the dispatch that binds it.
-            let near_args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("near dispatch"),
-                size: 16,
-                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            let (near, near_args) =
+                compute::near_list(ctx, near_capacity + overflow_capacity, deep_capacity);
             self.timings.lock().expect("timings lock").bytes_uploaded += (view_bytes.len()
                 + vertex_bytes.len()
                 + exception_bytes.len()

@@ -4,7 +4,7 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use super::GpuContext;
-use super::layout::WORKGROUP;
+use super::layout::{NEAR_HEADER_BYTES, WORKGROUP};
 use super::shaders::Precision;
 use crate::error::{Error, Result};
 
@@ -192,12 +192,7 @@ pub fn copy_mapped(
     precision: Precision,
     out: &mut [f64],
 ) -> Result<()> {
-    {
-        let view = staging
-            .slice(..size.max(16))
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
-        let bytes = &view[..size as usize];
+    with_mapped(staging, size, |bytes| {
         // On all cores: copying out of mapped memory is bound by bandwidth, and on one thread it
         // would take most of a GPU assembly's time on a real card (docs/gpu.md).
         match precision {
@@ -214,9 +209,40 @@ pub fn copy_mapped(
                     .for_each(|(o, v)| o.iter_mut().zip(v).for_each(|(o, v)| *o = f64::from(*v)));
             }
         }
-    }
+    })
+}
+
+/// `read(bytes)` of the first `size` bytes of a staging buffer mapped by [`wait`], which is
+/// unmapped after.
+fn with_mapped<T>(staging: &wgpu::Buffer, size: u64, read: impl FnOnce(&[u8]) -> T) -> Result<T> {
+    let value = {
+        let view = staging
+            .slice(..size.max(16))
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
+        read(&view[..size as usize])
+    };
     staging.unmap();
-    Ok(())
+    Ok(value)
+}
+
+/// A near list (shaders/collocation.wgsl, `NearList`) holding `pairs` pairs after its header
+/// and then `deferred` single indices, and the buffer its indirect dispatch arguments are
+/// copied into (a buffer bound read-write cannot also drive the dispatch that binds it).
+pub fn near_list(ctx: &GpuContext, pairs: u64, deferred: u64) -> (wgpu::Buffer, wgpu::Buffer) {
+    let list = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("near"),
+        size: NEAR_HEADER_BYTES + 8 * pairs.max(1) + 4 * deferred.next_multiple_of(2),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("near dispatch"),
+        size: 16,
+        usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    (list, args)
 }
 
 /// Waits for the device and returns the reals of a staging buffer.
@@ -254,13 +280,5 @@ pub fn read_u32s(
     encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
     ctx.queue.submit([encoder.finish()]);
     wait(ctx, &staging, size)?;
-    let values = {
-        let view = staging
-            .slice(..size.max(16))
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("mapped range: {e}")))?;
-        bytemuck::pod_collect_to_vec::<u8, u32>(&view[..size as usize])
-    };
-    staging.unmap();
-    Ok(values)
+    with_mapped(&staging, size, bytemuck::pod_collect_to_vec::<u8, u32>)
 }
