@@ -151,20 +151,7 @@ impl PairEvaluator<'_> {
                 let views = compute::storage(ctx, &layout::real_bytes(&batch.views, p));
                 let records = compute::storage(ctx, bytemuck::cast_slice(&batch.records));
                 let vertices = compute::storage(ctx, &layout::real_bytes(&batch.vertices, p));
-                let near = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("listed cuts"),
-                    size: header
-                        + 8 * overflow_capacity.max(1)
-                        + 4 * deep_capacity.next_multiple_of(2),
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let near_args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("listed cuts dispatch"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+                let (near, near_args) = compute::near_list(ctx, overflow_capacity, deep_capacity);
                 let size = pairs * (per * p.bytes()) as u64;
                 let (output, staging) = compute::output(ctx, size);
                 let group = compute::bind_group(
