@@ -2,6 +2,8 @@
 // Each test crate uses what it needs of this module.
 #![allow(dead_code)]
 
+pub mod gpu;
+
 use std::process::Command;
 
 use serde_json::Value;
