@@ -206,7 +206,7 @@ impl Aca {
             State::Finished { accepted: false } => return None,
             _ => panic!("cross approximation not finished"),
         }
-        Some(recompressed(self.m, self.c, &self.us, &self.vs, RECOMPRESSION_SHARE * self.tolerance))
+        Some(recompressed(self.m, self.c, self.us, self.vs, RECOMPRESSION_SHARE * self.tolerance))
     }
 
     /// Takes row i as the next pivot row; `residual` when its remainder is known already.
@@ -290,48 +290,61 @@ const RECOMPRESSION_SHARE: f64 = 0.5;
 
 /// The crosses `us[l] vs[l]^T` (m and c values each) summed into one [`LowRank`], recompressed
 /// (Bebendorf 2008, sec. 2.6): U = Q_u R_u and V = Q_v R_v, the SVD W S Z^T of the small core
-/// R_u R_v^T, and the singular values whose tail stays within `drop` of |S|_F left out, so that
+/// R_u R_v^T, and the singular values whose tail stays within `tail` of |S|_F left out, so that
 /// U = Q_u W S and V = Q_v Z with the rank that is left.
-fn recompressed(m: usize, c: usize, us: &[Vec<f64>], vs: &[Vec<f64>], drop: f64) -> LowRank {
+///
+/// The crosses are taken, and each copy is dropped as soon as the next one exists: a block of
+/// a face against a face (131 072 by 65 536 at rank 36, 57 MB of factors) would otherwise hold
+/// the crosses, their matrices, their QR factors and the new factors at once.
+fn recompressed(m: usize, c: usize, us: Vec<Vec<f64>>, vs: Vec<Vec<f64>>, tail: f64) -> LowRank {
     let k = us.len();
-    let as_rows = |rank: usize, at: &dyn Fn(usize, usize) -> f64, len: usize| -> Vec<f64> {
-        (0..len * rank).map(|x| at(x / rank, x % rank)).collect()
-    };
-    let plain = || LowRank {
+    let u = Mat::from_fn(m, k, |i, l| us[l][i]);
+    drop(us);
+    let v = Mat::from_fn(c, k, |j, l| vs[l][j]);
+    drop(vs);
+    let plain = |u: &Mat<f64>, v: &Mat<f64>| LowRank {
         m,
         c,
         k,
-        u: as_rows(k, &|i, l| us[l][i], m),
-        v: as_rows(k, &|j, l| vs[l][j], c),
+        u: by_rows(u, |_| 1.0),
+        v: by_rows(v, |_| 1.0),
     };
     if k < 2 || m < k || c < k {
-        return plain();
+        return plain(&u, &v);
     }
-    let (u, v) = (Mat::from_fn(m, k, |i, l| us[l][i]), Mat::from_fn(c, k, |j, l| vs[l][j]));
     let (qr_u, qr_v) = (u.qr(), v.qr());
     let core = qr_u.thin_R() * qr_v.thin_R().transpose();
-    let Ok(svd) = core.thin_svd() else { return plain() };
+    let Ok(svd) = core.thin_svd() else { return plain(&u, &v) };
     let s = svd.S().column_vector();
     let total: f64 = (0..k).map(|l| s[l] * s[l]).sum();
-    // The smallest rank whose left-out tail is within the drop.
-    let (mut rank, mut tail) = (k, 0.0);
-    while rank > 1 && tail + s[rank - 1] * s[rank - 1] <= drop * drop * total {
-        tail += s[rank - 1] * s[rank - 1];
+    // The smallest rank whose left-out tail is within `tail`.
+    let (mut rank, mut left_out) = (k, 0.0);
+    while rank > 1 && left_out + s[rank - 1] * s[rank - 1] <= tail * tail * total {
+        left_out += s[rank - 1] * s[rank - 1];
         rank -= 1;
     }
     if rank == k {
-        return plain();
+        drop((qr_u, qr_v));
+        return plain(&u, &v);
     }
-    let (w, z) = (svd.U().subcols(0, rank), svd.V().subcols(0, rank));
-    let u = qr_u.compute_thin_Q() * w;
-    let v = qr_v.compute_thin_Q() * z;
-    LowRank {
-        m,
-        c,
-        k: rank,
-        u: as_rows(rank, &|i, l| u[(i, l)] * s[l], m),
-        v: as_rows(rank, &|j, l| v[(j, l)], c),
-    }
+    drop((u, v));
+    let u = {
+        let q = qr_u.compute_thin_Q();
+        drop(qr_u);
+        by_rows(&(q * svd.U().subcols(0, rank)), |l| s[l])
+    };
+    let v = {
+        let q = qr_v.compute_thin_Q();
+        drop(qr_v);
+        by_rows(&(q * svd.V().subcols(0, rank)), |_| 1.0)
+    };
+    LowRank { m, c, k: rank, u, v }
+}
+
+/// `a`'s entries row by row, column l times `scale(l)`.
+fn by_rows(a: &Mat<f64>, scale: impl Fn(usize) -> f64) -> Vec<f64> {
+    let rank = a.ncols();
+    (0..a.nrows() * rank).map(|x| a[(x / rank, x % rank)] * scale(x % rank)).collect()
 }
 
 /// `a · b` in four interleaved partial sums, which the compiler keeps in vector registers (a
@@ -473,14 +486,14 @@ mod tests {
         let us = vec![a.clone(), b.clone(), mix(&a, &b, 1.0, 1.0), mix(&a, &b, 1.0, -2.0)];
         let vs = vec![p.clone(), q.clone(), mix(&p, &q, 1.0, -1.0), mix(&p, &q, 2.0, 1.0)];
         let product = |i: usize, j: usize| -> f64 { (0..4).map(|l| us[l][i] * vs[l][j]).sum() };
-        let lr = recompressed(m, c, &us, &vs, 1e-12);
+        let lr = recompressed(m, c, us.clone(), vs.clone(), 1e-12);
         assert_eq!(lr.k, 2);
         let scale = (0..m).flat_map(|i| (0..c).map(move |j| (i, j)));
         let largest = scale.clone().map(|(i, j)| product(i, j).abs()).fold(0.0, f64::max);
         let worst = scale.map(|(i, j)| (lr.get(i, j) - product(i, j)).abs()).fold(0.0, f64::max);
         assert!(worst <= 1e-13 * largest, "{worst} of {largest}");
         // Independent crosses keep their rank.
-        let independent = recompressed(m, c, &us[..2], &vs[..2], 1e-12);
+        let independent = recompressed(m, c, us[..2].to_vec(), vs[..2].to_vec(), 1e-12);
         assert_eq!(independent.k, 2);
     }
 }

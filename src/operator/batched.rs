@@ -67,15 +67,17 @@ pub(super) fn build_blocks(
             None => exact.push((t, s, true)),
         }
     }
-    let mut built =
-        cross_approximate(entries, faces, crossings, &mut exact, device, guard, progress)?;
-    exact_blocks(entries, exact, device, guard, progress, &mut built)?;
     // Shadowed blocks walk their leaves' pairs and compress as the CPU's build does: their
-    // entries are mostly partly visible pairs, which the host integrates anyway.
+    // entries are mostly partly visible pairs, which the host integrates anyway. They come
+    // first, as on the CPU, where their compression's scratch adds least to the peak; their
+    // slots go last in the list.
     let mut slots: Vec<Block> =
         (0..shadowed::sub_blocks(&plan.shadowed)).map(|_| Block::nothing()).collect();
     let met =
         shadowed::build(entries, &plan.shadowed, faces, tolerance, guard, progress, &mut slots);
+    let mut built =
+        cross_approximate(entries, faces, crossings, &mut exact, device, guard, progress)?;
+    exact_blocks(entries, exact, device, guard, progress, &mut built)?;
     built = built.merged(met);
     built.blocks.extend(slots);
     guard.check(0)?;

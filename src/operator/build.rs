@@ -256,6 +256,10 @@ pub(super) fn build_block_by_block(
         slots_of_groups.push((group, slots));
         near_rest = after;
     }
+    // The shadowed blocks first: compressing one (a face against a face) holds its crosses and
+    // their QR factors for a while, which adds least to the peak before the other blocks exist.
+    let shadowed =
+        shadowed::build(entries, &plan.shadowed, faces, tolerance, guard, progress, shadowed_slots);
     // The exact blocks of one node cluster together: each node's views of the faces are found
     // once for all of them.
     let near = slots_of_groups.into_par_iter().map(|(group, slots)| {
@@ -282,10 +286,7 @@ pub(super) fn build_block_by_block(
         progress.advance(1);
         met
     });
-    let mut met = near.chain(far).reduce(Built::default, Built::merged);
-    let shadowed =
-        shadowed::build(entries, &plan.shadowed, faces, tolerance, guard, progress, shadowed_slots);
-    met = met.merged(shadowed);
+    let met = near.chain(far).reduce(Built::default, Built::merged).merged(shadowed);
     guard.check(0)?;
     Ok(Built { blocks, ..met })
 }
