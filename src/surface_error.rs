@@ -62,7 +62,7 @@ pub fn sample_points(scene: &Scene, mesh: &Mesh, lattice: usize) -> Vec<Node> {
 pub fn interpolant_at(disc: &Discretization, u: &[f64], point: &Node) -> f64 {
     let j = point.element;
     let per = disc.method.nodes_per_element();
-    let q = disc.elements[j].frame.to_plane(point.position);
+    let q = disc.placed(j).frame.to_plane(point.position);
     (0..per).map(|l| u[j * per + l] * disc.basis(j)[l].eval(q)).sum()
 }
 

@@ -6,7 +6,7 @@
 
 use glam::DVec2;
 
-use crate::discretization::{ElementFrame, Method};
+use crate::discretization::{Method, Placed};
 use crate::kernels::far_field::FarFieldRule;
 use crate::kernels::graded::GradedRule;
 use crate::kernels::{Affine2, Observer, exact, lanes};
@@ -85,7 +85,7 @@ impl PairIntegrator {
     #[inline(always)]
     pub(crate) fn full_pair(
         &self,
-        el: &ElementFrame,
+        el: &Placed,
         basis: &[Affine2; 3],
         p: glam::DVec3,
         normal: glam::DVec3,
@@ -107,7 +107,7 @@ impl PairIntegrator {
     #[inline(always)]
     pub(crate) fn integrate_or_batch<T: Copy>(
         &self,
-        el: &ElementFrame,
+        el: &Placed,
         basis: &[Affine2; 3],
         p: glam::DVec3,
         normal: glam::DVec3,
@@ -140,11 +140,11 @@ impl PairIntegrator {
 
     /// Whether the centroid method's closed form over (any part of) element `el`, seen from a
     /// node at `p` with unit normal `normal`, may be evaluated in lanes, and the observer to
-    /// give them with triangles in the element's units ([`ElementFrame::to_scaled`]).
+    /// give them with triangles in the element's units ([`Placed::to_scaled`]).
     #[inline(always)]
     pub(crate) fn lane_observer(
         &self,
-        el: &ElementFrame,
+        el: &Placed,
         p: glam::DVec3,
         normal: glam::DVec3,
     ) -> LaneObserver {
@@ -160,10 +160,11 @@ impl PairIntegrator {
         if thin || banded { LaneObserver::Scalar } else { LaneObserver::Lane(obs) }
     }
 
-    /// The node seen from the element's frame in the element's units ([`ElementFrame::unit`]),
-    /// or `None` when the node is not above the element's plane.
+    /// The node seen from the element's frame in the element's units
+    /// ([`crate::discretization::ElementFrame::unit`]), or `None` when the node is not above the
+    /// element's plane.
     #[inline(always)]
-    fn observer(&self, el: &ElementFrame, p: glam::DVec3, normal: glam::DVec3) -> Option<Observer> {
+    fn observer(&self, el: &Placed, p: glam::DVec3, normal: glam::DVec3) -> Option<Observer> {
         let obs = Observer {
             position: el.frame.to_local(p) * el.unit,
             normal: el.frame.dir_to_local(normal),
@@ -182,7 +183,7 @@ impl PairIntegrator {
     /// node at `p` with unit normal `normal`. Entries past the method's basis count are zero.
     pub fn integrate(
         &self,
-        el: &ElementFrame,
+        el: &Placed,
         basis: &[Affine2; 3],
         p: glam::DVec3,
         normal: glam::DVec3,
@@ -210,11 +211,11 @@ impl PairIntegrator {
     }
 
     /// `∫ G φ_l` over `loops`: the visible convex pieces of element `el`, counter-clockwise, in
-    /// its local coordinates and units ([`ElementFrame::scaled`]).
+    /// its local coordinates and units ([`crate::discretization::ElementFrame::scaled`]).
     fn integrate_loops(
         &self,
         obs: &Observer,
-        el: &ElementFrame,
+        el: &Placed,
         loops: &[&[DVec2]],
         basis: &[Affine2; 3],
     ) -> [f64; 3] {
@@ -259,7 +260,7 @@ fn integrate_fan(loops: &[&[DVec2]], part: impl Fn(&[DVec2; 3]) -> [f64; 3]) -> 
 /// for the observer `obs`, as the fan of triangles from its first corner in the element's units,
 /// each with `tag`: the values `sink` receives add up to the piece's closed form.
 pub(crate) fn push_fan<T: Copy>(
-    el: &ElementFrame,
+    el: &Placed,
     obs: Observer,
     piece: &[DVec2],
     (tag, batch): (T, &mut lanes::Batch<T>),

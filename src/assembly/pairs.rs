@@ -88,7 +88,7 @@ impl PairEvaluation for CpuPairs<'_> {
             .map(|t| {
                 let node = &self.disc.nodes[t.node];
                 let values = self.integrator.integrate(
-                    &self.disc.elements[t.element],
+                    &self.disc.placed(t.element),
                     self.disc.basis(t.element),
                     node.position,
                     node.normal,

@@ -159,7 +159,7 @@ fn fill_entry(
 ) {
     let per = disc.method.nodes_per_element();
     let scale = node.rho / PI;
-    let el = &disc.elements[j];
+    let el = &disc.placed(j);
     let sink = |j: usize, v: f64| row[j] += scale * v;
     let Some(values) = integrator.integrate_or_batch(
         el,
@@ -184,7 +184,7 @@ pub(crate) fn face_boxes(mesh: &Mesh, disc: &Discretization) -> Vec<ElementBoxes
     (0..mesh.face_count())
         .map(|face| {
             let range = mesh.face_range(face);
-            ElementBoxes::new(disc.elements[range].iter().map(|el| el.in_face()).collect())
+            ElementBoxes::new(range.map(|j| disc.in_face(j)).collect())
         })
         .collect()
 }

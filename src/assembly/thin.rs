@@ -63,9 +63,7 @@ impl ThinElements {
         let boxes = by_face
             .iter()
             .map(|(_, list)| {
-                ElementBoxes::new(
-                    list.iter().map(|&k| disc.elements[elements[k]].in_face()).collect(),
-                )
+                ElementBoxes::new(list.iter().map(|&k| disc.in_face(elements[k])).collect())
             })
             .collect();
         Some(Self {
@@ -91,7 +89,7 @@ impl ThinElements {
         let scale = node.rho / PI;
         let mut put = |k: usize, vis: &Visibility| {
             let j = self.elements[k];
-            let el = &disc.elements[j];
+            let el = &disc.placed(j);
             let values =
                 self.integrator.integrate(el, disc.basis(j), node.position, node.normal, vis);
             write(k, values.map(|v| scale * v));

@@ -7,6 +7,7 @@
 //!   function is `(λ_k - α) / (1 - 3α)` with λ_k the barycentric coordinate of vertex k.
 
 use std::fmt;
+use std::ops::Deref;
 
 use glam::{DVec2, DVec3};
 
@@ -127,15 +128,14 @@ impl Node {
     }
 }
 
-/// An element described in its own frame: origin at its centroid, axes of its face.
+/// An element described in its own frame: origin at its centroid, axes of its face (kept once
+/// per face by the discretization, not per element: [`Discretization::placed`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ElementFrame {
-    /// Local frame (origin = centroid).
-    pub frame: PlaneFrame,
+    /// Centroid, the origin of the local frame.
+    pub centroid: DVec3,
     /// Face index.
     pub face: usize,
-    /// Centroid in the face frame's 2-D coordinates.
-    pub centroid_in_face: DVec2,
     /// Vertices in the local frame's 2-D coordinates (counter-clockwise).
     pub local: [DVec2; 3],
     /// The element's unit of length: a power of two near its radius, so that scaling by it is
@@ -148,22 +148,40 @@ pub struct ElementFrame {
     pub thin: bool,
 }
 
-impl ElementFrame {
-    /// Vertices in the face frame's 2-D coordinates.
-    pub fn in_face(&self) -> [DVec2; 3] {
-        self.local.map(|v| v + self.centroid_in_face)
-    }
+/// An element with its local frame, as the kernels see it: the frame and the centroid in the
+/// face's coordinates are made from its face's frame and its centroid when asked for (88 bytes
+/// an element not kept).
+#[derive(Clone, Copy, Debug)]
+pub struct Placed<'a> {
+    /// The element.
+    pub element: &'a ElementFrame,
+    /// Its local frame (origin = centroid).
+    pub frame: PlaneFrame,
+    /// Its centroid in the face frame's 2-D coordinates.
+    pub centroid_in_face: DVec2,
+}
 
-    /// Vertices in the local frame's 2-D coordinates and the element's units: `local` times
-    /// `unit`, where the kernels integrate (made when asked for, not kept: 48 bytes an element).
-    pub fn scaled(&self) -> [DVec2; 3] {
-        self.local.map(|v| v * self.unit)
-    }
-
+impl Placed<'_> {
     /// A point of the face frame's 2-D coordinates in the element's local coordinates and units
     /// (those of [`ElementFrame::scaled`], where the kernels integrate).
     pub fn to_scaled(&self, q: DVec2) -> DVec2 {
         (q - self.centroid_in_face) * self.unit
+    }
+}
+
+impl Deref for Placed<'_> {
+    type Target = ElementFrame;
+
+    fn deref(&self) -> &ElementFrame {
+        self.element
+    }
+}
+
+impl ElementFrame {
+    /// Vertices in the local frame's 2-D coordinates and the element's units: `local` times
+    /// `unit`, where the kernels integrate (made when asked for, not kept: 48 bytes an element).
+    pub fn scaled(&self) -> [DVec2; 3] {
+        self.local.map(|v| v * self.unit)
     }
 }
 
@@ -176,6 +194,8 @@ pub struct Discretization {
     pub nodes: Vec<Node>,
     /// Element frames, in mesh order.
     pub elements: Vec<ElementFrame>,
+    /// The faces' frames, whose axes the elements' frames share.
+    face_frames: Vec<PlaneFrame>,
     /// The linear method's basis functions per element, in the element's local frame; none
     /// for the centroid method, whose one basis function is 1 on every element
     /// ([`Discretization::basis`]).
@@ -202,9 +222,8 @@ impl Discretization {
             let local = e.vertices.map(|v| frame.to_plane(v));
             let unit = crate::geometry::power_of_two_unit(far_field::radius(&local));
             elements.push(ElementFrame {
-                frame,
+                centroid,
                 face: e.face,
-                centroid_in_face: face.frame.to_plane(centroid),
                 local,
                 unit,
                 scaled_radius: far_field::radius(&local.map(|v| v * unit)),
@@ -228,7 +247,31 @@ impl Discretization {
                 }
             }
         }
-        Ok(Self { method, nodes, elements, bases })
+        let face_frames = scene.faces.iter().map(|f| f.frame).collect();
+        Ok(Self { method, nodes, elements, face_frames, bases })
+    }
+
+    /// Element `j` with its local frame.
+    pub fn placed(&self, j: usize) -> Placed<'_> {
+        let element = &self.elements[j];
+        let face = &self.face_frames[element.face];
+        Placed {
+            element,
+            frame: face.with_origin(element.centroid),
+            centroid_in_face: face.to_plane(element.centroid),
+        }
+    }
+
+    /// The centroid of element `j` in its face frame's 2-D coordinates.
+    pub fn centroid_in_face(&self, j: usize) -> DVec2 {
+        let element = &self.elements[j];
+        self.face_frames[element.face].to_plane(element.centroid)
+    }
+
+    /// The vertices of element `j` in its face frame's 2-D coordinates.
+    pub fn in_face(&self, j: usize) -> [DVec2; 3] {
+        let c = self.centroid_in_face(j);
+        self.elements[j].local.map(|v| v + c)
     }
 
     /// Number of unknowns d_n (n or 3n).
@@ -278,11 +321,11 @@ mod tests {
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
         let d = Discretization::new(&scene, &mesh, Method::linear(1.0 / 6.0).unwrap()).unwrap();
         assert_eq!(d.dof(), 3 * mesh.len());
-        for (j, e) in d.elements.iter().enumerate() {
+        for j in 0..d.element_count() {
             for (l, basis) in d.basis(j).iter().enumerate() {
                 for m in 0..3 {
                     let node = d.nodes[3 * j + m].position;
-                    let value = basis.eval(e.frame.to_plane(node));
+                    let value = basis.eval(d.placed(j).frame.to_plane(node));
                     let want = if l == m { 1.0 } else { 0.0 };
                     assert!(
                         (value - want).abs() < 1e-13,
@@ -304,6 +347,12 @@ mod tests {
         let d = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
         for (node, e) in d.nodes.iter().zip(mesh.elements()) {
             assert!((node.position - e.centroid()).length() < 1e-15);
+        }
+        // Each element keeps its centroid, not its frame's axes, which are its face's.
+        assert!(std::mem::size_of::<ElementFrame>() <= 104);
+        for j in 0..d.element_count() {
+            let (placed, face) = (d.placed(j), &scene.faces[d.elements[j].face].frame);
+            assert_eq!(placed.frame, face.with_origin(mesh.elements()[j].centroid()));
         }
         // Its basis is the constant 1 on every element, kept once, not per element.
         assert!(d.bases.is_empty());

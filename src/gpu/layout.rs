@@ -108,7 +108,7 @@ pub fn pack_elements(disc: &Discretization, unit: f64) -> Vec<f64> {
     let mut v = Vec::with_capacity(disc.element_count() * ELEMENT_STRIDE);
     for (j, el) in disc.elements.iter().enumerate() {
         let basis = disc.basis(j);
-        let c = el.centroid_in_face * unit;
+        let c = disc.centroid_in_face(j) * unit;
         v.extend_from_slice(&[c.x, c.y]);
         for p in el.local {
             v.extend_from_slice(&[p.x * unit, p.y * unit]);

@@ -169,7 +169,7 @@ impl<'a> PairEvaluator<'a> {
             let (first, count) = match &t.visible {
                 Visibility::Partial(pieces) => {
                     let first = (piece_records.len() / 2) as u32;
-                    let c = disc.elements[t.element].centroid_in_face;
+                    let c = disc.centroid_in_face(t.element);
                     for piece in pieces {
                         piece_records
                             .extend_from_slice(&[(vertices.len() / 2) as u32, piece.len() as u32]);

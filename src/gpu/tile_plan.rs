@@ -124,7 +124,7 @@ fn device_pieces(
     unit: f64,
 ) -> Vec<Vec<DVec2>> {
     let el = &disc.elements[j];
-    let c = el.centroid_in_face;
+    let c = disc.centroid_in_face(j);
     match visibility {
         Visibility::Skip(_) => Vec::new(),
         Visibility::Full => vec![el.local.iter().map(|&v| v * unit).collect()],

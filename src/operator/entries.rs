@@ -158,7 +158,7 @@ impl Entries<'_> {
             .into_iter()
             .map(|(face, columns)| {
                 let elements: Vec<usize> = columns.iter().map(|&k| element_ids[k]).collect();
-                let polygons = elements.iter().map(|&j| self.disc.elements[j].in_face()).collect();
+                let polygons = elements.iter().map(|&j| self.disc.in_face(j)).collect();
                 BlockFace { face, columns, elements, tree: ElementBoxes::new(polygons) }
             })
             .collect()
@@ -260,7 +260,7 @@ impl Entries<'_> {
                     return;
                 }
             }
-            let el = &self.disc.elements[j];
+            let el = &self.disc.placed(j);
             let at = r * width + k * per;
             let scale = node.rho / PI;
             let sink = |(at, scale): (usize, f64), v: f64| data[at] += scale * v;
@@ -337,7 +337,7 @@ impl Entries<'_> {
             let scale = node.rho / PI;
             let sink = |(at, scale): (usize, f64), v: f64| out[at] += scale * v;
             let Some(values) = self.integrator.integrate_or_batch(
-                &self.disc.elements[j],
+                &self.disc.placed(j),
                 self.disc.basis(j),
                 node.position,
                 node.normal,

@@ -146,7 +146,7 @@ impl Entries<'_> {
             sight = match seen {
                 FaceSight::Hidden(_) => Sight::Hidden,
                 FaceSight::Whole => Sight::Whole,
-                FaceSight::Part(mut part) => match part.element(&el.in_face()) {
+                FaceSight::Part(mut part) => match part.element(&self.disc.in_face(j)) {
                     Visibility::Skip(_) => Sight::Hidden,
                     Visibility::Full => Sight::Whole,
                     Visibility::Partial(_) => Sight::Part,

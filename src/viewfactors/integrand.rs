@@ -56,7 +56,7 @@ impl Context<'_> {
         mut shapes: Option<&mut Shapes>,
         mut sink: impl FnMut(usize, f64),
     ) {
-        let (el, basis) = (&self.disc.elements[j], self.disc.basis(j));
+        let (el, basis) = (&self.disc.placed(j), self.disc.basis(j));
         let normal = self.scene.faces[self.mesh.elements()[i].face].frame.normal;
         let mut batch = lanes::Batch::<(usize, f64)>::default();
         let mut lane_sink = |(k, w): (usize, f64), v: f64| sink(k, w * v);
@@ -114,7 +114,7 @@ impl Context<'_> {
     /// closed forms: the reference that the tests hold the lanes of [`Context::values`] to.
     #[cfg(test)]
     pub(super) fn point_to_element(&self, i: usize, j: usize, p: DVec3, sight: Sight<'_>) -> f64 {
-        let (el, basis) = (&self.disc.elements[j], self.disc.basis(j));
+        let (el, basis) = (&self.disc.placed(j), self.disc.basis(j));
         let normal = self.scene.faces[self.mesh.elements()[i].face].frame.normal;
         let whole = || self.integrator.integrate(el, basis, p, normal, &Visibility::Full)[0] / PI;
         let Sight::PerPoint(among) = sight else { return whole() };
@@ -137,7 +137,7 @@ impl Context<'_> {
         added: Vec<Vec<DVec2>>,
         taken: Vec<Vec<DVec2>>,
     ) -> f64 {
-        let (el, basis) = (&self.disc.elements[j], self.disc.basis(j));
+        let (el, basis) = (&self.disc.placed(j), self.disc.basis(j));
         let integral = |pieces| self.integrator.integrate(el, basis, p, normal, &pieces)[0];
         let taken = if taken.is_empty() { 0.0 } else { integral(Visibility::Partial(taken)) };
         integral(Visibility::Partial(added)) - taken

@@ -42,7 +42,7 @@ impl Context<'_> {
     /// opening, what it sees on its side of the plate and through the opening, shadowed by the
     /// others.
     pub(super) fn point_view(&self, i: usize, j: usize, p: DVec3, among: Among<'_>) -> PointView {
-        let element = self.disc.elements[j].in_face();
+        let element = self.disc.in_face(j);
         let frame = &self.scene.faces[self.disc.elements[j].face].frame;
         let Some((windows, others)) =
             among.opening.and_then(|(o, others)| Some((o.windows(p, frame, &element)?, others)))

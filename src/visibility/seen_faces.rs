@@ -267,7 +267,7 @@ mod tests {
                     continue;
                 }
                 let sees = mesh.face_range(f).any(|j| {
-                    let element = disc.elements[j].in_face();
+                    let element = disc.in_face(j);
                     !matches!(planner.visible(&view, &element), Visibility::Skip(_))
                 });
                 if sees {

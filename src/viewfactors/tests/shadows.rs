@@ -62,7 +62,7 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
                 continue;
             }
             let normal = scene.faces[ei.face].frame.normal;
-            let part = disc.elements[j].in_face();
+            let part = disc.in_face(j);
             let among = planner.casters(ei.face, ej.face, &among);
             // Points on a grid over T_i, inside it.
             let grid = (1..7).flat_map(|a| (1..7 - a).map(move |b| (a, b)));
@@ -79,7 +79,7 @@ fn inclusion_and_exclusion_of_shadows_equals_the_subtracted_pieces() {
                 }
                 let vis = planner.visible(&view, &part);
                 let want =
-                    integrator.integrate(&disc.elements[j], disc.basis(j), p, normal, &vis)[0] / PI;
+                    integrator.integrate(&disc.placed(j), disc.basis(j), p, normal, &vis)[0] / PI;
                 assert!((got - want).abs() <= 1e-14, "{i} -> {j} at {p}: {got} vs {want}");
             }
         }
