@@ -59,7 +59,7 @@ impl ThinElements {
             return None;
         }
         let by_face =
-            by_face(elements.iter().enumerate().map(|(k, &j)| (disc.elements[j].face, k)));
+            by_face(elements.iter().enumerate().map(|(k, &j)| (disc.elements[j].face(), k)));
         let boxes = by_face
             .iter()
             .map(|(_, list)| {

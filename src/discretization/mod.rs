@@ -135,7 +135,7 @@ pub struct ElementFrame {
     /// Centroid, the origin of the local frame.
     pub centroid: DVec3,
     /// Face index.
-    pub face: usize,
+    face: u32,
     /// Vertices in the local frame's 2-D coordinates (counter-clockwise).
     pub local: [DVec2; 3],
     /// The element's unit of length: a power of two near its radius, so that scaling by it is
@@ -178,6 +178,11 @@ impl Deref for Placed<'_> {
 }
 
 impl ElementFrame {
+    /// The face it lies on.
+    pub fn face(&self) -> usize {
+        self.face as usize
+    }
+
     /// Vertices in the local frame's 2-D coordinates and the element's units: `local` times
     /// `unit`, where the kernels integrate (made when asked for, not kept: 48 bytes an element).
     pub fn scaled(&self) -> [DVec2; 3] {
@@ -223,7 +228,7 @@ impl Discretization {
             let unit = crate::geometry::power_of_two_unit(far_field::radius(&local));
             elements.push(ElementFrame {
                 centroid,
-                face: e.face,
+                face: u32::try_from(e.face).expect("fewer than 2^32 faces"),
                 local,
                 unit,
                 scaled_radius: far_field::radius(&local.map(|v| v * unit)),
@@ -254,7 +259,7 @@ impl Discretization {
     /// Element `j` with its local frame.
     pub fn placed(&self, j: usize) -> Placed<'_> {
         let element = &self.elements[j];
-        let face = &self.face_frames[element.face];
+        let face = &self.face_frames[element.face()];
         Placed {
             element,
             frame: face.with_origin(element.centroid),
@@ -265,7 +270,7 @@ impl Discretization {
     /// The centroid of element `j` in its face frame's 2-D coordinates.
     pub fn centroid_in_face(&self, j: usize) -> DVec2 {
         let element = &self.elements[j];
-        self.face_frames[element.face].to_plane(element.centroid)
+        self.face_frames[element.face()].to_plane(element.centroid)
     }
 
     /// The vertices of element `j` in its face frame's 2-D coordinates.
@@ -349,9 +354,9 @@ mod tests {
             assert!((node.position - e.centroid()).length() < 1e-15);
         }
         // Each element keeps its centroid, not its frame's axes, which are its face's.
-        assert!(std::mem::size_of::<ElementFrame>() <= 104);
+        assert!(std::mem::size_of::<ElementFrame>() <= 96);
         for j in 0..d.element_count() {
-            let (placed, face) = (d.placed(j), &scene.faces[d.elements[j].face].frame);
+            let (placed, face) = (d.placed(j), &scene.faces[d.elements[j].face()].frame);
             assert_eq!(placed.frame, face.with_origin(mesh.elements()[j].centroid()));
         }
         // Its basis is the constant 1 on every element, kept once, not per element.

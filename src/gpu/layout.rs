@@ -116,7 +116,7 @@ pub fn pack_elements(disc: &Discretization, unit: f64) -> Vec<f64> {
         for b in basis {
             v.extend_from_slice(&[b.c0, b.cx / unit, b.cy / unit]);
         }
-        v.push(el.face as f64);
+        v.push(el.face() as f64);
     }
     v
 }

@@ -160,8 +160,10 @@ impl<'a> PairEvaluator<'a> {
         let (disc, unit) = (self.disc, self.unit);
         // One array per task, so that the collect is indexed: each thread writes its part of
         // the vector in place (a flat map's collect gathers lists and copies them on one thread).
-        let views: Vec<[f64; VIEW_STRIDE]> =
-            tasks.par_iter().map(|t| self.view_of(t.node, disc.elements[t.element].face)).collect();
+        let views: Vec<[f64; VIEW_STRIDE]> = tasks
+            .par_iter()
+            .map(|t| self.view_of(t.node, disc.elements[t.element].face()))
+            .collect();
         let mut records = Vec::with_capacity(4 * tasks.len());
         let mut piece_records = Vec::new();
         let mut vertices = Vec::new();

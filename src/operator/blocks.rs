@@ -106,9 +106,9 @@ impl<'a> FacePairs<'a> {
         vertices: &[DVec3; 3],
     ) -> bool {
         let fa = &self.scene.faces[face].frame;
-        self.planner.same_plane(face, el.face)
+        self.planner.same_plane(face, el.face())
             || vertices.iter().all(|&v| fa.normal.dot(v - p) <= 0.0)
-            || (p - el.centroid).dot(self.scene.faces[el.face].frame.normal) <= 0.0
+            || (p - el.centroid).dot(self.scene.faces[el.face()].frame.normal) <= 0.0
     }
 
     /// Whether [`FacePairs::nothing_between`] is false for every node of `nodes` and element of

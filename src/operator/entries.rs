@@ -154,7 +154,7 @@ impl Entries<'_> {
     pub(super) fn block_faces(&self, s: usize) -> Vec<BlockFace> {
         let sc = &self.elements.clusters[s];
         let element_ids = &self.elements.order[sc.start..sc.end];
-        by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face, k)))
+        by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face(), k)))
             .into_iter()
             .map(|(face, columns)| {
                 let elements: Vec<usize> = columns.iter().map(|&k| element_ids[k]).collect();

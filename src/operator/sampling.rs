@@ -141,7 +141,7 @@ impl Entries<'_> {
     fn pair_sight(&self, i: usize, j: usize, hiders: &mut RecentHiders) -> Sight {
         let (node, el) = (&self.disc.nodes[i], &self.disc.elements[j]);
         let mut sight = Sight::Hidden;
-        let faces = [(el.face, std::iter::once(()))];
+        let faces = [(el.face(), std::iter::once(()))];
         self.planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, _, seen| {
             sight = match seen {
                 FaceSight::Hidden(_) => Sight::Hidden,
