@@ -45,13 +45,13 @@ pub fn sample_points(scene: &Scene, mesh: &Mesh, lattice: usize) -> Vec<Node> {
             for j in 1..m - i {
                 let k = m - i - j;
                 let w = DVec3::new(i as f64, j as f64, k as f64) / m as f64;
-                points.push(Node {
-                    position: e.vertices[0] * w.x + e.vertices[1] * w.y + e.vertices[2] * w.z,
-                    normal: face.frame.normal,
-                    face: e.face,
+                points.push(Node::new(
+                    e.vertices[0] * w.x + e.vertices[1] * w.y + e.vertices[2] * w.z,
+                    face.frame.normal,
+                    e.face,
                     element,
-                    rho: face.rho,
-                });
+                    face.rho,
+                ));
             }
         }
     }
@@ -60,7 +60,7 @@ pub fn sample_points(scene: &Scene, mesh: &Mesh, lattice: usize) -> Vec<Node> {
 
 /// The collocation solution `u` (nodal values of `disc`) at a point of its element.
 pub fn interpolant_at(disc: &Discretization, u: &[f64], point: &Node) -> f64 {
-    let j = point.element;
+    let j = point.element();
     let per = disc.method.nodes_per_element();
     let q = disc.placed(j).frame.to_plane(point.position);
     (0..per).map(|l| u[j * per + l] * disc.basis(j)[l].eval(q)).sum()
@@ -82,7 +82,7 @@ pub fn surface_errors(
     let ku = assembly::apply_at(&points, problem, assembly, u)?;
     let (mut interpolant, mut iterated) = (0.0f64, 0.0f64);
     for ((p, e), ku) in points.iter().zip(e).zip(ku) {
-        let exact = truth[p.face].eval(p.position);
+        let exact = truth[p.face()].eval(p.position);
         interpolant = interpolant.max((exact - interpolant_at(disc, u, p)).abs());
         iterated = iterated.max((exact - (e + ku)).abs());
     }
@@ -105,7 +105,7 @@ mod tests {
         let points = sample_points(&scene, &mesh, 9);
         assert_eq!(points.len(), 28 * mesh.len());
         for p in &points {
-            let e = &mesh.elements()[p.element];
+            let e = &mesh.elements()[p.element()];
             let d = p.position - e.vertices[0];
             assert!(d.dot(p.normal).abs() < 1e-12, "off the face's plane");
         }

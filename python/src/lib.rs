@@ -391,7 +391,7 @@ fn nodes_array<'py>(
     let positions = Array2::from_shape_fn((nodes.len(), 3), |(i, k)| {
         (nodes[i].position + origin).to_array()[k]
     });
-    let faces: Vec<usize> = nodes.iter().map(|n| n.face).collect();
+    let faces: Vec<usize> = nodes.iter().map(|n| n.face()).collect();
     (positions.into_pyarray(py), faces.into_pyarray(py))
 }
 

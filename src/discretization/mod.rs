@@ -113,18 +113,35 @@ pub struct Node {
     pub position: DVec3,
     /// Unit normal of its face.
     pub normal: DVec3,
-    /// Face it lies on.
-    pub face: usize,
-    /// Element it belongs to.
-    pub element: usize,
     /// Reflectivity at the node.
     pub rho: f64,
+    /// Face it lies on ([`Node::face`]).
+    face: u32,
+    /// Element it belongs to ([`Node::element`]).
+    element: u32,
 }
 
 impl Node {
+    /// A node at `position` of element `element` on face `face`, whose unit normal and
+    /// reflectivity are `normal` and `rho`.
+    pub fn new(position: DVec3, normal: DVec3, face: usize, element: usize, rho: f64) -> Self {
+        let index = |i: usize| u32::try_from(i).expect("fewer than 2^32 faces and elements");
+        Self { position, normal, rho, face: index(face), element: index(element) }
+    }
+
+    /// Face it lies on.
+    pub fn face(&self) -> usize {
+        self.face as usize
+    }
+
+    /// Element it belongs to.
+    pub fn element(&self) -> usize {
+        self.element as usize
+    }
+
     /// The node as a point that looks at the scene (the pair plan's rows).
     pub fn viewer(&self) -> Viewer {
-        Viewer { position: self.position, normal: self.normal, face: self.face, rho: self.rho }
+        Viewer { position: self.position, normal: self.normal, face: self.face(), rho: self.rho }
     }
 }
 
@@ -234,13 +251,7 @@ impl Discretization {
                 scaled_radius: far_field::radius(&local.map(|v| v * unit)),
                 thin: far_field::is_thin(&local),
             });
-            let node = |position| Node {
-                position,
-                normal: face.frame.normal,
-                face: e.face,
-                element: j,
-                rho: face.rho,
-            };
+            let node = |position| Node::new(position, face.frame.normal, e.face, j, face.rho);
             match method {
                 Method::Centroid => nodes.push(node(centroid)),
                 Method::Linear { alpha } => {
@@ -355,6 +366,7 @@ mod tests {
         }
         // Each element keeps its centroid, not its frame's axes, which are its face's.
         assert!(std::mem::size_of::<ElementFrame>() <= 96);
+        assert!(std::mem::size_of::<Node>() <= 64);
         for j in 0..d.element_count() {
             let (placed, face) = (d.placed(j), &scene.faces[d.elements[j].face()].frame);
             assert_eq!(placed.frame, face.with_origin(mesh.elements()[j].centroid()));

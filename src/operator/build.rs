@@ -208,7 +208,7 @@ pub(super) fn cluster_trees(
     let node_items: Vec<Item> = disc
         .nodes
         .iter()
-        .map(|n| Item { point: n.position, lo: n.position, hi: n.position, face: n.face })
+        .map(|n| Item { point: n.position, lo: n.position, hi: n.position, face: n.face() })
         .collect();
     let element_items: Vec<Item> = mesh
         .elements()

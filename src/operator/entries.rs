@@ -301,7 +301,7 @@ impl Entries<'_> {
         let el = &self.disc.elements[j];
         node.rho != 0.0
             && !faces.nothing_between(
-                node.face,
+                node.face(),
                 node.position,
                 el,
                 &self.mesh.elements()[j].vertices,

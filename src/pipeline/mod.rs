@@ -223,7 +223,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
         disc.nodes
             .iter()
             .zip(&u)
-            .map(|(node, value)| (uf[node.face].eval(node.position) - value).abs())
+            .map(|(node, value)| (uf[node.face()].eval(node.position) - value).abs())
             .fold(0.0, f64::max)
     });
     let over_surface = match (&u_faces, config.surface_lattice) {
@@ -291,7 +291,7 @@ fn emission(
             progress.finish();
             (e.values, Some(e.error_estimate))
         }
-        None => (disc.nodes.iter().map(|n| scene.faces[n.face].emission).collect(), None),
+        None => (disc.nodes.iter().map(|n| scene.faces[n.face()].emission).collect(), None),
     }
 }
 

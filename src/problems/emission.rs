@@ -89,7 +89,7 @@ pub fn emission_at(
                 error += estimate;
             });
             progress.advance(1);
-            (u[node.face].eval(node.position) - node.rho / PI * integral, node.rho / PI * error)
+            (u[node.face()].eval(node.position) - node.rho / PI * integral, node.rho / PI * error)
         })
         .collect();
     let largest = per_point.iter().fold(0.0f64, |m, (e, _)| m.max(e.abs()));

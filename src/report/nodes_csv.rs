@@ -25,7 +25,7 @@ pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
     for (i, node) in field.disc.nodes.iter().enumerate() {
         // In the user's coordinates.
         let p = node.position + field.scene.origin;
-        let face = &field.scene.faces[node.face];
+        let face = &field.scene.faces[node.face()];
         let bands = field.bands.iter().flat_map(|b| {
             [face.channel(b.channel).0, b.emission[i], b.u[i]].map(|v| format!("{v:e}"))
         });
@@ -34,8 +34,8 @@ pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
         out.write_record(
             [
                 i.to_string(),
-                node.element.to_string(),
-                field.scene.faces[node.face].name.clone(),
+                node.element().to_string(),
+                field.scene.faces[node.face()].name.clone(),
                 format!("{:e}", p.x),
                 format!("{:e}", p.y),
                 format!("{:e}", p.z),

@@ -77,7 +77,7 @@ fn with_rho(mut scene: Scene, rho: f64) -> Scene {
 
 /// Row scales: the row of a node on face `black` gets 0, every other row `rho`.
 fn row_rhos(disc: &Discretization, black: Option<usize>, rho: f64) -> Vec<f64> {
-    disc.nodes.iter().map(|n| if Some(n.face) == black { 0.0 } else { rho }).collect()
+    disc.nodes.iter().map(|n| if Some(n.face()) == black { 0.0 } else { rho }).collect()
 }
 
 /// Runs the study on `backend` (the assembly; the solves run on the CPU).
