@@ -161,7 +161,7 @@ impl PairIntegrator {
     }
 
     /// The node seen from the element's frame in the element's units
-    /// ([`crate::discretization::ElementFrame::unit`]), or `None` when the node is not above the
+    /// ([`crate::discretization::Placed::unit`]), or `None` when the node is not above the
     /// element's plane.
     #[inline(always)]
     fn observer(&self, el: &Placed, p: glam::DVec3, normal: glam::DVec3) -> Option<Observer> {
@@ -211,7 +211,7 @@ impl PairIntegrator {
     }
 
     /// `∫ G φ_l` over `loops`: the visible convex pieces of element `el`, counter-clockwise, in
-    /// its local coordinates and units ([`crate::discretization::ElementFrame::scaled`]).
+    /// its local coordinates and units ([`crate::discretization::Placed::scaled`]).
     fn integrate_loops(
         &self,
         obs: &Observer,

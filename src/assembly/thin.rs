@@ -54,12 +54,11 @@ impl ThinElements {
     fn new(problem: &Problem, options: &AssemblyOptions) -> Option<Self> {
         let disc = &problem.disc;
         let elements: Vec<usize> =
-            (0..disc.elements.len()).filter(|&j| disc.elements[j].thin).collect();
+            (0..disc.element_count()).filter(|&j| disc.placed(j).thin).collect();
         if elements.is_empty() || !options.far_field {
             return None;
         }
-        let by_face =
-            by_face(elements.iter().enumerate().map(|(k, &j)| (disc.elements[j].face(), k)));
+        let by_face = by_face(elements.iter().enumerate().map(|(k, &j)| (disc.face_of(j), k)));
         let boxes = by_face
             .iter()
             .map(|(_, list)| {

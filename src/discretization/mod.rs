@@ -7,14 +7,14 @@
 //!   function is `(λ_k - α) / (1 - 3α)` with λ_k the barycentric coordinate of vertex k.
 
 use std::fmt;
-use std::ops::Deref;
+use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
 use crate::error::{Error, Result};
 use crate::geometry::PlaneFrame;
 use crate::kernels::{Affine2, far_field};
-use crate::mesh::Mesh;
+use crate::mesh::{Element, Mesh};
 use crate::scene::Scene;
 use crate::visibility::Viewer;
 
@@ -145,65 +145,65 @@ impl Node {
     }
 }
 
-/// An element described in its own frame: origin at its centroid, axes of its face (kept once
-/// per face by the discretization, not per element: [`Discretization::placed`]).
+/// An element as the kernels see it, in its own frame: origin at its centroid, axes of its
+/// face. It is made from the mesh's element and its face's frame when asked for
+/// ([`Discretization::placed`]), not kept: a record an element would be about twice the mesh's.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ElementFrame {
+pub struct Placed {
     /// Centroid, the origin of the local frame.
     pub centroid: DVec3,
-    /// Face index.
-    face: u32,
+    /// Its local frame (origin = centroid).
+    pub frame: PlaneFrame,
     /// Vertices in the local frame's 2-D coordinates (counter-clockwise).
     pub local: [DVec2; 3],
+    /// Its centroid in the face frame's 2-D coordinates.
+    pub centroid_in_face: DVec2,
     /// The element's unit of length: a power of two near its radius, so that scaling by it is
     /// exact. The kernels integrate in these units, where no square or fourth power of a length
     /// under- or overflows, whatever the scene's unit (G dS is invariant under scaling).
     pub unit: f64,
-    /// Radius of [`ElementFrame::scaled`] about the centroid ([`far_field::radius`]).
+    /// Radius of [`Placed::scaled`] about the centroid ([`far_field::radius`]).
     pub scaled_radius: f64,
     /// Whether the closed forms cancel on it ([`far_field::is_thin`]).
     pub thin: bool,
+    /// Face index.
+    face: u32,
 }
 
-/// An element with its local frame, as the kernels see it: the frame and the centroid in the
-/// face's coordinates are made from its face's frame and its centroid when asked for (88 bytes
-/// an element not kept).
-#[derive(Clone, Copy, Debug)]
-pub struct Placed<'a> {
-    /// The element.
-    pub element: &'a ElementFrame,
-    /// Its local frame (origin = centroid).
-    pub frame: PlaneFrame,
-    /// Its centroid in the face frame's 2-D coordinates.
-    pub centroid_in_face: DVec2,
-}
-
-impl Placed<'_> {
-    /// A point of the face frame's 2-D coordinates in the element's local coordinates and units
-    /// (those of [`ElementFrame::scaled`], where the kernels integrate).
-    pub fn to_scaled(&self, q: DVec2) -> DVec2 {
-        (q - self.centroid_in_face) * self.unit
+impl Placed {
+    /// Element `e` on a face whose frame is `face`.
+    fn new(e: &Element, face: &PlaneFrame) -> Self {
+        let centroid = e.centroid();
+        let frame = face.with_origin(centroid);
+        let local = e.vertices.map(|v| frame.to_plane(v));
+        let unit = crate::geometry::power_of_two_unit(far_field::radius(&local));
+        Self {
+            centroid,
+            frame,
+            local,
+            centroid_in_face: face.to_plane(centroid),
+            unit,
+            scaled_radius: far_field::radius(&local.map(|v| v * unit)),
+            thin: far_field::is_thin(&local),
+            face: u32::try_from(e.face).expect("fewer than 2^32 faces"),
+        }
     }
-}
 
-impl Deref for Placed<'_> {
-    type Target = ElementFrame;
-
-    fn deref(&self) -> &ElementFrame {
-        self.element
-    }
-}
-
-impl ElementFrame {
     /// The face it lies on.
     pub fn face(&self) -> usize {
         self.face as usize
     }
 
     /// Vertices in the local frame's 2-D coordinates and the element's units: `local` times
-    /// `unit`, where the kernels integrate (made when asked for, not kept: 48 bytes an element).
+    /// `unit`, where the kernels integrate.
     pub fn scaled(&self) -> [DVec2; 3] {
         self.local.map(|v| v * self.unit)
+    }
+
+    /// A point of the face frame's 2-D coordinates in the element's local coordinates and units
+    /// (those of [`Placed::scaled`], where the kernels integrate).
+    pub fn to_scaled(&self, q: DVec2) -> DVec2 {
+        (q - self.centroid_in_face) * self.unit
     }
 }
 
@@ -214,10 +214,11 @@ pub struct Discretization {
     pub method: Method,
     /// Nodes; for the linear method node `3j + l` belongs to basis function l of element j.
     pub nodes: Vec<Node>,
-    /// Element frames, in mesh order.
-    pub elements: Vec<ElementFrame>,
     /// The faces' frames, whose axes the elements' frames share.
     face_frames: Vec<PlaneFrame>,
+    /// The mesh's elements, shared with it and not copied: the vertices that the local
+    /// coordinates are made from ([`Discretization::placed`]).
+    mesh: Arc<[Element]>,
     /// The linear method's basis functions per element, in the element's local frame; none
     /// for the centroid method, whose one basis function is 1 on every element
     /// ([`Discretization::basis`]).
@@ -234,60 +235,47 @@ impl Discretization {
             Method::linear(alpha)?;
         }
         let mut nodes = Vec::with_capacity(mesh.len() * method.nodes_per_element());
-        let mut elements = Vec::with_capacity(mesh.len());
         let linear = matches!(method, Method::Linear { .. });
         let mut bases = Vec::with_capacity(if linear { mesh.len() } else { 0 });
         for (j, e) in mesh.elements().iter().enumerate() {
             let face = &scene.faces[e.face];
-            let centroid = e.centroid();
-            let frame = face.frame.with_origin(centroid);
-            let local = e.vertices.map(|v| frame.to_plane(v));
-            let unit = crate::geometry::power_of_two_unit(far_field::radius(&local));
-            elements.push(ElementFrame {
-                centroid,
-                face: u32::try_from(e.face).expect("fewer than 2^32 faces"),
-                local,
-                unit,
-                scaled_radius: far_field::radius(&local.map(|v| v * unit)),
-                thin: far_field::is_thin(&local),
-            });
             let node = |position| Node::new(position, face.frame.normal, e.face, j, face.rho);
             match method {
-                Method::Centroid => nodes.push(node(centroid)),
+                Method::Centroid => nodes.push(node(e.centroid())),
                 Method::Linear { alpha } => {
                     let sum = e.vertices[0] + e.vertices[1] + e.vertices[2];
                     for v in e.vertices {
                         nodes.push(node(sum * alpha + v * (1.0 - 3.0 * alpha)));
                     }
-                    bases.push(linear_basis(&local, alpha));
+                    bases.push(linear_basis(&Placed::new(e, &face.frame).local, alpha));
                 }
             }
         }
         let face_frames = scene.faces.iter().map(|f| f.frame).collect();
-        Ok(Self { method, nodes, elements, face_frames, bases })
+        let mesh = mesh.shared_elements();
+        Ok(Self { method, nodes, face_frames, mesh, bases })
     }
 
-    /// Element `j` with its local frame.
-    pub fn placed(&self, j: usize) -> Placed<'_> {
-        let element = &self.elements[j];
-        let face = &self.face_frames[element.face()];
-        Placed {
-            element,
-            frame: face.with_origin(element.centroid),
-            centroid_in_face: face.to_plane(element.centroid),
-        }
+    /// Element `j` with its local frame and what the kernels read of it.
+    pub fn placed(&self, j: usize) -> Placed {
+        let e = &self.mesh[j];
+        Placed::new(e, &self.face_frames[e.face])
+    }
+
+    /// The face element `j` lies on.
+    pub fn face_of(&self, j: usize) -> usize {
+        self.mesh[j].face
     }
 
     /// The centroid of element `j` in its face frame's 2-D coordinates.
     pub fn centroid_in_face(&self, j: usize) -> DVec2 {
-        let element = &self.elements[j];
-        self.face_frames[element.face()].to_plane(element.centroid)
+        self.placed(j).centroid_in_face
     }
 
     /// The vertices of element `j` in its face frame's 2-D coordinates.
     pub fn in_face(&self, j: usize) -> [DVec2; 3] {
-        let c = self.centroid_in_face(j);
-        self.elements[j].local.map(|v| v + c)
+        let placed = self.placed(j);
+        placed.local.map(|v| v + placed.centroid_in_face)
     }
 
     /// Number of unknowns d_n (n or 3n).
@@ -297,7 +285,7 @@ impl Discretization {
 
     /// Number of elements n.
     pub fn element_count(&self) -> usize {
-        self.elements.len()
+        self.mesh.len()
     }
 
     /// The basis functions on element `j` (one or three used), in its local frame.
@@ -364,12 +352,17 @@ mod tests {
         for (node, e) in d.nodes.iter().zip(mesh.elements()) {
             assert!((node.position - e.centroid()).length() < 1e-15);
         }
-        // Each element keeps its centroid, not its frame's axes, which are its face's.
-        assert!(std::mem::size_of::<ElementFrame>() <= 96);
+        // An element is placed from the mesh's element and its face's frame, not kept.
         assert!(std::mem::size_of::<Node>() <= 64);
-        for j in 0..d.element_count() {
-            let (placed, face) = (d.placed(j), &scene.faces[d.elements[j].face()].frame);
-            assert_eq!(placed.frame, face.with_origin(mesh.elements()[j].centroid()));
+        assert_eq!(d.element_count(), mesh.len());
+        for (j, e) in mesh.elements().iter().enumerate() {
+            let (placed, face) = (d.placed(j), &scene.faces[e.face].frame);
+            let frame = face.with_origin(e.centroid());
+            assert_eq!((placed.frame, placed.face(), d.face_of(j)), (frame, e.face, e.face));
+            assert_eq!(placed.local, e.vertices.map(|v| frame.to_plane(v)));
+            let unit = placed.unit;
+            assert_eq!(unit, crate::geometry::power_of_two_unit(far_field::radius(&placed.local)));
+            assert_eq!(placed.scaled(), placed.local.map(|v| v * unit));
         }
         // Its basis is the constant 1 on every element, kept once, not per element.
         assert!(d.bases.is_empty());

@@ -106,9 +106,9 @@ const _: () = assert!(std::mem::size_of::<Params>() == 64);
 /// lengths in units of `1 / unit` (a power of two; basis gradients scaled inversely).
 pub fn pack_elements(disc: &Discretization, unit: f64) -> Vec<f64> {
     let mut v = Vec::with_capacity(disc.element_count() * ELEMENT_STRIDE);
-    for (j, el) in disc.elements.iter().enumerate() {
-        let basis = disc.basis(j);
-        let c = disc.centroid_in_face(j) * unit;
+    for j in 0..disc.element_count() {
+        let (el, basis) = (disc.placed(j), disc.basis(j));
+        let c = el.centroid_in_face * unit;
         v.extend_from_slice(&[c.x, c.y]);
         for p in el.local {
             v.extend_from_slice(&[p.x * unit, p.y * unit]);

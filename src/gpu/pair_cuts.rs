@@ -63,7 +63,7 @@ impl PairEvaluator<'_> {
         let mut thin = Vec::new();
         let mut first = 0u32;
         for (c, cut) in cuts.iter().enumerate() {
-            let face = disc.elements[cut.elements[0]].face();
+            let face = disc.face_of(cut.elements[0]);
             views.extend(self.view_of(cut.node, face));
             let tree = *trees
                 .entry(std::ptr::from_ref(cut.tree))

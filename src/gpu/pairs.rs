@@ -35,7 +35,7 @@ pub struct PairEvaluator<'a> {
     pub(super) assembler: &'a GpuAssembler<'a>,
     pub(super) scene: &'a Scene,
     pub(super) disc: &'a Discretization,
-    /// Thin elements ([`crate::discretization::ElementFrame::thin`]): their closed forms cancel, so their pairs are
+    /// Thin elements ([`crate::discretization::Placed::thin`]): their closed forms cancel, so their pairs are
     /// recomputed on the CPU, as the dense GPU path does.
     pub(super) thin: Vec<bool>,
     integrator: PairIntegrator,
@@ -98,7 +98,8 @@ impl<'a> PairEvaluator<'a> {
             assembler.upload(scene, disc, options, &[])?;
         let limits = TileLimits::default();
         let budget = assembler.ctx.max_binding().min(BATCH_BYTES);
-        let thin = disc.elements.iter().map(|el| options.far_field && el.thin).collect();
+        let thin =
+            (0..disc.element_count()).map(|j| options.far_field && disc.placed(j).thin).collect();
         let uploaded = elements.size() + tables.size();
         let traffic = DeviceTraffic { bytes_uploaded: uploaded, ..Default::default() };
         Ok(Self {
@@ -160,10 +161,8 @@ impl<'a> PairEvaluator<'a> {
         let (disc, unit) = (self.disc, self.unit);
         // One array per task, so that the collect is indexed: each thread writes its part of
         // the vector in place (a flat map's collect gathers lists and copies them on one thread).
-        let views: Vec<[f64; VIEW_STRIDE]> = tasks
-            .par_iter()
-            .map(|t| self.view_of(t.node, disc.elements[t.element].face()))
-            .collect();
+        let views: Vec<[f64; VIEW_STRIDE]> =
+            tasks.par_iter().map(|t| self.view_of(t.node, disc.face_of(t.element))).collect();
         let mut records = Vec::with_capacity(4 * tasks.len());
         let mut piece_records = Vec::new();
         let mut vertices = Vec::new();

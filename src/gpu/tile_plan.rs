@@ -79,7 +79,7 @@ pub(super) fn record_pairs(records: &[u32], mesh: &Mesh, disc: &Discretization) 
     records
         .chunks_exact(4)
         .flat_map(|r| {
-            let face = disc.elements[r[2] as usize].face();
+            let face = disc.face_of(r[2] as usize);
             mesh.face_range(face).map(move |el| (r[1], el as u32))
         })
         .collect()
@@ -123,8 +123,8 @@ fn device_pieces(
     visibility: Visibility,
     unit: f64,
 ) -> Vec<Vec<DVec2>> {
-    let el = &disc.elements[j];
-    let c = disc.centroid_in_face(j);
+    let el = disc.placed(j);
+    let c = el.centroid_in_face;
     match visibility {
         Visibility::Skip(_) => Vec::new(),
         Visibility::Full => vec![el.local.iter().map(|&v| v * unit).collect()],
@@ -270,7 +270,7 @@ pub(super) fn host_pieces(
 ) -> (PieceLists, PairStats) {
     let Geometry { mesh, disc, boxes, planner, unit, .. } = g;
     pairs.sort_unstable();
-    let face_of = |el: u32| disc.elements[el as usize].face();
+    let face_of = |el: u32| disc.face_of(el as usize);
     let groups: Vec<&[(u32, u32)]> =
         pairs.chunk_by(|a, b| a.0 == b.0 && face_of(a.1) == face_of(b.1)).collect();
     let planned: Vec<(Vec<PairPieces>, PairStats)> = groups

@@ -3,6 +3,8 @@
 //! graded edge (within its face, D the largest such distance) moves to distance D (d/D)^q; lines
 //! parallel to the edge stay parallel, so the refined lattice of a face keeps its orientation.
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use super::Mesh;
@@ -70,7 +72,7 @@ impl Mesh {
                 x + inward * (depth * (d / depth).powf(grading.exponent) - d)
             };
             let size = face.size();
-            for e in &mut self.elements[self.face_ranges[f].clone()] {
+            for e in &mut Arc::make_mut(&mut self.elements)[self.face_ranges[f].clone()] {
                 let before = (e.vertices[1] - e.vertices[0]).cross(e.vertices[2] - e.vertices[0]);
                 e.vertices = e.vertices.map(map);
                 let after = (e.vertices[1] - e.vertices[0]).cross(e.vertices[2] - e.vertices[0]);

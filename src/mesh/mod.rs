@@ -14,6 +14,7 @@ pub use grid::{GridCuts, S5Diagonals, paper_discontinuity_cuts};
 pub use shadow_lines::{LineExtent, Segment, Sources, shadow_lines};
 
 use std::ops::Range;
+use std::sync::Arc;
 
 use glam::DVec3;
 
@@ -72,7 +73,8 @@ pub enum MeshKind {
 /// A triangulation of a scene.
 #[derive(Clone, Debug)]
 pub struct Mesh {
-    elements: Vec<Element>,
+    /// Shared with the discretizations made from it ([`Mesh::shared_elements`]).
+    elements: Arc<[Element]>,
     face_ranges: Vec<Range<usize>>,
 }
 
@@ -122,12 +124,18 @@ impl Mesh {
             elements.extend(tris);
             face_ranges.push(start..elements.len());
         }
-        Ok(Self { elements, face_ranges })
+        Ok(Self { elements: elements.into(), face_ranges })
     }
 
     /// All elements, face by face.
     pub fn elements(&self) -> &[Element] {
         &self.elements
+    }
+
+    /// The elements, shared rather than copied (a discretization keeps them to place its
+    /// elements).
+    pub(crate) fn shared_elements(&self) -> Arc<[Element]> {
+        Arc::clone(&self.elements)
     }
 
     /// Number of elements n.

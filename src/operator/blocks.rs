@@ -10,9 +10,9 @@ use rayon::prelude::*;
 use super::cluster::{Cluster, ClusterTree};
 use super::options::{CompressionOptions, ShadowedBlocks};
 use super::sight::ClusterSight;
-use crate::discretization::ElementFrame;
 use crate::distributed::Collective;
 use crate::geometry::box_corners;
+use crate::mesh::Element;
 use crate::progress::Progress;
 use crate::scene::Scene;
 use crate::visibility::{OccluderUnit, PairPlanner, Shaft};
@@ -98,17 +98,12 @@ impl<'a> FacePairs<'a> {
     /// element on or behind the node's tangent plane, or the node on or behind the element's.
     /// In a smooth block this is the whole difference between an entry and the kernel over the
     /// whole element.
-    pub(super) fn nothing_between(
-        &self,
-        face: usize,
-        p: DVec3,
-        el: &ElementFrame,
-        vertices: &[DVec3; 3],
-    ) -> bool {
+    pub(super) fn nothing_between(&self, face: usize, p: DVec3, el: &Element) -> bool {
         let fa = &self.scene.faces[face].frame;
-        self.planner.same_plane(face, el.face())
-            || vertices.iter().all(|&v| fa.normal.dot(v - p) <= 0.0)
-            || (p - el.centroid).dot(self.scene.faces[el.face()].frame.normal) <= 0.0
+        let element_frame = self.scene.faces[el.face].frame.with_origin(el.centroid());
+        self.planner.same_plane(face, el.face)
+            || el.vertices.iter().all(|&v| fa.normal.dot(v - p) <= 0.0)
+            || element_frame.height(p) <= 0.0
     }
 
     /// Whether [`FacePairs::nothing_between`] is false for every node of `nodes` and element of

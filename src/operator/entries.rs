@@ -1,6 +1,7 @@
 //! The entries of K for the blocks of a compressed operator: exact ones by the dense path's
 //! pair plan and kernels, smooth ones for the cross approximations.
 
+use std::cell::OnceCell;
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -12,13 +13,17 @@ use super::compressed::Block;
 use super::sight::ClusterSight;
 use super::stored::{self, BlockData, Precision};
 use crate::assembly::PairIntegrator;
-use crate::discretization::Discretization;
+use crate::discretization::{Discretization, Placed};
 use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::visibility::{
     ElementBoxes, FaceSight, FaceView, KeptViews, PairPlanner, PairStats, RecentHiders, Views,
     Visibility, by_face,
 };
+
+/// Bytes an element placed takes while a cross approximation of its block runs
+/// ([`Entries::low_rank`]).
+pub(super) const PLACED_BYTES: u64 = std::mem::size_of::<Placed>() as u64;
 
 /// Admissible blocks whose break-even rank is below this are stored exactly.
 pub(super) const MIN_USEFUL_RANK: usize = 4;
@@ -154,7 +159,7 @@ impl Entries<'_> {
     pub(super) fn block_faces(&self, s: usize) -> Vec<BlockFace> {
         let sc = &self.elements.clusters[s];
         let element_ids = &self.elements.order[sc.start..sc.end];
-        by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.elements[j].face(), k)))
+        by_face(element_ids.iter().enumerate().map(|(k, &j)| (self.disc.face_of(j), k)))
             .into_iter()
             .map(|(face, columns)| {
                 let elements: Vec<usize> = columns.iter().map(|&k| element_ids[k]).collect();
@@ -248,6 +253,10 @@ impl Entries<'_> {
         // The centroid method's closed forms wait in lanes, each with where its value goes and
         // the node's rho / pi; a partly visible element's pieces add into its entry.
         let mut batch = lanes::Batch::<(usize, f64)>::default();
+        // The block's elements placed once for all its rows.
+        let sc = &self.elements.clusters[s];
+        let placed: Vec<Placed> =
+            self.elements.order[sc.start..sc.end].iter().map(|&j| self.disc.placed(j)).collect();
         let stats = self.visible_pairs(t, s, views, |r, k, i, j, vis| {
             let node = &self.disc.nodes[i];
             if let Some(mask) = whole.as_deref_mut() {
@@ -260,7 +269,7 @@ impl Entries<'_> {
                     return;
                 }
             }
-            let el = &self.disc.placed(j);
+            let el = &placed[k];
             let at = r * width + k * per;
             let scale = node.rho / PI;
             let sink = |(at, scale): (usize, f64), v: f64| data[at] += scale * v;
@@ -298,23 +307,17 @@ impl Entries<'_> {
     /// the element is wholly visible from the node unless their faces give nothing.
     pub(super) fn smooth_sees(&self, i: usize, j: usize, faces: &FacePairs) -> bool {
         let node = &self.disc.nodes[i];
-        let el = &self.disc.elements[j];
         node.rho != 0.0
-            && !faces.nothing_between(
-                node.face(),
-                node.position,
-                el,
-                &self.mesh.elements()[j].vertices,
-            )
+            && !faces.nothing_between(node.face(), node.position, &self.mesh.elements()[j])
     }
 
-    /// The values of the pairs (node i, element j) of a smooth block, in order: all of each
+    /// The values of the pairs (node i, element j, j placed) of a smooth block, in order: all of each
     /// element's basis functions, or only `basis`. The centroid method's closed forms are
     /// evaluated in lanes. `continued`: the kernel over every element whole, without testing
     /// each pair for planes that make it give nothing ([`FacePairs::nothing_between`]).
-    pub(super) fn smooth_values(
+    pub(super) fn smooth_values<'p>(
         &self,
-        pairs: impl Iterator<Item = (usize, usize)>,
+        pairs: impl Iterator<Item = (usize, usize, &'p Placed)>,
         basis: Option<usize>,
         faces: &FacePairs,
         continued: bool,
@@ -322,7 +325,7 @@ impl Entries<'_> {
         let take = if basis.is_some() { 1 } else { self.per };
         let mut out = Vec::new();
         let mut batch = lanes::Batch::<(usize, f64)>::default();
-        for (i, j) in pairs {
+        for (i, j, el) in pairs {
             let at = out.len();
             out.resize(at + take, 0.0);
             let gives = if continued {
@@ -337,7 +340,7 @@ impl Entries<'_> {
             let scale = node.rho / PI;
             let sink = |(at, scale): (usize, f64), v: f64| out[at] += scale * v;
             let Some(values) = self.integrator.integrate_or_batch(
-                &self.disc.placed(j),
+                el,
                 self.disc.basis(j),
                 node.position,
                 node.normal,
@@ -402,13 +405,21 @@ impl Entries<'_> {
         // Where no pair can give nothing, every entry is the kernel over the whole element, as
         // in a continued block.
         let continued = continued || faces.every_pair_gives(tc, sc);
+        // The block's elements placed once for all the rows the approximation takes
+        // ([`PLACED_BYTES`] each while it runs), a column's element once for its rows.
+        let placed = OnceCell::new();
         let row = |r: usize| {
             let i = node_ids[r];
-            self.smooth_values(element_ids.iter().map(|&j| (i, j)), None, faces, continued)
+            let placed: &Vec<Placed> =
+                placed.get_or_init(|| element_ids.iter().map(|&j| self.disc.placed(j)).collect());
+            let pairs = element_ids.iter().zip(placed).map(|(&j, el)| (i, j, el));
+            self.smooth_values(pairs, None, faces, continued)
         };
         let col = |q: usize| {
             let (j, basis) = (element_ids[q / per], q % per);
-            self.smooth_values(node_ids.iter().map(|&i| (i, j)), Some(basis), faces, continued)
+            let el = self.disc.placed(j);
+            let pairs = node_ids.iter().map(|&i| (i, j, &el));
+            self.smooth_values(pairs, Some(basis), faces, continued)
         };
         aca::aca(m, c, row, col, tolerance, self.useful_rank(t, s)?)
     }

@@ -188,7 +188,7 @@ fn the_plan_settles_every_pair_once_and_counts_the_culled_ones() {
                 .flat_map(|b| b.seen.iter().chain(&b.leaves))
                 .map(|&(t, s)| size(t, s))
                 .sum();
-            let all = (c.disc.dof() * c.disc.elements.len()) as u64;
+            let all = (c.disc.dof() * c.disc.element_count()) as u64;
             let label = format!("{}, shadowed blocks {shadowed_blocks:?}", c.scene.name);
             assert_eq!(near + far + parts + plan.empty.pairs, all, "{label}");
             assert_eq!(steps.0.into_inner(), super::blocks::PLAN_STEPS, "{label}");

@@ -8,7 +8,7 @@ use super::blocks::{
 };
 use super::cluster::{self, ClusterTree};
 use super::compressed::Block;
-use super::entries::Entries;
+use super::entries::{Entries, PLACED_BYTES};
 use super::estimate::MemoryEstimate;
 use super::options::CompressionOptions;
 use super::shadowed;
@@ -139,9 +139,9 @@ impl Sampled {
 impl Entries<'_> {
     /// How node i sees element j, by the row walk of the dense path's pair plan.
     fn pair_sight(&self, i: usize, j: usize, hiders: &mut RecentHiders) -> Sight {
-        let (node, el) = (&self.disc.nodes[i], &self.disc.elements[j]);
+        let node = &self.disc.nodes[i];
         let mut sight = Sight::Hidden;
-        let faces = [(el.face(), std::iter::once(()))];
+        let faces = [(self.disc.face_of(j), std::iter::once(()))];
         self.planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, _, seen| {
             sight = match seen {
                 FaceSight::Hidden(_) => Sight::Hidden,
@@ -301,7 +301,7 @@ pub(super) fn estimate_memory(
         }
     };
     // The largest cross approximation met: its crosses, as many as its rank (an incompressible
-    // far block's reach its break-even rank before it is refused).
+    // far block's reach its break-even rank before it is refused), and its elements placed.
     let crossing = kinds
         .iter()
         .map(|(&(t, s), &continued)| {
@@ -311,7 +311,8 @@ pub(super) fn estimate_memory(
                 Some(None) => entries.useful_rank(t, s).unwrap_or(0) as f64,
                 None => imputed(continued, shape(t, s)),
             };
-            rank * (m + c) as f64
+            let placed = (c / entries.per) as f64 * PLACED_BYTES as f64;
+            CROSSING_BYTES as f64 * rank * (m + c) as f64 + placed
         })
         .fold(0.0, f64::max);
 
@@ -407,7 +408,7 @@ pub(super) fn estimate_memory(
         factors: total(sum.factors),
         blocks: total(sum.blocks),
         views: (threads as f64 * cluster * faces_met * view_bytes) as u64,
-        crossing: (in_flight * CROSSING_BYTES as f64 * crossing) as u64,
+        crossing: (in_flight * crossing) as u64,
         error: (scale * (count * variance).sqrt()).round() as u64,
         samples: samples.len(),
         ..estimate

@@ -43,7 +43,7 @@ impl Context<'_> {
     /// others.
     pub(super) fn point_view(&self, i: usize, j: usize, p: DVec3, among: Among<'_>) -> PointView {
         let element = self.disc.in_face(j);
-        let frame = &self.scene.faces[self.disc.elements[j].face()].frame;
+        let frame = &self.scene.faces[self.disc.face_of(j)].frame;
         let Some((windows, others)) =
             among.opening.and_then(|(o, others)| Some((o.windows(p, frame, &element)?, others)))
         else {
@@ -76,9 +76,10 @@ impl Context<'_> {
         window: &[DVec2],
         among: &[Caster],
     ) -> Option<PointView> {
-        let (ei, el) = (&self.mesh.elements()[i], &self.disc.elements[j]);
+        let ei = &self.mesh.elements()[i];
         let normal = self.scene.faces[ei.face].frame.normal;
-        Some(match self.planner.part_view_among(p, normal, ei.face, el.face(), window, among) {
+        let face = self.disc.face_of(j);
+        Some(match self.planner.part_view_among(p, normal, ei.face, face, window, among) {
             FaceView::Skip(_) => PointView::Nothing,
             FaceView::Visible { clip, shadows } if shadows.len() <= INCLUSION_EXCLUSION => {
                 // The shadows lie in the window, T_j in front of the tangent plane: the
