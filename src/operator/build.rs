@@ -123,19 +123,15 @@ impl CompressedOperator {
         let budget = guard.plan_budget(estimate.trees);
         progress.start("block plan", PLAN_STEPS);
         let plan = match ranks {
-            Some(ranks) => {
-                let whole = BlockPlan::new_shared(
-                    &nodes,
-                    &elements,
-                    &faces,
-                    options,
-                    &**ranks,
-                    budget.as_ref(),
-                    progress,
-                );
-                let rank = (ranks.rank(), ranks.size());
-                share::share_of(&whole, &nodes, &elements, per, rank)
-            }
+            Some(ranks) => BlockPlan::new_shared(
+                &nodes,
+                &elements,
+                &faces,
+                options,
+                &**ranks,
+                budget.as_ref(),
+                progress,
+            ),
             None => BlockPlan::new(&nodes, &elements, &faces, options, budget.as_ref(), progress),
         };
         progress.finish();
@@ -147,28 +143,51 @@ impl CompressedOperator {
                 return Err(guard.plan_too_large(budget, estimate.trees));
             }
         }
-        // What the exact blocks store for certain, with the build's lists and the blocks'
-        // slots, must fit before any is computed (counting every exact block in full would
-        // refuse runs that fit: a partly visible block stores anything from none to all of its
-        // entries, and on a city most store few); then every block built counts, and the build
-        // stops where it would pass the allowance.
-        let reflects = |i: usize| disc.nodes[i].rho != 0.0;
-        let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
-        guard.check(precision.bytes() * certain + build_list_bytes(&plan))?;
-
-        let sub_blocks = shadowed::sub_blocks(&plan.shadowed);
-        progress.start("compression", plan.near.len() + plan.far.len() + sub_blocks);
         let tolerance = options.tolerance;
-        let built = match batches {
-            Some(evaluator) => batched::build_blocks(
-                &entries, &plan, &faces, tolerance, evaluator, &guard, progress,
-            )?,
-            None => build_block_by_block(&entries, &plan, &faces, tolerance, &guard, progress)?,
+        let build = |plan: &BlockPlan, stage: &str| -> Result<Built> {
+            // What the exact blocks store for certain, with the build's lists and the blocks'
+            // slots, must fit before any is computed (counting every exact block in full would
+            // refuse runs that fit: a partly visible block stores anything from none to all of
+            // its entries, and on a city most store few); then every block built counts, and
+            // the build stops where it would pass the allowance.
+            let reflects = |i: usize| disc.nodes[i].rho != 0.0;
+            let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
+            guard.check(precision.bytes() * certain + build_list_bytes(plan))?;
+            let sub_blocks = shadowed::sub_blocks(&plan.shadowed);
+            progress.start(stage, plan.near.len() + plan.far.len() + sub_blocks);
+            let built = match batches {
+                Some(evaluator) => batched::build_blocks(
+                    &entries, plan, &faces, tolerance, evaluator, &guard, progress,
+                )?,
+                None => build_block_by_block(&entries, plan, &faces, tolerance, &guard, progress)?,
+            };
+            progress.finish();
+            Ok(built)
         };
-        progress.finish();
+        let (built, empty) = match ranks {
+            None => (build(&plan, "compression")?, plan.empty),
+            Some(ranks) => {
+                // The shadowed blocks first; then, in rounds, from what each rank's blocks
+                // turned out to hold, the rest dealt so that the ranks' bytes come out about
+                // equal.
+                let (rank, size) = (ranks.rank(), ranks.size());
+                let mine = share::shadowed_share(&plan, &nodes, &elements, per, (rank, size));
+                let mut built = build(&mine, "shadowed blocks")?;
+                let rounds = share::rest_rounds(&plan, &nodes, &elements, per);
+                let empty = if rank == 0 { plan.empty } else { Default::default() };
+                drop(plan);
+                for round in rounds {
+                    let held: u64 = built.blocks.iter().map(Block::bytes).sum();
+                    let held: Vec<u64> = ranks.gather(&[held]).iter().map(|v| v[0]).collect();
+                    let mine = share::dealt(round, &held, precision.bytes(), rank);
+                    built = built.joined(build(&mine, "compression")?);
+                }
+                (built, empty)
+            }
+        };
 
-        let (blocks, mut stats, mut pairs) = kept_blocks(built, plan.empty.blocks, per);
-        stats.empty_block_pairs = plan.empty.pairs;
+        let (blocks, mut stats, mut pairs) = kept_blocks(built, empty.blocks, per);
+        stats.empty_block_pairs = empty.pairs;
         stats.faces_viewed = entries.faces.viewed();
         stats.faces_culled = entries.faces.culled();
         stats.operator_bytes += order_bytes(disc.dof(), per);

@@ -46,6 +46,12 @@ impl Built {
         self.incompressible += other.incompressible;
         self
     }
+
+    /// Two builds in one: `other`'s blocks after `self`'s, and what both met.
+    pub(super) fn joined(mut self, mut other: Built) -> Self {
+        self.blocks.append(&mut other.blocks);
+        self.merged(other)
+    }
 }
 
 /// The blocks built that hold something, in one list, with their statistics and the pair

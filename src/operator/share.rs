@@ -1,8 +1,11 @@
 //! A rank's share of the compressed operator's blocks in a distributed run
 //! ([`crate::distributed`]): every rank holds the whole block plan and takes the blocks dealt to
-//! it, so that the ranks' estimated costs come out about equal.
+//! it in two rounds. The shadowed blocks go first, dealt by their estimated cost, and are built;
+//! their stored bytes, which follow their partly visible pairs and which no estimate made before
+//! sees, are then gathered, and the other blocks are dealt so that the ranks' bytes come out
+//! about equal.
 
-use super::blocks::{BlockPlan, Empty, NearBlock, ShadowedBlock};
+use super::blocks::{BlockPlan, NearBlock, ShadowedBlock};
 use super::cluster::ClusterTree;
 
 /// Cross-approximation steps assumed per low-rank block when estimating its cost (each step
@@ -11,55 +14,58 @@ const ESTIMATED_STEPS: usize = 12;
 
 /// Blocks that are built together: the exact blocks of one node cluster (they share the nodes'
 /// views of the faces), one low-rank block, or one shadowed block with its sub-blocks.
-struct Unit {
-    /// Estimated entry evaluations.
+pub(super) struct Unit {
+    /// Estimated entry evaluations, and entries stored (a low-rank block stores about as many
+    /// as its cross approximation evaluates).
     cost: usize,
     near: Vec<NearBlock>,
     far: Option<(usize, usize)>,
     shadowed: Option<ShadowedBlock>,
 }
 
-/// The blocks of `plan` that rank `rank` of `size` builds. Units are sorted by estimated cost
-/// and dealt out in turns that go back and forth (0, 1, .., N-1, N-1, .., 0, ...), so that every
-/// rank gets its like share of the large and the small ones, whatever the estimate's error is
-/// for a kind of block. The empty blocks are counted at rank 0.
-pub(super) fn share_of(
+/// The units of `plan` (its shadowed blocks', or the near and far blocks'), in the same order
+/// on every rank: by cost, largest first, then by the blocks themselves.
+fn units(
     plan: &BlockPlan,
     nodes: &ClusterTree,
     elements: &ClusterTree,
     per: usize,
-    (rank, size): (usize, usize),
-) -> BlockPlan {
+    shadowed: bool,
+) -> Vec<Unit> {
     let size_of = |t: usize, s: usize| (nodes.clusters[t].len(), elements.clusters[s].len() * per);
-    let mut near = plan.near.clone();
-    near.sort_unstable();
-    let mut units: Vec<Unit> = near
-        .chunk_by(|a, b| a.t == b.t)
-        .map(|group| Unit {
+    let far_cost = |(m, c): (usize, usize)| (ESTIMATED_STEPS * (m + c)).min(m * c);
+    let mut units: Vec<Unit> = if shadowed {
+        // A shadowed block: its factors as a far block's, its leaves as exact blocks.
+        plan.shadowed
+            .iter()
+            .map(|b| {
+                let leaves = b.leaves.iter().map(|&(t, s)| size_of(t, s));
+                let leaves: usize = leaves.map(|(m, c)| m * c).sum();
+                Unit {
+                    cost: far_cost(size_of(b.t, b.s)) + leaves,
+                    near: Vec::new(),
+                    far: None,
+                    shadowed: Some(b.clone()),
+                }
+            })
+            .collect()
+    } else {
+        let mut near = plan.near.clone();
+        near.sort_unstable();
+        let near = near.chunk_by(|a, b| a.t == b.t).map(|group| Unit {
             cost: group.iter().map(|b| size_of(b.t, b.s)).map(|(m, c)| m * c).sum(),
             near: group.to_vec(),
             far: None,
             shadowed: None,
-        })
-        .collect();
-    let far_cost = |(m, c): (usize, usize)| (ESTIMATED_STEPS * (m + c)).min(m * c);
-    units.extend(plan.far.iter().map(|&(t, s)| Unit {
-        cost: far_cost(size_of(t, s)),
-        near: Vec::new(),
-        far: Some((t, s)),
-        shadowed: None,
-    }));
-    // A shadowed block: its factors as a far block's, its leaves as exact blocks.
-    units.extend(plan.shadowed.iter().map(|b| {
-        let leaves: usize = b.leaves.iter().map(|&(t, s)| size_of(t, s)).map(|(m, c)| m * c).sum();
-        Unit {
-            cost: far_cost(size_of(b.t, b.s)) + leaves,
+        });
+        let far = plan.far.iter().map(|&(t, s)| Unit {
+            cost: far_cost(size_of(t, s)),
             near: Vec::new(),
-            far: None,
-            shadowed: Some(b.clone()),
-        }
-    }));
-    // The same order on every rank: by cost, then by the blocks themselves.
+            far: Some((t, s)),
+            shadowed: None,
+        });
+        near.chain(far).collect()
+    };
     units.sort_unstable_by(|a, b| {
         let at = |u: &Unit| u.shadowed.as_ref().map(|b| (b.t, b.s));
         b.cost
@@ -68,14 +74,18 @@ pub(super) fn share_of(
             .then_with(|| a.far.cmp(&b.far))
             .then_with(|| at(a).cmp(&at(b)))
     });
-    let mut mine = BlockPlan {
-        empty: if rank == 0 { plan.empty } else { Empty::default() },
-        ..Default::default()
-    };
+    units
+}
+
+/// The blocks of `units` dealt to `rank` by `dealt_to` (a unit's position to its rank).
+fn taken(
+    units: Vec<Unit>,
+    rank: usize,
+    mut dealt_to: impl FnMut(usize, &Unit) -> usize,
+) -> BlockPlan {
+    let mut mine = BlockPlan::default();
     for (position, unit) in units.into_iter().enumerate() {
-        let (turn, seat) = (position / size, position % size);
-        let dealt_to = if turn % 2 == 0 { seat } else { size - 1 - seat };
-        if dealt_to == rank {
+        if dealt_to(position, &unit) == rank {
             mine.near.extend(unit.near);
             mine.far.extend(unit.far);
             mine.shadowed.extend(unit.shadowed);
@@ -84,15 +94,77 @@ pub(super) fn share_of(
     mine
 }
 
+/// The shadowed blocks of `plan` that rank `rank` of `size` builds first. They are dealt by
+/// estimated cost in turns that go back and forth (0, 1, .., N-1, N-1, .., 0, ...), so that
+/// every rank gets its like share of the large and the small ones.
+pub(super) fn shadowed_share(
+    plan: &BlockPlan,
+    nodes: &ClusterTree,
+    elements: &ClusterTree,
+    per: usize,
+    (rank, size): (usize, usize),
+) -> BlockPlan {
+    let units = units(plan, nodes, elements, per, true);
+    taken(units, rank, |position, _| {
+        let (turn, seat) = (position / size, position % size);
+        if turn % 2 == 0 { seat } else { size - 1 - seat }
+    })
+}
+
+/// Rounds in which the near and far blocks are dealt after the shadowed ones, and the share of
+/// their estimated cost each round leaves to the rounds after it.
+const ROUNDS: usize = 4;
+const LEFT_AFTER_A_ROUND: f64 = 0.25;
+
+/// The near and far blocks of `plan` in the rounds they are dealt in: largest first, each round
+/// a quarter of the estimated cost of the one before, so that the last rounds' small blocks
+/// even out what the estimate got wrong in the earlier ones.
+pub(super) fn rest_rounds(
+    plan: &BlockPlan,
+    nodes: &ClusterTree,
+    elements: &ClusterTree,
+    per: usize,
+) -> Vec<Vec<Unit>> {
+    let units = units(plan, nodes, elements, per, false);
+    let total: usize = units.iter().map(|u| u.cost).sum();
+    let mut rounds: Vec<Vec<Unit>> = (0..ROUNDS).map(|_| Vec::new()).collect();
+    let (mut round, mut dealt) = (0, 0);
+    for unit in units {
+        let left = total as f64 * LEFT_AFTER_A_ROUND.powi(round as i32 + 1);
+        if round + 1 < ROUNDS && (total - dealt) as f64 <= left {
+            round += 1;
+        }
+        dealt += unit.cost;
+        rounds[round].push(unit);
+    }
+    rounds
+}
+
+/// The blocks of one round of [`rest_rounds`] that rank `rank` builds, where `held[r]` is what
+/// rank r holds already, in bytes. Units are dealt largest first, each to the rank that holds
+/// least so far (the lowest such rank), a unit counting as its estimated cost times
+/// `entry_bytes`: so the ranks' bytes come out about equal whatever the blocks built before
+/// turned out to hold.
+pub(super) fn dealt(units: Vec<Unit>, held: &[u64], entry_bytes: u64, rank: usize) -> BlockPlan {
+    let mut load = held.to_vec();
+    taken(units, rank, |_, unit| {
+        let least = (0..load.len()).min_by_key(|&r| (load[r], r)).expect("at least one rank");
+        load[least] += unit.cost as u64 * entry_bytes;
+        least
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::operator::blocks::Empty;
     use crate::operator::cluster::Item;
     use glam::DVec3;
 
-    /// Every block goes to exactly one rank, and the ranks' estimated costs are close.
+    /// Every block goes to exactly one rank; the shadowed blocks are dealt by cost, and the rest
+    /// even out the ranks' bytes, whatever the shadowed blocks turned out to hold.
     #[test]
-    fn shares_cover_the_plan_once_and_balance() {
+    fn shares_cover_the_plan_once_and_balance_the_bytes() {
         let items: Vec<Item> = (0..256)
             .map(|i| {
                 let p = DVec3::new((i % 16) as f64, (i / 16) as f64, 0.0);
@@ -110,40 +182,94 @@ mod tests {
         let near = pairs(&leaves, 3).into_iter();
         let near = near.map(|(t, s)| NearBlock { t, s, seen_whole: (t + s) % 2 == 0 }).collect();
         let far = pairs(&inner[1..], 5);
+        let shadowed = pairs(&inner[1..3], 1).into_iter();
+        let shadowed = shadowed
+            .map(|(t, s)| ShadowedBlock {
+                t,
+                s,
+                seen: vec![(t, s)],
+                leaves: vec![(leaves[0], leaves[1])],
+            })
+            .collect();
         let empty = Empty { blocks: 5, pairs: 40 };
-        let plan = BlockPlan { near, far, shadowed: Vec::new(), empty };
+        let plan = BlockPlan { near, far, shadowed, empty };
+        let cost = |p: &BlockPlan| -> u64 {
+            let near: usize =
+                p.near.iter().map(|b| tree.clusters[b.t].len() * tree.clusters[b.s].len()).sum();
+            let far: usize = p
+                .far
+                .iter()
+                .map(|&(t, s)| {
+                    let (m, c) = (tree.clusters[t].len(), tree.clusters[s].len());
+                    (ESTIMATED_STEPS * (m + c)).min(m * c)
+                })
+                .sum();
+            (near + far) as u64
+        };
+        let whole: u64 = cost(&plan);
         for size in [1, 2, 3] {
-            let shares: Vec<BlockPlan> =
-                (0..size).map(|r| share_of(&plan, &tree, &tree, 1, (r, size))).collect();
-            let mut near: Vec<_> = shares.iter().flat_map(|p| p.near.clone()).collect();
-            let mut far: Vec<_> = shares.iter().flat_map(|p| p.far.clone()).collect();
-            let (mut want_near, mut want_far) = (plan.near.clone(), plan.far.clone());
-            near.sort_unstable();
-            want_near.sort_unstable();
-            far.sort_unstable();
-            want_far.sort_unstable();
-            assert_eq!((near, far), (want_near, want_far), "{size} ranks");
-            assert_eq!(shares.iter().map(|p| p.empty.blocks).sum::<usize>(), 5);
-            assert_eq!(shares.iter().map(|p| p.empty.pairs).sum::<u64>(), 40);
-            let cost = |p: &BlockPlan| -> usize {
-                let near: usize = p
-                    .near
-                    .iter()
-                    .map(|b| tree.clusters[b.t].len() * tree.clusters[b.s].len())
-                    .sum();
-                let far: usize = p
-                    .far
-                    .iter()
-                    .map(|&(t, s)| {
-                        let (m, c) = (tree.clusters[t].len(), tree.clusters[s].len());
-                        (ESTIMATED_STEPS * (m + c)).min(m * c)
+            // What the ranks' shadowed blocks held: nothing, or a tenth of the rest's bytes at
+            // rank 0 (which is then dealt that much less).
+            for first in [0, whole] {
+                let held: Vec<u64> = (0..size).map(|r| if r == 0 { first } else { 0 }).collect();
+                let mut rounds: Vec<_> =
+                    (0..size).map(|_| rest_rounds(&plan, &tree, &tree, 1).into_iter()).collect();
+                let mut shares: Vec<(BlockPlan, BlockPlan)> = (0..size)
+                    .map(|r| {
+                        (shadowed_share(&plan, &tree, &tree, 1, (r, size)), BlockPlan::default())
                     })
-                    .sum();
-                near + far
-            };
-            let costs: Vec<usize> = shares.iter().map(cost).collect();
-            let (lo, hi) = (costs.iter().min().unwrap(), costs.iter().max().unwrap());
-            assert!(*hi as f64 <= 1.1 * *lo as f64, "{size} ranks: costs {costs:?}");
+                    .collect();
+                shares[0].1.empty = plan.empty;
+                // Each round dealt on every rank from the same bytes held, as the build
+                // gathers them; here a unit holds what its cost says, 10 bytes an entry.
+                let mut now = held.clone();
+                for _ in 0..ROUNDS {
+                    let mine: Vec<BlockPlan> = (rounds.iter_mut().enumerate())
+                        .map(|(r, rounds)| {
+                            let round = rounds.next().expect("ROUNDS rounds");
+                            let costs: Vec<usize> = round.iter().map(|u| u.cost).collect();
+                            assert!(costs.windows(2).all(|w| w[0] >= w[1]), "largest first");
+                            dealt(round, &now, 10, r)
+                        })
+                        .collect();
+                    for (r, m) in mine.into_iter().enumerate() {
+                        now[r] += 10 * cost(&m);
+                        shares[r].1.near.extend(m.near);
+                        shares[r].1.far.extend(m.far);
+                        shares[r].1.shadowed.extend(m.shadowed);
+                    }
+                }
+                let all = |f: &dyn Fn(&BlockPlan) -> Vec<String>| {
+                    let mut v: Vec<String> =
+                        shares.iter().flat_map(|(a, b)| [f(a), f(b)].concat()).collect();
+                    v.sort_unstable();
+                    v
+                };
+                let list = |f: &dyn Fn(&BlockPlan) -> Vec<String>| {
+                    let mut v = f(&plan);
+                    v.sort_unstable();
+                    v
+                };
+                let near = |p: &BlockPlan| p.near.iter().map(|b| format!("{b:?}")).collect();
+                let far = |p: &BlockPlan| p.far.iter().map(|b| format!("{b:?}")).collect();
+                let shadowed =
+                    |p: &BlockPlan| p.shadowed.iter().map(|b| format!("{b:?}")).collect();
+                assert_eq!(all(&near), list(&near), "{size} ranks");
+                assert_eq!(all(&far), list(&far), "{size} ranks");
+                assert_eq!(all(&shadowed), list(&shadowed), "{size} ranks");
+                assert!(shares.iter().all(|(a, _)| a.near.is_empty() && a.far.is_empty()));
+                assert!(shares.iter().all(|(_, b)| b.shadowed.is_empty()));
+                assert_eq!(
+                    shares.iter().map(|(a, b)| a.empty.blocks + b.empty.blocks).sum::<usize>(),
+                    5
+                );
+                assert_eq!(shares.iter().map(|(_, b)| b.empty.pairs).sum::<u64>(), 40);
+                // Each rank's bytes: what it held plus its units' at 10 bytes an entry.
+                let bytes: Vec<u64> =
+                    shares.iter().zip(&held).map(|((_, b), h)| h + 10 * cost(b)).collect();
+                let (lo, hi) = (bytes.iter().min().unwrap(), bytes.iter().max().unwrap());
+                assert!(*hi as f64 <= 1.1 * *lo as f64, "{size} ranks: bytes {bytes:?}");
+            }
         }
     }
 }
