@@ -12,6 +12,9 @@ use mpi::traits::*;
 
 use super::{Collective, Traffic};
 
+/// Values summed over the ranks at once ([`Collective::sum`]): 512 KiB a piece.
+const SUM_PIECE: usize = 1 << 16;
+
 /// MPI for the life of the process: finalized when dropped, after the last collective.
 pub struct MpiSession {
     _universe: Universe,
@@ -68,15 +71,19 @@ impl Collective for MpiWorld {
     fn sum(&self, values: &mut [f64]) {
         // Reduced at the root in one order and broadcast: the same bits on every rank, so that
         // their solvers take the same steps (an all-reduce may sum in a different order on
-        // each rank).
+        // each rank). In pieces: the root's sums of a whole vector, and the library's buffer
+        // beside them, would be two more vectors of n on rank 0 alone.
         self.call(2 * 8 * values.len(), |world| {
             let root = world.process_at_rank(0);
-            if self.rank == 0 {
-                let mut total = vec![0.0; values.len()];
-                root.reduce_into_root(&*values, &mut total[..], SystemOperation::sum());
-                values.copy_from_slice(&total);
-            } else {
-                root.reduce_into(&*values, SystemOperation::sum());
+            let mut total = vec![0.0; values.len().min(SUM_PIECE)];
+            for piece in values.chunks_mut(SUM_PIECE) {
+                if self.rank == 0 {
+                    let total = &mut total[..piece.len()];
+                    root.reduce_into_root(&*piece, total, SystemOperation::sum());
+                    piece.copy_from_slice(total);
+                } else {
+                    root.reduce_into(&*piece, SystemOperation::sum());
+                }
             }
             root.broadcast_into(values);
         });

@@ -123,6 +123,8 @@ impl CompressedOperator {
                     a
                 },
             );
+        // The columns are read: their n values need not wait beside the rows' for the sums.
+        drop(xp);
         if let Some(share) = &self.share {
             share.ranks.sum(&mut yp);
         }
