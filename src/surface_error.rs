@@ -7,6 +7,7 @@
 //! meshing) while its nodal values converge faster (2.41)–(2.42).
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::assembly::{self, AssemblyOptions, Problem};
@@ -78,8 +79,16 @@ pub fn surface_errors(
 ) -> Result<SurfaceErrors> {
     let Problem { scene, mesh, disc, planner, .. } = problem;
     let points = sample_points(scene, mesh, lattice);
-    let e = emission_at(scene, &points, planner, truth, emission, &crate::progress::Silent).values;
-    let ku = assembly::apply_at(&points, problem, assembly, u)?;
+    let e = emission_at(
+        scene,
+        points.par_iter().copied(),
+        planner,
+        truth,
+        emission,
+        &crate::progress::Silent,
+    )
+    .values;
+    let ku = assembly::apply_at(points.par_iter().copied(), problem, assembly, u)?;
     let (mut interpolant, mut iterated) = (0.0f64, 0.0f64);
     for ((p, e), ku) in points.iter().zip(e).zip(ku) {
         let exact = truth[p.face()].eval(p.position);
@@ -129,7 +138,7 @@ mod tests {
             let k = assembly::assemble(&problem, &options, &crate::progress::Silent).unwrap();
             let e = emission_at(
                 &scene,
-                &disc.nodes,
+                disc.par_nodes(),
                 planner,
                 &truth,
                 &emission,
@@ -137,12 +146,12 @@ mod tests {
             )
             .values;
             let u = solve(&k.matrix, &e, SolverOptions::with(SolverChoice::Lu)).unwrap().u;
-            let ku = assembly::apply_at(&disc.nodes, &problem, &options, &u).unwrap();
+            let ku = assembly::apply_at(disc.par_nodes(), &problem, &options, &u).unwrap();
             let scale = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for (i, node) in disc.nodes.iter().enumerate() {
+            for (i, node) in disc.nodes().enumerate() {
                 let iterated = e[i] + ku[i];
                 assert!((iterated - u[i]).abs() < 1e-12 * scale, "{}: node {i}", method.name());
-                let interpolated = interpolant_at(disc, &u, node);
+                let interpolated = interpolant_at(disc, &u, &node);
                 assert!((interpolated - u[i]).abs() < 1e-12 * scale, "{}: node {i}", method.name());
             }
         }

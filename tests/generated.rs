@@ -30,7 +30,7 @@ fn closed_rooms_with_random_boxes_have_rows_of_k_over_rho_summing_to_one() {
             let problem = problem(&scene, method, refine);
             let k = dense(&problem);
             let sums = k.apply(&vec![1.0; problem.disc.dof()]);
-            for (node, sum) in problem.disc.nodes.iter().zip(sums) {
+            for (node, sum) in problem.disc.nodes().zip(sums) {
                 let off = (sum / node.rho - 1.0).abs();
                 assert!(
                     off < 1e-9,

@@ -164,7 +164,7 @@ fn tiles_and_a_full_near_list_give_the_same_matrix() {
     let (d, _, _) = max_row_relative_diff(&cpu.matrix, &gpu.matrix);
     assert!(d <= 1e-12, "{d:e}");
     // Closed box: rows of K/rho sum to 1.
-    for (i, node) in disc.nodes.iter().enumerate() {
+    for (i, node) in disc.nodes().enumerate() {
         let s: f64 = gpu.matrix.row(i).iter().sum::<f64>() / node.rho;
         assert!((s - 1.0).abs() < 1e-11, "row {i}: {s}");
     }
@@ -439,7 +439,7 @@ fn gmres_on_the_device_resident_matrix_equals_gmres_on_the_host() {
         let e: Vec<f64> = (0..problem.disc.dof()).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect();
         let iterative = SolverOptions::with(SolverChoice::Iterative);
         let on_host = solve::solve_many(&host.matrix, &[&e], iterative).unwrap().pop().unwrap();
-        let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
+        let rho: Vec<f64> = problem.disc.nodes().map(|n| n.rho).collect();
         let on_device =
             solve::solve_by_products(&device, &e, (&rho, &rho), iterative, 0.0).unwrap();
         let scale = on_host.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -481,7 +481,7 @@ fn k_stored_in_f32_on_the_device_reports_the_error_it_adds() {
         assert!(s.matrix < 1e-7, "{name}: {s:?}");
         let bound = s.solution_bound.expect("||K|| < 1 in these scenes");
         let e: Vec<f64> = (0..dof).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect();
-        let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
+        let rho: Vec<f64> = problem.disc.nodes().map(|n| n.rho).collect();
         let solver =
             SolverOptions { tolerance: 1e-13, ..SolverOptions::with(SolverChoice::Iterative) };
         let wide = solve::solve_many(&host.matrix, &[&e], solver).unwrap().pop().unwrap();

@@ -122,7 +122,7 @@ proptest! {
                 prop_assert!(row.iter().all(|&v| v >= -1e-15), "row {}: negative entry", i);
             }
             let sum: f64 = row.iter().sum();
-            prop_assert!((sum - 1.0).abs() <= 1e-9, "row {} ({:?}): K/rho sums to {}", i, disc.nodes[i].position, sum);
+            prop_assert!((sum - 1.0).abs() <= 1e-9, "row {} ({:?}): K/rho sums to {}", i, disc.node(i).position, sum);
         }
     }
 

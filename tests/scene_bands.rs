@@ -333,7 +333,7 @@ fn occluded_scenes_compress_to_within_ten_times_the_tolerance_of_their_dense_mat
             assert!(d <= 10.0 * tolerance, "{name}: products differ by {d:.2e}");
             if closed {
                 let sums = op.apply(&vec![1.0; problem.disc.dof()]);
-                for (node, sum) in problem.disc.nodes.iter().zip(sums) {
+                for (node, sum) in problem.disc.nodes().zip(sums) {
                     if node.rho > 0.0 {
                         let off = (sum / node.rho - 1.0).abs();
                         assert!(off <= 10.0 * tolerance, "{name}: a row sums to 1 + {off:.1e}");

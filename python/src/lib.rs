@@ -424,7 +424,8 @@ fn solve<'py>(
         })
         .map_err(raised)?;
     let out = pyo3::types::PyDict::new(py);
-    let (positions, faces) = nodes_array(py, &run.disc.nodes, run.scene.origin);
+    let nodes: Vec<_> = run.disc.nodes().collect();
+    let (positions, faces) = nodes_array(py, &nodes, run.scene.origin);
     out.set_item("nodes", positions)?;
     out.set_item("faces", faces)?;
     let report = serde_json::to_string(&run.report).expect("the report is JSON");
@@ -474,8 +475,8 @@ impl PyOperator {
         &self,
         py: Python<'py>,
     ) -> (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<usize>>, Bound<'py, PyArray1<f64>>) {
-        let nodes = &self.problem.disc.nodes;
-        let (positions, faces) = nodes_array(py, nodes, self.problem.scene.origin);
+        let nodes: Vec<_> = self.problem.disc.nodes().collect();
+        let (positions, faces) = nodes_array(py, &nodes, self.problem.scene.origin);
         let rho: Vec<f64> = nodes.iter().map(|n| n.rho).collect();
         (positions, faces, rho.into_pyarray(py))
     }

@@ -86,7 +86,7 @@ impl PairEvaluation for CpuPairs<'_> {
         Ok(tasks
             .par_iter()
             .map(|t| {
-                let node = &self.disc.nodes[t.node];
+                let node = &self.disc.node(t.node);
                 let values = self.integrator.integrate(
                     &self.disc.placed(t.element),
                     self.disc.basis(t.element),

@@ -49,7 +49,7 @@ pub fn assemble(
         .enumerate()
         .map_init(RecentHiders::default, |hiders, (i, row)| {
             let surface = (mesh, disc, boxes.as_slice());
-            let s = assemble_row(&disc.nodes[i], row, surface, planner, &integrator, hiders);
+            let s = assemble_row(&disc.node(i), row, surface, planner, &integrator, hiders);
             progress.advance(1);
             s
         })
@@ -63,7 +63,7 @@ pub fn assemble(
 /// `(K u)(P)` at arbitrary points of S (the operator of (1.4) applied to the collocation solution
 /// `u` of `disc`, seen from each point), without storing K.
 pub fn apply_at(
-    points: &[Node],
+    points: impl IndexedParallelIterator<Item = Node>,
     problem: &Problem,
     options: &AssemblyOptions,
     u: &[f64],
@@ -73,13 +73,12 @@ pub fn apply_at(
     let integrator = PairIntegrator::new(disc.method, options);
     let boxes = face_boxes(mesh, disc);
     Ok(points
-        .par_iter()
         .map_init(
             || (vec![0.0; disc.dof()], RecentHiders::default()),
             |(row, hiders), point| {
                 row.fill(0.0);
                 let surface = (mesh, disc, boxes.as_slice());
-                assemble_row(point, row, surface, planner, &integrator, hiders);
+                assemble_row(&point, row, surface, planner, &integrator, hiders);
                 row.iter().zip(u).map(|(k, v)| k * v).sum()
             },
         )

@@ -15,7 +15,7 @@ fn row_sum_range(scene: &Scene, method: Method, refine: u32) -> (f64, f64, PairS
     let a = assemble(&problem, &AssemblyOptions::default(), &crate::progress::Silent).unwrap();
     let disc = &problem.disc;
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (i, node) in disc.nodes.iter().enumerate() {
+    for (i, node) in disc.nodes().enumerate() {
         let s: f64 = a.matrix.row(i).iter().sum::<f64>() / node.rho;
         lo = lo.min(s);
         hi = hi.max(s);

@@ -84,7 +84,7 @@ impl ThinElements {
         mut write: impl FnMut(usize, [f64; 3]),
     ) {
         let Problem { disc, planner, .. } = problem;
-        let node = &disc.nodes[i];
+        let node = &disc.node(i);
         let scale = node.rho / PI;
         let mut put = |k: usize, vis: &Visibility| {
             let j = self.elements[k];

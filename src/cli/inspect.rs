@@ -83,7 +83,7 @@ pub(crate) fn inspect(args: &SolveArgs) -> Result<()> {
         return Ok(());
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (node, sum) in disc.nodes.iter().zip(&row_sums) {
+    for (node, sum) in disc.nodes().zip(&row_sums) {
         if node.rho > 0.0 {
             let s = sum / node.rho;
             lo = lo.min(s);

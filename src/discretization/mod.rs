@@ -10,6 +10,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::geometry::PlaneFrame;
@@ -212,10 +213,11 @@ impl Placed {
 pub struct Discretization {
     /// The method.
     pub method: Method,
-    /// Nodes; for the linear method node `3j + l` belongs to basis function l of element j.
-    pub nodes: Vec<Node>,
-    /// The faces' frames, whose axes the elements' frames share.
+    /// The faces' frames, whose axes the elements' frames share and whose normals are the
+    /// nodes'.
     face_frames: Vec<PlaneFrame>,
+    /// The faces' reflectivities, the nodes'.
+    face_rho: Vec<f64>,
     /// The mesh's elements, shared with it and not copied: the vertices that the local
     /// coordinates are made from ([`Discretization::placed`]).
     mesh: Arc<[Element]>,
@@ -234,26 +236,42 @@ impl Discretization {
         if let Method::Linear { alpha } = method {
             Method::linear(alpha)?;
         }
-        let mut nodes = Vec::with_capacity(mesh.len() * method.nodes_per_element());
-        let linear = matches!(method, Method::Linear { .. });
-        let mut bases = Vec::with_capacity(if linear { mesh.len() } else { 0 });
-        for (j, e) in mesh.elements().iter().enumerate() {
-            let face = &scene.faces[e.face];
-            let node = |position| Node::new(position, face.frame.normal, e.face, j, face.rho);
-            match method {
-                Method::Centroid => nodes.push(node(e.centroid())),
-                Method::Linear { alpha } => {
-                    let sum = e.vertices[0] + e.vertices[1] + e.vertices[2];
-                    for v in e.vertices {
-                        nodes.push(node(sum * alpha + v * (1.0 - 3.0 * alpha)));
-                    }
-                    bases.push(linear_basis(&Placed::new(e, &face.frame).local, alpha));
-                }
-            }
-        }
+        let bases = match method {
+            Method::Centroid => Vec::new(),
+            Method::Linear { alpha } => (mesh.elements().iter())
+                .map(|e| linear_basis(&Placed::new(e, &scene.faces[e.face].frame).local, alpha))
+                .collect(),
+        };
         let face_frames = scene.faces.iter().map(|f| f.frame).collect();
+        let face_rho = scene.faces.iter().map(|f| f.rho).collect();
         let mesh = mesh.shared_elements();
-        Ok(Self { method, nodes, face_frames, mesh, bases })
+        Ok(Self { method, face_frames, face_rho, mesh, bases })
+    }
+
+    /// Node `i`; for the linear method node `3j + l` belongs to basis function l of element j.
+    /// Made from its element and face when asked for, not kept (64 bytes a node).
+    pub fn node(&self, i: usize) -> Node {
+        let per = self.method.nodes_per_element();
+        let (j, l) = (i / per, i % per);
+        let e = &self.mesh[j];
+        let position = match self.method {
+            Method::Centroid => e.centroid(),
+            Method::Linear { alpha } => {
+                let sum = e.vertices[0] + e.vertices[1] + e.vertices[2];
+                sum * alpha + e.vertices[l] * (1.0 - 3.0 * alpha)
+            }
+        };
+        Node::new(position, self.face_frames[e.face].normal, e.face, j, self.face_rho[e.face])
+    }
+
+    /// Every node, in order.
+    pub fn nodes(&self) -> impl ExactSizeIterator<Item = Node> + '_ {
+        (0..self.dof()).map(|i| self.node(i))
+    }
+
+    /// Every node, in order, for the threads.
+    pub fn par_nodes(&self) -> impl IndexedParallelIterator<Item = Node> + '_ {
+        (0..self.dof()).into_par_iter().map(|i| self.node(i))
     }
 
     /// Element `j` with its local frame and what the kernels read of it.
@@ -280,7 +298,7 @@ impl Discretization {
 
     /// Number of unknowns d_n (n or 3n).
     pub fn dof(&self) -> usize {
-        self.nodes.len()
+        self.mesh.len() * self.method.nodes_per_element()
     }
 
     /// Number of elements n.
@@ -328,7 +346,7 @@ mod tests {
         for j in 0..d.element_count() {
             for (l, basis) in d.basis(j).iter().enumerate() {
                 for m in 0..3 {
-                    let node = d.nodes[3 * j + m].position;
+                    let node = d.node(3 * j + m).position;
                     let value = basis.eval(d.placed(j).frame.to_plane(node));
                     let want = if l == m { 1.0 } else { 0.0 };
                     assert!(
@@ -349,7 +367,7 @@ mod tests {
         let scene = five_piece(SurfaceParameters::default()).unwrap();
         let mesh = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
         let d = Discretization::new(&scene, &mesh, Method::Centroid).unwrap();
-        for (node, e) in d.nodes.iter().zip(mesh.elements()) {
+        for (node, e) in d.nodes().zip(mesh.elements()) {
             assert!((node.position - e.centroid()).length() < 1e-15);
         }
         // An element is placed from the mesh's element and its face's frame, not kept.

@@ -150,7 +150,7 @@ impl<'a> PairEvaluator<'a> {
 
     /// Node `node` in the frame of face `face`, as `assemble_pairs` reads its view.
     pub(super) fn view_of(&self, node: usize, face: usize) -> [f64; VIEW_STRIDE] {
-        let node = &self.disc.nodes[node];
+        let node = &self.disc.node(node);
         let frame = &self.scene.faces[face].frame;
         let (p, n) = (frame.to_local(node.position) * self.unit, frame.dir_to_local(node.normal));
         [p.x, p.y, p.z, n.x, n.y, n.z, node.rho / std::f64::consts::PI, 0.0]

@@ -171,7 +171,7 @@ struct RowPlan {
 
 fn plan_row(i: usize, g: Geometry, clipping: Clipping, hiders: &mut RecentHiders) -> RowPlan {
     let Geometry { scene, mesh, disc, boxes, planner, unit, trees } = g;
-    let node = &disc.nodes[i];
+    let node = &disc.node(i);
     let faces = mesh.face_count();
     let mut plan = RowPlan {
         views: vec![0.0; faces * VIEW_STRIDE],
@@ -277,7 +277,7 @@ pub(super) fn host_pieces(
         .into_par_iter()
         .map_init(RecentHiders::default, |hiders, group| {
             let (row, face) = (group[0].0, face_of(group[0].1));
-            let viewer = disc.nodes[first_row + row as usize].viewer();
+            let viewer = disc.node(first_row + row as usize).viewer();
             let view =
                 planner.face_view_with(viewer.position, viewer.normal, viewer.face, face, hiders);
             let first = mesh.face_range(face).start;

@@ -150,7 +150,7 @@ impl CompressedOperator {
             // refuse runs that fit: a partly visible block stores anything from none to all of
             // its entries, and on a city most store few); then every block built counts, and
             // the build stops where it would pass the allowance.
-            let reflects = |i: usize| disc.nodes[i].rho != 0.0;
+            let reflects = |i: usize| disc.node(i).rho != 0.0;
             let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
             guard.check(precision.bytes() * certain + build_list_bytes(plan))?;
             let sub_blocks = shadowed::sub_blocks(&plan.shadowed);
@@ -201,7 +201,7 @@ impl CompressedOperator {
                 + estimate.orders;
             RankShare { ranks: ranks.clone(), operator_bytes, waited_seconds, replicated_bytes }
         });
-        let zero_rows = disc.nodes.iter().filter(|n| n.rho == 0.0).count();
+        let zero_rows = disc.nodes().filter(|n| n.rho == 0.0).count();
         Ok(Self {
             dof: disc.dof(),
             per,
@@ -225,8 +225,7 @@ pub(super) fn cluster_trees(
     options: &CompressionOptions,
 ) -> (ClusterTree, ClusterTree) {
     let node_items: Vec<Item> = disc
-        .nodes
-        .iter()
+        .nodes()
         .map(|n| Item { point: n.position, lo: n.position, hi: n.position, face: n.face() })
         .collect();
     let element_items: Vec<Item> = mesh

@@ -13,7 +13,7 @@ use super::compressed::Block;
 use super::sight::ClusterSight;
 use super::stored::{self, BlockData, Precision};
 use crate::assembly::PairIntegrator;
-use crate::discretization::{Discretization, Placed};
+use crate::discretization::{Discretization, Node, Placed};
 use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::visibility::{
@@ -186,7 +186,7 @@ impl Entries<'_> {
         let mut stats = PairStats::default();
         views.prepare(t, &self.nodes.order[tc.start..tc.end]);
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
-            let viewer = self.disc.nodes[i].viewer();
+            let viewer = self.disc.node(i).viewer();
             let walked = faces.iter().map(|f| (f.face, f.columns.iter().zip(&f.elements)));
             let kept = Views::Kept(&mut views.rows[r], &mut views.hiders);
             stats +=
@@ -253,12 +253,15 @@ impl Entries<'_> {
         // The centroid method's closed forms wait in lanes, each with where its value goes and
         // the node's rho / pi; a partly visible element's pieces add into its entry.
         let mut batch = lanes::Batch::<(usize, f64)>::default();
-        // The block's elements placed once for all its rows.
+        // The block's elements placed once for all its rows, its nodes once for all its columns.
         let sc = &self.elements.clusters[s];
         let placed: Vec<Placed> =
             self.elements.order[sc.start..sc.end].iter().map(|&j| self.disc.placed(j)).collect();
-        let stats = self.visible_pairs(t, s, views, |r, k, i, j, vis| {
-            let node = &self.disc.nodes[i];
+        let tc = &self.nodes.clusters[t];
+        let nodes: Vec<Node> =
+            self.nodes.order[tc.start..tc.end].iter().map(|&i| self.disc.node(i)).collect();
+        let stats = self.visible_pairs(t, s, views, |r, k, _, j, vis| {
+            let node = &nodes[r];
             if let Some(mask) = whole.as_deref_mut() {
                 if matches!(vis, Visibility::Full) {
                     if node.rho != 0.0 {
@@ -306,7 +309,11 @@ impl Entries<'_> {
     /// Whether node i (original index) gives element j anything, where the block's plan says
     /// the element is wholly visible from the node unless their faces give nothing.
     pub(super) fn smooth_sees(&self, i: usize, j: usize, faces: &FacePairs) -> bool {
-        let node = &self.disc.nodes[i];
+        self.node_sees(&self.disc.node(i), j, faces)
+    }
+
+    /// [`Self::smooth_sees`] for `node`.
+    fn node_sees(&self, node: &Node, j: usize, faces: &FacePairs) -> bool {
         node.rho != 0.0
             && !faces.nothing_between(node.face(), node.position, &self.mesh.elements()[j])
     }
@@ -328,15 +335,11 @@ impl Entries<'_> {
         for (i, j, el) in pairs {
             let at = out.len();
             out.resize(at + take, 0.0);
-            let gives = if continued {
-                self.disc.nodes[i].rho != 0.0
-            } else {
-                self.smooth_sees(i, j, faces)
-            };
+            let node = &self.disc.node(i);
+            let gives = if continued { node.rho != 0.0 } else { self.node_sees(node, j, faces) };
             if !gives {
                 continue;
             }
-            let node = &self.disc.nodes[i];
             let scale = node.rho / PI;
             let sink = |(at, scale): (usize, f64), v: f64| out[at] += scale * v;
             let Some(values) = self.integrator.integrate_or_batch(

@@ -139,7 +139,7 @@ impl Sampled {
 impl Entries<'_> {
     /// How node i sees element j, by the row walk of the dense path's pair plan.
     fn pair_sight(&self, i: usize, j: usize, hiders: &mut RecentHiders) -> Sight {
-        let node = &self.disc.nodes[i];
+        let node = &self.disc.node(i);
         let mut sight = Sight::Hidden;
         let faces = [(self.disc.face_of(j), std::iter::once(()))];
         self.planner.walk_row(&node.viewer(), faces, Views::Fresh(hiders), |_, _, seen| {

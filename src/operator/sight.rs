@@ -103,7 +103,7 @@ impl ClusterSight {
                 let mut lists = Vec::with_capacity(cluster.len());
                 let mut count = SightCount::default();
                 for &i in &nodes.order[cluster.start..cluster.end] {
-                    let viewer = disc.nodes[i].viewer();
+                    let viewer = disc.node(i).viewer();
                     let mut list = Vec::new();
                     let walked = hierarchy.seen_from(planner, &viewer, cube, |f| {
                         set.insert(f);

@@ -132,7 +132,7 @@ fn closed_boxes_keep_rows_summing_to_one() {
         let worst = op
             .apply(&ones)
             .iter()
-            .zip(&c.disc.nodes)
+            .zip(c.disc.nodes())
             .map(|(s, node)| (s / node.rho - 1.0).abs())
             .fold(0.0, f64::max);
         assert!(worst <= 10.0 * tol, "{name}: {worst:.2e}");
@@ -185,12 +185,12 @@ fn hidden_and_facing_away_blocks_store_nothing() {
     assert!(op.max_product_difference(&|x| k.apply(x)) <= 1e-9);
     assert!(op.stats.empty_blocks > 0, "{:?}", op.stats);
     // The plate hides the ceiling from the floor entirely (dense matrix).
-    for (i, node) in c.disc.nodes.iter().enumerate().filter(|(_, n)| n.face() == 0) {
+    for (i, node) in c.disc.nodes().enumerate().filter(|(_, n)| n.face() == 0) {
         for j in (0..c.disc.element_count()).filter(|&j| c.disc.face_of(j) == 1) {
             assert_eq!(k.get(i, j), 0.0, "node {i} at {:?} sees element {j}", node.position);
         }
     }
-    let face_of_row = |r: usize| c.disc.nodes[op.node_order[r]].face();
+    let face_of_row = |r: usize| c.disc.node(op.node_order[r]).face();
     let face_of_col = |q: usize| c.disc.face_of(op.element_order[q]);
     let floor_to_ceiling = op.blocks.iter().filter(|b| {
         b.row_range().clone().all(|r| face_of_row(r) == 0)
@@ -362,7 +362,7 @@ fn far_blocks_whose_boxes_clear_the_planes_have_no_pair_that_gives_nothing() {
             }
             clear += 1;
             for &i in &nodes.order[tc.start..tc.end] {
-                let node = &c.disc.nodes[i];
+                let node = &c.disc.node(i);
                 for &j in &elements.order[sc.start..sc.end] {
                     let el = &c.mesh.elements()[j];
                     assert!(
@@ -535,7 +535,7 @@ fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
         let assembly = AssemblyOptions::default();
         let silent = &crate::progress::Silent;
         let one = CompressedOperator::build(&c, &assembly, &options, None, silent).unwrap();
-        let rho: Vec<f64> = c.disc.nodes.iter().map(|n| n.rho).collect();
+        let rho: Vec<f64> = c.disc.nodes().map(|n| n.rho).collect();
         let emission: Vec<f64> = (0..c.disc.dof()).map(|i| 1.0 + (i as f64 * 0.3).sin()).collect();
         let solver = crate::solve::SolverOptions { tolerance: 1e-12, ..Default::default() };
         let solve = |op: &CompressedOperator| {

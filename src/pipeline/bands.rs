@@ -23,7 +23,7 @@ fn band_matrix(
     channel: usize,
 ) -> CollocationMatrix {
     let mut k = grey.clone();
-    k.rows_mut().zip(disc.nodes.par_iter()).for_each(|(row, node)| {
+    k.rows_mut().zip(disc.par_nodes()).for_each(|(row, node)| {
         let face = &scene.faces[node.face()];
         let scale = if face.rho == 0.0 { 0.0 } else { face.channel(channel).0 / face.rho };
         if scale != 1.0 {
@@ -56,10 +56,10 @@ pub(super) fn solve_bands_by_products(
     options: SolverOptions,
     compression_tolerance: f64,
 ) -> Result<Vec<(BandValues, BandReport, SolveOutcome)>> {
-    let grey_rho: Vec<f64> = disc.nodes.iter().map(|n| n.rho).collect();
+    let grey_rho: Vec<f64> = disc.nodes().map(|n| n.rho).collect();
     solve_each_band(scene, disc, channels, |channel, emission| {
         let rho: Vec<f64> =
-            disc.nodes.iter().map(|n| scene.faces[n.face()].channel(channel).0).collect();
+            disc.nodes().map(|n| scene.faces[n.face()].channel(channel).0).collect();
         let rho = (rho.as_slice(), grey_rho.as_slice());
         solve::solve_by_products(grey, emission, rho, options, compression_tolerance)
     })
@@ -76,7 +76,7 @@ fn solve_each_band(
         .iter()
         .map(|&channel| {
             let emission: Vec<f64> =
-                disc.nodes.iter().map(|n| scene.faces[n.face()].channel(channel).1).collect();
+                disc.nodes().map(|n| scene.faces[n.face()].channel(channel).1).collect();
             let started = Instant::now();
             let outcome = solve(channel, &emission)?;
             let report = BandReport {

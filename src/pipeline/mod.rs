@@ -220,8 +220,7 @@ pub fn run_problem(config: &RunConfig, problem: Problem) -> Result<Run> {
 
     let Problem { scene, disc, .. } = &problem;
     let error = u_faces.as_ref().map(|uf| {
-        disc.nodes
-            .iter()
+        disc.nodes()
             .zip(&u)
             .map(|(node, value)| (uf[node.face()].eval(node.position) - value).abs())
             .fold(0.0, f64::max)
@@ -287,11 +286,11 @@ fn emission(
         Some(u) => {
             let progress = &*config.progress;
             progress.start("emission", disc.dof());
-            let e = emission_at(scene, &disc.nodes, planner, u, &config.emission, progress);
+            let e = emission_at(scene, disc.par_nodes(), planner, u, &config.emission, progress);
             progress.finish();
             (e.values, Some(e.error_estimate))
         }
-        None => (disc.nodes.iter().map(|n| scene.faces[n.face()].emission).collect(), None),
+        None => (disc.nodes().map(|n| scene.faces[n.face()].emission).collect(), None),
     }
 }
 

@@ -215,7 +215,7 @@ impl BuiltOperator {
         match self {
             Self::Dense(t) => solve::solve_many(&t.assembled.matrix, rhs, config.solver),
             Self::Device { .. } | Self::Compressed { .. } => {
-                let rho: Vec<f64> = problem.disc.nodes.iter().map(|n| n.rho).collect();
+                let rho: Vec<f64> = problem.disc.nodes().map(|n| n.rho).collect();
                 let rho = (rho.as_slice(), rho.as_slice());
                 let (op, tolerance) = self.products(config).expect("known by products");
                 solve::solve_by_products_many(op, rhs, rho, config.solver, tolerance)

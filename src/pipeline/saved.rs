@@ -131,7 +131,7 @@ fn geometry_hash(problem: &Problem) -> u64 {
         add(element.face as u64);
         element.vertices.iter().flat_map(|v| v.to_array()).for_each(|x| add(x.to_bits()));
     }
-    for node in &disc.nodes {
+    for node in disc.nodes() {
         node.position.to_array().iter().for_each(|x| add(x.to_bits()));
         add(node.rho.to_bits());
     }

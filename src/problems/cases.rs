@@ -97,7 +97,7 @@ impl EmissionCases {
             Ok(self
                 .values
                 .iter()
-                .map(|column| disc.nodes.iter().map(|n| column[n.face()]).collect())
+                .map(|column| disc.nodes().map(|n| column[n.face()]).collect())
                 .collect())
         } else if rows == disc.dof() {
             Ok(self.values.clone())

@@ -22,7 +22,7 @@ pub fn write_node_csv(field: &SolutionField, path: &Path) -> Result<()> {
         header.extend([format!("E_{}", case.name), format!("u_{}", case.name)]);
     }
     out.write_record(&header).map_err(csv_error)?;
-    for (i, node) in field.disc.nodes.iter().enumerate() {
+    for (i, node) in field.disc.nodes().enumerate() {
         // In the user's coordinates.
         let p = node.position + field.scene.origin;
         let face = &field.scene.faces[node.face()];

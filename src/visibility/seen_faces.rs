@@ -252,7 +252,7 @@ mod tests {
         let disc = Discretization::new(scene, &mesh, Method::Centroid).unwrap();
         let mut cube = OcclusionCube::default();
         let (mut kept, mut seen, mut nodes) = (0, 0, 0);
-        for node in &disc.nodes {
+        for node in disc.nodes() {
             let v = node.viewer();
             if v.rho == 0.0 {
                 continue;

@@ -280,7 +280,7 @@ impl ExtremeCase {
 
     /// Reference entries `K[node, element's dofs]` (rho/π with rho = 1) for the discretized node.
     fn reference(&self, scene: &Scene, disc: &Discretization) -> Vec<f64> {
-        let node = &disc.nodes[0];
+        let node = &disc.node(0);
         // The scene may have been moved (exactly) to a local frame; the shift between the two
         // frames is small and exact, so nothing is rounded at the offset's magnitude.
         let shift = scene.origin - self.offset;

@@ -77,7 +77,7 @@ fn with_rho(mut scene: Scene, rho: f64) -> Scene {
 
 /// Row scales: the row of a node on face `black` gets 0, every other row `rho`.
 fn row_rhos(disc: &Discretization, black: Option<usize>, rho: f64) -> Vec<f64> {
-    disc.nodes.iter().map(|n| if Some(n.face()) == black { 0.0 } else { rho }).collect()
+    disc.nodes().map(|n| if Some(n.face()) == black { 0.0 } else { rho }).collect()
 }
 
 /// Runs the study on `backend` (the assembly; the solves run on the CPU).
@@ -104,7 +104,7 @@ pub fn run(backend: Backend) -> Result<Vec<StiffRow>> {
         let (k1, _) = assemble_on(backend, &problem, &AssemblyOptions::default(), &Silent)?;
         let disc = &problem.disc;
         let exact: Vec<f64> =
-            disc.nodes.iter().map(|n| 1.0 + n.position.dot(DVec3::new(0.5, 0.25, 0.125))).collect();
+            disc.nodes().map(|n| 1.0 + n.position.dot(DVec3::new(0.5, 0.25, 0.125))).collect();
         let dof = disc.dof();
         for rho in RHOS {
             let scales = row_rhos(disc, black, rho);
