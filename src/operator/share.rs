@@ -1,9 +1,9 @@
 //! A rank's share of the compressed operator's blocks in a distributed run
 //! ([`crate::distributed`]): every rank holds the whole block plan and takes the blocks dealt to
-//! it in two rounds. The shadowed blocks go first, dealt by their estimated cost, and are built;
+//! it in two steps. The shadowed blocks go first, dealt by their estimated cost, and are built;
 //! their stored bytes, which follow their partly visible pairs and which no estimate made before
-//! sees, are then gathered, and the other blocks are dealt so that the ranks' bytes come out
-//! about equal.
+//! sees, are then gathered, and the other blocks are dealt in rounds, the bytes gathered again
+//! after each, so that the ranks' bytes come out about equal.
 
 use super::blocks::{BlockPlan, NearBlock, ShadowedBlock};
 use super::cluster::ClusterTree;
