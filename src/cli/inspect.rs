@@ -148,7 +148,7 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
             "compressed operator (tolerance {:.0e}, values in {}): {:.1} MB ({:.1} MB of low-rank \
              factors); {} exact blocks ({} entries), {} low-rank blocks (standing for {} entries, \
              rank <= {}), {} empty blocks, {} admissible blocks kept exact{}; the exact blocks' \
-             row walks viewed {:.0} faces per node",
+             row walks viewed {:.0} faces per node ({:.1} of them hidden)",
             tolerance,
             radiosity::operator::Precision::for_tolerance(tolerance).name(),
             out.operator_bytes as f64 / 1e6,
@@ -164,7 +164,8 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
                 0 => String::new(),
                 k => format!(", {k} shadowed blocks"),
             },
-            b.faces_viewed as f64 / out.dof.max(1) as f64
+            b.faces_viewed as f64 / out.dof.max(1) as f64,
+            b.faces_viewed_unseen as f64 / out.dof.max(1) as f64
         );
     }
     println!("setup {:.3} s on the {}", out.setup_seconds, out.backend);

@@ -189,6 +189,7 @@ impl CompressedOperator {
         let (blocks, mut stats, mut pairs) = kept_blocks(built, empty.blocks, per);
         stats.empty_block_pairs = empty.pairs;
         stats.faces_viewed = entries.faces.viewed();
+        stats.faces_viewed_unseen = entries.faces.viewed_unseen();
         stats.faces_culled = entries.faces.culled();
         stats.operator_bytes += order_bytes(disc.dof(), per);
         let share = ranks.map(|ranks| {

@@ -62,6 +62,8 @@ impl NodeViews<'_> {
         if let Some(tally) = self.tally {
             let viewed = self.rows.iter().map(KeptViews::faces_viewed).sum();
             tally.viewed.fetch_add(viewed, Ordering::Relaxed);
+            let unseen = self.rows.iter().map(KeptViews::faces_viewed_unseen).sum();
+            tally.viewed_unseen.fetch_add(unseen, Ordering::Relaxed);
             let culled = self.rows.iter().map(KeptViews::faces_culled).sum();
             tally.culled.fetch_add(culled, Ordering::Relaxed);
         }
@@ -79,6 +81,7 @@ impl Drop for NodeViews<'_> {
 #[derive(Debug, Default)]
 pub(super) struct FaceTally {
     viewed: AtomicU64,
+    viewed_unseen: AtomicU64,
     culled: AtomicU64,
 }
 
@@ -86,6 +89,11 @@ impl FaceTally {
     /// Views computed.
     pub(super) fn viewed(&self) -> u64 {
         self.viewed.load(Ordering::Relaxed)
+    }
+
+    /// Of the views computed, those that found the face hidden.
+    pub(super) fn viewed_unseen(&self) -> u64 {
+        self.viewed_unseen.load(Ordering::Relaxed)
     }
 
     /// Faces taken as hidden without a view, outside what their nodes' cluster may see.

@@ -41,6 +41,10 @@ pub struct OperatorStats {
     /// behind it): over the unknowns, the faces examined per node. Not among
     /// [`OperatorStats::counts`] (none in a loaded operator).
     pub faces_viewed: u64,
+    /// Of `faces_viewed`, the views that found the face hidden: faces examined in vain, which
+    /// a tighter set of the faces in sight would not examine. Not among
+    /// [`OperatorStats::counts`] (none in a loaded operator).
+    pub faces_viewed_unseen: u64,
     /// Faces that the exact blocks' row walks took as hidden without a view, being outside
     /// what their node may see (`operator/sight.rs`; each time a block asked). Not among
     /// [`OperatorStats::counts`] (none in a loaded operator).
@@ -96,6 +100,7 @@ impl OperatorStats {
             low_rank_bytes: 0,
             shadowed_blocks: 0,
             faces_viewed: 0,
+            faces_viewed_unseen: 0,
             faces_culled: 0,
             empty_block_pairs: 0,
         }
@@ -117,6 +122,7 @@ impl std::ops::AddAssign for OperatorStats {
         self.low_rank_bytes += o.low_rank_bytes;
         self.shadowed_blocks += o.shadowed_blocks;
         self.faces_viewed += o.faces_viewed;
+        self.faces_viewed_unseen += o.faces_viewed_unseen;
         self.faces_culled += o.faces_culled;
         self.empty_block_pairs += o.empty_block_pairs;
     }
@@ -139,6 +145,7 @@ pub(super) fn summed_over(
         stats.faces_viewed,
         stats.empty_block_pairs,
         stats.faces_culled,
+        stats.faces_viewed_unseen,
     ];
     let mine: Vec<u64> = stats.counts().into_iter().chain(pairs.counts()).chain(more).collect();
     let (mut stats, mut pairs) = (OperatorStats::default(), PairStats::default());
@@ -151,6 +158,7 @@ pub(super) fn summed_over(
             faces_viewed: more[2],
             empty_block_pairs: more[3],
             faces_culled: more[4],
+            faces_viewed_unseen: more[5],
             ..OperatorStats::from_counts(s.try_into().expect("a rank's statistics"))
         };
         pairs += PairStats::from_counts(p.try_into().expect("a rank's pair classes"));

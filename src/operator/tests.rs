@@ -462,8 +462,13 @@ fn a_written_operator_reads_back_block_for_block() {
         assert!(op.stats.low_rank_bytes < op.stats.operator_bytes);
         let (read, bytes) = written_and_read(&op);
         // What the build's walks cost is not saved.
-        let stats =
-            OperatorStats { faces_viewed: 0, faces_culled: 0, empty_block_pairs: 0, ..op.stats };
+        let stats = OperatorStats {
+            faces_viewed: 0,
+            faces_viewed_unseen: 0,
+            faces_culled: 0,
+            empty_block_pairs: 0,
+            ..op.stats
+        };
         assert_eq!((read.stats, read.pairs, read.zero_rows), (stats, op.pairs, op.zero_rows));
         assert_eq!(kinds(&read), kinds(&op));
         let x: Vec<f64> = (0..op.dof()).map(|i| (i as f64 * 0.7).sin()).collect();

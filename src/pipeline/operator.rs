@@ -83,8 +83,8 @@ pub enum BuiltOperator {
     },
     /// K in exact and low-rank blocks.
     Compressed {
-        /// The operator.
-        op: CompressedOperator,
+        /// The operator (boxed: the variants stay near one size).
+        op: Box<CompressedOperator>,
         /// Its blocks in the GPU's memory, where the run is on the GPU: GMRES's products run
         /// there.
         on_device: Option<Box<DeviceBlocks>>,
@@ -232,7 +232,7 @@ impl BuiltOperator {
             Self::Compressed { on_device: Some(blocks), .. } => {
                 Some((&**blocks, config.compression.tolerance))
             }
-            Self::Compressed { op, .. } => Some((op, config.compression.tolerance)),
+            Self::Compressed { op, .. } => Some((&**op, config.compression.tolerance)),
         }
     }
 
@@ -401,7 +401,7 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
     let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();
     let on_device = blocks_on_device(config, &op);
     Ok(BuiltOperator::Compressed {
-        op,
+        op: Box::new(op),
         on_device,
         build_traffic,
         setup_seconds,

@@ -228,7 +228,7 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
             let setup_seconds = started.elapsed().as_secs_f64();
             let on_device = super::operator::blocks_on_device(config, &op);
             BuiltOperator::Compressed {
-                op,
+                op: Box::new(op),
                 on_device,
                 build_traffic: None,
                 setup_seconds,

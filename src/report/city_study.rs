@@ -22,6 +22,8 @@ pub fn city_table(study: &CityStudy, format: TableFormat) -> String {
                 r.memory_estimate_bytes.map_or("-".into(), |b| size_text(b as f64)),
                 format!("{:.0}", r.faces_viewed_per_node),
                 exponent(r.faces_viewed_exponent),
+                format!("{:.1}", r.unseen_faces_viewed_per_node),
+                exponent(r.unseen_faces_viewed_exponent),
                 format!("{:.0} / {:.0}", r.hidden_pairs_per_node, r.seen_pairs_per_node),
                 format!("{:.3}", r.culled_share),
             ]
@@ -37,6 +39,8 @@ pub fn city_table(study: &CityStudy, format: TableFormat) -> String {
         "operator",
         "peak estimate",
         "faces viewed per node",
+        "~ n^",
+        "of them hidden",
         "~ n^",
         "pairs per node hidden / seen",
         "culled whole",

@@ -49,6 +49,8 @@ pub struct CityRow {
     pub memory_estimate_bytes: Option<u64>,
     /// Views of faces the exact blocks' row walks computed, over n.
     pub faces_viewed_per_node: f64,
+    /// Of them, the views that found the face hidden, over n.
+    pub unseen_faces_viewed_per_node: f64,
     /// Pairs the row walks found hidden, over n.
     pub hidden_pairs_per_node: f64,
     /// Pairs the row walks found seen whole or in part, over n.
@@ -59,6 +61,8 @@ pub struct CityRow {
     pub setup_exponent: Option<f64>,
     /// The same for the faces viewed per node.
     pub faces_viewed_exponent: Option<f64>,
+    /// The same for the views that found the face hidden.
+    pub unseen_faces_viewed_exponent: Option<f64>,
 }
 
 /// The study's result.
@@ -92,6 +96,7 @@ pub fn run_cities(series: &CitySeries, progress: &dyn Progress) -> Result<CitySt
         let pairs = report.pairs;
         let per_node = |count: u64| count as f64 / n.max(1) as f64;
         let faces_viewed_per_node = per_node(blocks.faces_viewed);
+        let unseen_faces_viewed_per_node = per_node(blocks.faces_viewed_unseen);
         let exponent = |now: f64, before: f64, n_before: usize| {
             let ratio = (n as f64 / n_before as f64).ln();
             (now > 0.0 && before > 0.0 && ratio > 0.0).then(|| (now / before).ln() / ratio)
@@ -107,6 +112,7 @@ pub fn run_cities(series: &CitySeries, progress: &dyn Progress) -> Result<CitySt
             operator_bytes: report.operator_bytes,
             memory_estimate_bytes: report.memory_estimate_bytes,
             faces_viewed_per_node,
+            unseen_faces_viewed_per_node,
             hidden_pairs_per_node: per_node(pairs.hidden),
             seen_pairs_per_node: per_node(pairs.full + pairs.partial),
             culled_share: blocks.empty_block_pairs as f64 / (n as f64 * n as f64).max(1.0),
@@ -114,6 +120,9 @@ pub fn run_cities(series: &CitySeries, progress: &dyn Progress) -> Result<CitySt
                 .and_then(|p| exponent(report.setup_seconds, p.setup_seconds, p.n)),
             faces_viewed_exponent: previous
                 .and_then(|p| exponent(faces_viewed_per_node, p.faces_viewed_per_node, p.n)),
+            unseen_faces_viewed_exponent: previous.and_then(|p| {
+                exponent(unseen_faces_viewed_per_node, p.unseen_faces_viewed_per_node, p.n)
+            }),
         });
         progress.advance(1);
     }
@@ -138,6 +147,7 @@ mod tests {
         assert!(small.setup_exponent.is_none() && large.setup_exponent.is_some());
         for row in &study.rows {
             assert!(row.faces_viewed_per_node > 0.0 && row.seen_pairs_per_node > 0.0, "{row:?}");
+            assert!(row.unseen_faces_viewed_per_node < row.faces_viewed_per_node, "{row:?}");
             // Faces of two triangles: the plan's blocks span many faces and cull little whole.
             assert!((0.0..1.0).contains(&row.culled_share), "{row:?}");
             let walked = row.hidden_pairs_per_node + row.seen_pairs_per_node;

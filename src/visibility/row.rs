@@ -58,6 +58,9 @@ pub struct KeptViews {
     seen: Option<Vec<u32>>,
     /// Faces found hidden so, without a view.
     culled: u64,
+    /// Of `viewed`, the faces whose view found nothing seen: the work that a tighter set of
+    /// the faces in sight would save.
+    viewed_unseen: u64,
 }
 
 impl KeptViews {
@@ -88,17 +91,24 @@ impl KeptViews {
             self.culled += 1;
             return &HIDDEN;
         }
-        let viewed = &mut self.viewed;
+        let (viewed, unseen) = (&mut self.viewed, &mut self.viewed_unseen);
         self.views.entry(face).or_insert_with(|| {
-            *viewed += 1;
             let (p, n) = (viewer.position, viewer.normal);
-            planner.face_view_with(p, n, viewer.face, face, hiders)
+            let view = planner.face_view_with(p, n, viewer.face, face, hiders);
+            *viewed += 1;
+            *unseen += u64::from(matches!(view, FaceView::Skip(_)));
+            view
         })
     }
 
     /// Faces this viewer has viewed (each once), besides those that the planes told.
     pub fn faces_viewed(&self) -> u64 {
         self.viewed
+    }
+
+    /// Of [`KeptViews::faces_viewed`], those whose view found the face hidden.
+    pub fn faces_viewed_unseen(&self) -> u64 {
+        self.viewed_unseen
     }
 
     /// Faces found hidden without a view (outside the faces it may see), each time asked.
