@@ -23,49 +23,68 @@ pub(super) struct Unit {
     shadowed: Option<ShadowedBlock>,
 }
 
-/// The units of `plan` (its shadowed blocks', or the near and far blocks'), in the same order
-/// on every rank: by cost, largest first, then by the blocks themselves.
-fn units(
-    plan: &BlockPlan,
-    nodes: &ClusterTree,
-    elements: &ClusterTree,
+/// What a unit's blocks are estimated to cost: a cluster pair's (rows, columns) and the cost of
+/// a low-rank block of that size.
+struct Costs<'a> {
+    nodes: &'a ClusterTree,
+    elements: &'a ClusterTree,
     per: usize,
-    shadowed: bool,
-) -> Vec<Unit> {
-    let size_of = |t: usize, s: usize| (nodes.clusters[t].len(), elements.clusters[s].len() * per);
-    let far_cost = |(m, c): (usize, usize)| (ESTIMATED_STEPS * (m + c)).min(m * c);
-    let mut units: Vec<Unit> = if shadowed {
-        // A shadowed block: its factors as a far block's, its leaves as exact blocks.
-        plan.shadowed
-            .iter()
-            .map(|b| {
-                let leaves = b.leaves.iter().map(|&(t, s)| size_of(t, s));
-                let leaves: usize = leaves.map(|(m, c)| m * c).sum();
-                Unit {
-                    cost: far_cost(size_of(b.t, b.s)) + leaves,
-                    near: Vec::new(),
-                    far: None,
-                    shadowed: Some(b.clone()),
-                }
-            })
-            .collect()
-    } else {
-        let mut near = plan.near.clone();
-        near.sort_unstable();
-        let near = near.chunk_by(|a, b| a.t == b.t).map(|group| Unit {
-            cost: group.iter().map(|b| size_of(b.t, b.s)).map(|(m, c)| m * c).sum(),
-            near: group.to_vec(),
-            far: None,
-            shadowed: None,
-        });
-        let far = plan.far.iter().map(|&(t, s)| Unit {
-            cost: far_cost(size_of(t, s)),
-            near: Vec::new(),
-            far: Some((t, s)),
-            shadowed: None,
-        });
-        near.chain(far).collect()
-    };
+}
+
+impl Costs<'_> {
+    fn size_of(&self, t: usize, s: usize) -> (usize, usize) {
+        (self.nodes.clusters[t].len(), self.elements.clusters[s].len() * self.per)
+    }
+
+    /// An exact block evaluates and stores each entry.
+    fn exact(&self, t: usize, s: usize) -> usize {
+        let (m, c) = self.size_of(t, s);
+        m * c
+    }
+
+    /// A low-rank block evaluates about `ESTIMATED_STEPS` rows and columns, never more than
+    /// the whole block.
+    fn low_rank(&self, t: usize, s: usize) -> usize {
+        let (m, c) = self.size_of(t, s);
+        (ESTIMATED_STEPS * (m + c)).min(m * c)
+    }
+}
+
+/// The shadowed blocks of `plan` as units: each one's factors cost as a far block's, its leaves
+/// as exact blocks.
+fn shadowed_units(plan: &BlockPlan, costs: &Costs) -> Vec<Unit> {
+    let units = plan.shadowed.iter().map(|b| Unit {
+        cost: costs.low_rank(b.t, b.s)
+            + b.leaves.iter().map(|&(t, s)| costs.exact(t, s)).sum::<usize>(),
+        near: Vec::new(),
+        far: None,
+        shadowed: Some(b.clone()),
+    });
+    by_cost(units.collect())
+}
+
+/// The near blocks of `plan` as units, one per node cluster, and its far blocks, one each.
+fn plain_units(plan: &BlockPlan, costs: &Costs) -> Vec<Unit> {
+    let mut near = plan.near.clone();
+    near.sort_unstable();
+    let near = near.chunk_by(|a, b| a.t == b.t).map(|group| Unit {
+        cost: group.iter().map(|b| costs.exact(b.t, b.s)).sum(),
+        near: group.to_vec(),
+        far: None,
+        shadowed: None,
+    });
+    let far = plan.far.iter().map(|&(t, s)| Unit {
+        cost: costs.low_rank(t, s),
+        near: Vec::new(),
+        far: Some((t, s)),
+        shadowed: None,
+    });
+    by_cost(near.chain(far).collect())
+}
+
+/// `units` in the same order on every rank: by cost, largest first, then by the blocks
+/// themselves.
+fn by_cost(mut units: Vec<Unit>) -> Vec<Unit> {
     units.sort_unstable_by(|a, b| {
         let at = |u: &Unit| u.shadowed.as_ref().map(|b| (b.t, b.s));
         b.cost
@@ -104,7 +123,7 @@ pub(super) fn shadowed_share(
     per: usize,
     (rank, size): (usize, usize),
 ) -> BlockPlan {
-    let units = units(plan, nodes, elements, per, true);
+    let units = shadowed_units(plan, &Costs { nodes, elements, per });
     taken(units, rank, |position, _| {
         let (turn, seat) = (position / size, position % size);
         if turn % 2 == 0 { seat } else { size - 1 - seat }
@@ -125,7 +144,7 @@ pub(super) fn rest_rounds(
     elements: &ClusterTree,
     per: usize,
 ) -> Vec<Vec<Unit>> {
-    let units = units(plan, nodes, elements, per, false);
+    let units = plain_units(plan, &Costs { nodes, elements, per });
     let total: usize = units.iter().map(|u| u.cost).sum();
     let mut rounds: Vec<Vec<Unit>> = (0..ROUNDS).map(|_| Vec::new()).collect();
     let (mut round, mut dealt) = (0, 0);
