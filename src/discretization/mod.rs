@@ -264,6 +264,11 @@ impl Discretization {
         Node::new(position, self.face_frames[e.face].normal, e.face, j, self.face_rho[e.face])
     }
 
+    /// The reflectivity at node `i` (its face's), without making the node.
+    pub fn node_rho(&self, i: usize) -> f64 {
+        self.face_rho[self.mesh[i / self.method.nodes_per_element()].face]
+    }
+
     /// Every node, in order.
     pub fn nodes(&self) -> impl ExactSizeIterator<Item = Node> + '_ {
         (0..self.dof()).map(|i| self.node(i))
@@ -359,6 +364,23 @@ mod tests {
             let q = DVec2::new(0.1, -0.05);
             let sum: f64 = d.basis(j).iter().map(|b| b.eval(q)).sum();
             assert!((sum - 1.0).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn a_node_reads_its_own_face_reflectivity() {
+        let mut scene = five_piece(SurfaceParameters::default()).unwrap();
+        for (k, face) in scene.faces.iter_mut().enumerate() {
+            face.rho = 0.1 * k as f64;
+        }
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        for method in [Method::Centroid, Method::linear(1.0 / 6.0).unwrap()] {
+            let d = Discretization::new(&scene, &mesh, method).unwrap();
+            for i in 0..d.dof() {
+                let node = d.node(i);
+                assert_eq!(d.node_rho(i), node.rho, "{method:?} node {i}");
+                assert_eq!(node.rho, scene.faces[node.face()].rho, "{method:?} node {i}");
+            }
         }
     }
 

@@ -150,7 +150,7 @@ impl CompressedOperator {
             // refuse runs that fit: a partly visible block stores anything from none to all of
             // its entries, and on a city most store few); then every block built counts, and
             // the build stops where it would pass the allowance.
-            let reflects = |i: usize| disc.node(i).rho != 0.0;
+            let reflects = |i: usize| disc.node_rho(i) != 0.0;
             let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
             guard.check(precision.bytes() * certain + build_list_bytes(plan))?;
             let sub_blocks = shadowed::sub_blocks(&plan.shadowed);

@@ -110,7 +110,7 @@ fn the_memory_counted_before_the_build_is_what_blocks_seen_whole_store() {
         let faces = FacePairs::new(&c.scene, &c.planner, &options, None);
         let (nodes, elements) = cluster_trees(&c.mesh, &c.disc, &options);
         let plan = BlockPlan::new(&nodes, &elements, &faces, &options, None, &Silent);
-        let reflects = |i: usize| c.disc.node(i).rho != 0.0;
+        let reflects = |i: usize| c.disc.node_rho(i) != 0.0;
         let integrator = PairIntegrator::new(c.disc.method, &AssemblyOptions::default());
         let entries = Entries {
             mesh: &c.mesh,
