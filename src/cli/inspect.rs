@@ -148,7 +148,7 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
             "compressed operator (tolerance {:.0e}, values in {}): {:.1} MB ({:.1} MB of low-rank \
              factors); {} exact blocks ({} entries), {} low-rank blocks (standing for {} entries, \
              rank <= {}), {} empty blocks, {} admissible blocks kept exact{}; the exact blocks' \
-             row walks viewed {:.0} faces per node ({:.1} of them hidden)",
+             row walks viewed {:.0} faces per node ({:.1} of them finding nothing seen)",
             tolerance,
             radiosity::operator::Precision::for_tolerance(tolerance).name(),
             out.operator_bytes as f64 / 1e6,

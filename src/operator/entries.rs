@@ -91,7 +91,7 @@ impl FaceTally {
         self.viewed.load(Ordering::Relaxed)
     }
 
-    /// Of the views computed, those that found the face hidden.
+    /// Of the views computed, those that found nothing of the face seen.
     pub(super) fn viewed_unseen(&self) -> u64 {
         self.viewed_unseen.load(Ordering::Relaxed)
     }

@@ -41,9 +41,9 @@ pub struct OperatorStats {
     /// behind it): over the unknowns, the faces examined per node. Not among
     /// [`OperatorStats::counts`] (none in a loaded operator).
     pub faces_viewed: u64,
-    /// Of `faces_viewed`, the views that found the face hidden: faces examined in vain, which
-    /// a tighter set of the faces in sight would not examine. Not among
-    /// [`OperatorStats::counts`] (none in a loaded operator).
+    /// Of `faces_viewed`, the views that found nothing of the face seen (hidden, or behind the
+    /// node's tangent plane): faces examined in vain, which a tighter set of the faces in sight
+    /// would not examine. Not among [`OperatorStats::counts`] (none in a loaded operator).
     pub faces_viewed_unseen: u64,
     /// Faces that the exact blocks' row walks took as hidden without a view, being outside
     /// what their node may see (`operator/sight.rs`; each time a block asked). Not among

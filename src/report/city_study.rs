@@ -40,7 +40,7 @@ pub fn city_table(study: &CityStudy, format: TableFormat) -> String {
         "peak estimate",
         "faces viewed per node",
         "~ n^",
-        "of them hidden",
+        "of them unseen",
         "~ n^",
         "pairs per node hidden / seen",
         "culled whole",

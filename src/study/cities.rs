@@ -49,7 +49,7 @@ pub struct CityRow {
     pub memory_estimate_bytes: Option<u64>,
     /// Views of faces the exact blocks' row walks computed, over n.
     pub faces_viewed_per_node: f64,
-    /// Of them, the views that found the face hidden, over n.
+    /// Of them, the views that found nothing of the face seen, over n.
     pub unseen_faces_viewed_per_node: f64,
     /// Pairs the row walks found hidden, over n.
     pub hidden_pairs_per_node: f64,
@@ -61,7 +61,7 @@ pub struct CityRow {
     pub setup_exponent: Option<f64>,
     /// The same for the faces viewed per node.
     pub faces_viewed_exponent: Option<f64>,
-    /// The same for the views that found the face hidden.
+    /// The same for the views that found nothing of the face seen.
     pub unseen_faces_viewed_exponent: Option<f64>,
 }
 

@@ -106,7 +106,7 @@ impl KeptViews {
         self.viewed
     }
 
-    /// Of [`KeptViews::faces_viewed`], those whose view found the face hidden.
+    /// Of [`KeptViews::faces_viewed`], those whose view found nothing of the face seen.
     pub fn faces_viewed_unseen(&self) -> u64 {
         self.viewed_unseen
     }
