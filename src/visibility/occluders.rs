@@ -189,6 +189,11 @@ impl OccluderIndex {
         }))
     }
 
+    /// The convex solid that piece `o` bounds, if any.
+    pub(super) fn solid_of_piece(&self, o: usize) -> Option<usize> {
+        self.solid_of[o]
+    }
+
     /// The solid that piece `o` bounds, unless it has a face of `a` or `b` (seen from or seen on
     /// one of its own faces, a solid is no occluder of its own).
     pub(super) fn solid_for_view(&self, o: usize, a: usize, b: usize) -> Option<usize> {

@@ -20,7 +20,7 @@
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
-use crate::geometry::{bounding_box, bounding_box_3d, box_corners};
+use crate::geometry::{bounding_box, bounding_box_3d, box_corners, convex_hull};
 
 /// A polygon's vertices, kept on the stack when it has few.
 type Points3 = SmallVec<[DVec3; 16]>;
@@ -130,6 +130,41 @@ impl OcclusionCube {
                 continue;
             };
             self.draw_on_face(k, &projected, (normal, offset), (a, b, c));
+        }
+    }
+
+    /// Draws the convex solid with corners `vertices` (world coordinates) as one occluder, the
+    /// viewer outside it: on each cube face that the whole solid lies in front of (along the
+    /// face's axis), the hull of its corners' projections at the depth of its farthest corner.
+    /// A ray through that hull meets the solid, and enters it through a face nearer than that
+    /// corner, so each pixel inside counts; drawn face by face, the pixels on the lines where
+    /// its faces meet would not (a building's edge, behind which the next street hides).
+    /// Where the solid reaches behind a face's plane its projection is unbounded: nothing is
+    /// drawn there, its faces draw their own.
+    pub fn draw_solid(&mut self, vertices: &[DVec3]) {
+        if vertices.len() < 4 {
+            return;
+        }
+        let local: Points3 = vertices.iter().map(|&p| self.local(p)).collect();
+        let reach = local.iter().map(|q| q.abs().max_element()).fold(0.0, f64::max);
+        for (k, &(a, b, c)) in FACES.iter().enumerate() {
+            if !may_touch(&local, (a, b, c), k != 0) {
+                continue;
+            }
+            let (nearest, farthest) = local
+                .iter()
+                .map(|&q| a.dot(q))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+            if !above(nearest, 1e-9 * reach) {
+                continue;
+            }
+            let projected: Points2 =
+                local.iter().map(|&q| DVec2::new(b.dot(q), c.dot(q)) / a.dot(q)).collect();
+            let hull = convex_hull(&projected);
+            if hull.len() >= 3 {
+                // The plane a·x = farthest: at that depth over every pixel.
+                self.draw_on_face(k, &hull, (a, farthest), (a, b, c));
+            }
         }
     }
 
@@ -583,5 +618,85 @@ mod tests {
             assert!(bad.is_empty(), "{:?}", &bad[..bad.len().min(4)]);
             assert!(cube.depth.iter().flatten().any(|d| d.is_finite()), "nothing drawn");
         }
+    }
+
+    /// The corners and faces (quadrilaterals) of the box with centre `centre` and half axes
+    /// `axes` (orthogonal).
+    fn box_of(centre: DVec3, axes: [DVec3; 3]) -> (Vec<DVec3>, Vec<Vec<DVec3>>) {
+        let corner = |bits: [usize; 3]| {
+            centre + (0..3).map(|k| axes[k] * (2.0 * bits[k] as f64 - 1.0)).sum::<DVec3>()
+        };
+        let corners = (0..8).map(|i| corner([i & 1, (i >> 1) & 1, (i >> 2) & 1])).collect();
+        let mut faces = Vec::new();
+        for k in 0..3 {
+            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            for side in 0..2 {
+                let at = |a: usize, b: usize| {
+                    let mut bits = [0; 3];
+                    (bits[k], bits[k1], bits[k2]) = (side, a, b);
+                    corner(bits)
+                };
+                faces.push(vec![at(0, 0), at(1, 0), at(1, 1), at(0, 1)]);
+            }
+        }
+        (corners, faces)
+    }
+
+    #[test]
+    fn a_solid_drawn_whole_covers_only_pixels_its_faces_cover() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut drawn_somewhere = false;
+        for _ in 0..20 {
+            let mut cube = OcclusionCube::default();
+            let viewer = DVec3::new(random(), random(), random());
+            cube.reset(viewer, DVec3::new(random(), random(), random()).normalize());
+            let mut faces = Vec::new();
+            for _ in 0..8 {
+                let centre = DVec3::new(random(), random(), random()) * 4.0;
+                let (e1, e2) =
+                    DVec3::new(random(), random(), random()).normalize().any_orthonormal_pair();
+                let e3 = e1.cross(e2);
+                let half = [e1, e2, e3].map(|e| e * (0.3 + random().abs()));
+                let inside = half.iter().all(|h| (viewer - centre).dot(*h).abs() < h.dot(*h));
+                if inside {
+                    continue;
+                }
+                let (corners, box_faces) = box_of(centre, half);
+                cube.draw_solid(&corners);
+                faces.extend(box_faces);
+            }
+            let bad = pixels_not_covered(&cube, &faces);
+            assert!(bad.is_empty(), "{:?}", &bad[..bad.len().min(4)]);
+            drawn_somewhere |= cube.depth.iter().flatten().any(|d| d.is_finite());
+        }
+        assert!(drawn_somewhere, "no solid drawn");
+    }
+
+    #[test]
+    fn a_solid_drawn_whole_hides_what_lies_behind_the_edge_between_its_faces() {
+        // A box turned 45 degrees about x shows the viewer two faces that meet along an edge
+        // across a row of pixels: neither face covers that row whole, the box does.
+        let (c, s) = (std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2);
+        let axes = [DVec3::X * 2.0, DVec3::new(0.0, c, s), DVec3::new(0.0, -s, c)];
+        let (corners, faces) = box_of(DVec3::new(0.0, 0.03, 5.0), axes);
+        let behind = (DVec3::new(-0.2, 0.0, 8.0), DVec3::new(0.2, 0.1, 8.5));
+        let mut by_faces = OcclusionCube::default();
+        by_faces.reset(DVec3::ZERO, DVec3::Z);
+        faces.iter().for_each(|f| by_faces.draw(f));
+        assert!(!by_faces.hides_box(behind.0, behind.1));
+        let mut whole = OcclusionCube::default();
+        whole.reset(DVec3::ZERO, DVec3::Z);
+        whole.draw_solid(&corners);
+        assert!(whole.hides_box(behind.0, behind.1));
+        // In front of its farthest corner, nothing is proved hidden by it.
+        let between = (DVec3::new(-0.2, 0.0, 6.0), DVec3::new(0.2, 0.1, 6.2));
+        assert!(!whole.hides_box(between.0, between.1));
+        assert!(pixels_not_covered(&whole, &faces).is_empty());
     }
 }

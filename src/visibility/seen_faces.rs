@@ -64,7 +64,8 @@ impl Ord for Nearest {
 /// What one viewer's walk met ([`FaceHierarchy::seen_from`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SightCount {
-    /// Faces reached (not hidden by what was drawn before them).
+    /// Faces reached (not hidden by what was drawn before them, nor the far side of a solid
+    /// drawn whole).
     pub faces_reached: u64,
     /// Boxes of the hierarchy found hidden, each with all its faces.
     pub boxes_hidden: u64,
@@ -142,9 +143,23 @@ impl FaceHierarchy {
         // Nearest box first: a face is tested after every face nearer than its box's nearest
         // point has been drawn.
         let mut queue = BinaryHeap::new();
+        // The solids met so far, each drawn whole once beside its faces.
+        let mut solids_drawn: Vec<usize> = Vec::new();
+        let mut solids_whole: Vec<usize> = Vec::new();
         queue.push((Reverse(Nearest(0.0)), 0));
         while let Some((_, n)) = queue.pop() {
             let node = &self.nodes[n];
+            // A face seen from behind, of solids drawn whole: it lies behind their fronts and
+            // within what they cover, so it is neither tested nor drawn (a building's far walls
+            // cost half the walk's faces otherwise).
+            if let NodeKind::Face(f) = node.kind
+                && planner.plane_skip_of(p, viewer.face, f) == Some(SkipReason::FacingAway)
+                && self.pieces_of[f].iter().all(|&k| {
+                    planner.occluders.solid_of_piece(k).is_some_and(|s| solids_whole.contains(&s))
+                })
+            {
+                continue;
+            }
             let hidden = match node.kind {
                 NodeKind::Face(f) => {
                     cube.hides_polygon(&planner.faces[f].face.vertices, node.lo, node.hi)
@@ -179,6 +194,19 @@ impl FaceHierarchy {
                             let covers = piece.diameter >= OcclusionCube::SMALLEST_ANGLE * far;
                             if covers && !piece.faces.contains(&viewer.face) {
                                 cube.draw(&piece.polygon);
+                                if let Some(s) = planner.occluders.solid_of_piece(k)
+                                    && !solids_drawn.contains(&s)
+                                {
+                                    solids_drawn.push(s);
+                                    let solid = &planner.occluders.solids[s];
+                                    let tol = 1e-9 * solid.size;
+                                    if !solid.faces.contains(&viewer.face)
+                                        && solid.is_outside(p, tol)
+                                    {
+                                        cube.draw_solid(&solid.vertices);
+                                        solids_whole.push(s);
+                                    }
+                                }
                             }
                         }
                     }
@@ -294,7 +322,7 @@ mod tests {
         let scene = lit_city(6, 6).unwrap();
         let (kept, seen) = keeps_every_face_seen(&scene, 0);
         let faces = scene.faces.len() as f64;
-        // Measured: 34.4 faces kept per node, 29.7 seen, of 314.
+        // Measured: 34.2 faces kept per node, 29.7 seen, of 314.
         assert!(kept < 1.25 * seen && kept < 0.15 * faces, "{kept} kept, {seen} seen, {faces}");
     }
 }

@@ -45,6 +45,12 @@ pub(super) struct Solid {
 }
 
 impl Solid {
+    /// Whether `p` lies outside the solid, beyond one of its planes by more than `tol` (a point
+    /// on the ground under a building open at the bottom is inside).
+    pub(super) fn is_outside(&self, p: DVec3, tol: f64) -> bool {
+        self.planes.iter().any(|&(n, c)| n.dot(p) > c + tol)
+    }
+
     /// Whether the solid hides every point of the convex hull of `from` from every point of the
     /// convex hull of `to`: each set lies outside it (beyond one of its planes, or on it, within
     /// `tol`), and every segment between their corners passes through its interior (deeper than
