@@ -584,16 +584,20 @@ mod tests {
         bad
     }
 
-    #[test]
-    fn every_covered_pixel_is_covered_by_what_was_drawn() {
-        // Random triangles and quadrilaterals around viewers of random normals.
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut random = move || {
+    /// Numbers uniform in [-1, 1) from a xorshift generator started at `state`.
+    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        }
+    }
+
+    #[test]
+    fn every_covered_pixel_is_covered_by_what_was_drawn() {
+        // Random triangles and quadrilaterals around viewers of random normals.
+        let mut random = uniform(0x2545_f491_4f6c_dd1d_u64);
         for _ in 0..20 {
             let mut cube = OcclusionCube::default();
             let normal = DVec3::new(random(), random(), random()).normalize();
@@ -644,13 +648,7 @@ mod tests {
 
     #[test]
     fn a_solid_drawn_whole_covers_only_pixels_its_faces_cover() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut random = uniform(0x9e37_79b9_7f4a_7c15_u64);
         let mut drawn_somewhere = false;
         for _ in 0..20 {
             let mut cube = OcclusionCube::default();
