@@ -151,15 +151,18 @@ impl OcclusionCube {
             if !may_touch(&local, (a, b, c), k != 0) {
                 continue;
             }
-            let (nearest, farthest) = local
+            let depths: SmallVec<[f64; 16]> = local.iter().map(|&q| a.dot(q)).collect();
+            let (nearest, farthest) = depths
                 .iter()
-                .map(|&q| a.dot(q))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| (lo.min(d), hi.max(d)));
             if !above(nearest, 1e-9 * reach) {
                 continue;
             }
-            let projected: Points2 =
-                local.iter().map(|&q| DVec2::new(b.dot(q), c.dot(q)) / a.dot(q)).collect();
+            let projected: Points2 = local
+                .iter()
+                .zip(&depths)
+                .map(|(&q, &d)| DVec2::new(b.dot(q), c.dot(q)) / d)
+                .collect();
             let hull = convex_hull(&projected);
             if hull.len() >= 3 {
                 // The plane a·x = farthest: at that depth over every pixel.

@@ -143,19 +143,22 @@ impl FaceHierarchy {
         // Nearest box first: a face is tested after every face nearer than its box's nearest
         // point has been drawn.
         let mut queue = BinaryHeap::new();
-        // The solids met so far, each drawn whole once beside its faces.
-        let mut solids_drawn: Vec<usize> = Vec::new();
-        let mut solids_whole: Vec<usize> = Vec::new();
+        // The solids met so far, and of them those drawn whole (beside their faces).
+        let mut solids = SolidsMet::default();
         queue.push((Reverse(Nearest(0.0)), 0));
         while let Some((_, n)) = queue.pop() {
             let node = &self.nodes[n];
+            let skip = match node.kind {
+                NodeKind::Face(f) => planner.plane_skip_of(p, viewer.face, f),
+                NodeKind::Halves(..) => None,
+            };
             // A face seen from behind, of solids drawn whole: it lies behind their fronts and
             // within what they cover, so it is neither tested nor drawn (a building's far walls
             // cost half the walk's faces otherwise).
             if let NodeKind::Face(f) = node.kind
-                && planner.plane_skip_of(p, viewer.face, f) == Some(SkipReason::FacingAway)
+                && skip == Some(SkipReason::FacingAway)
                 && self.pieces_of[f].iter().all(|&k| {
-                    planner.occluders.solid_of_piece(k).is_some_and(|s| solids_whole.contains(&s))
+                    planner.occluders.solid_of_piece(k).is_some_and(|s| solids.whole.contains(&s))
                 })
             {
                 continue;
@@ -178,43 +181,60 @@ impl FaceHierarchy {
                 }
                 NodeKind::Face(f) => {
                     count.faces_reached += 1;
-                    let skip = planner.plane_skip_of(p, viewer.face, f);
                     if skip.is_none() {
                         seen(f);
                     }
                     // Its own plane's faces are seen edge on; any other face, seen from
                     // behind or not, blocks what lies behind it.
                     if skip != Some(SkipReason::SamePlane) {
-                        for &k in &self.pieces_of[f] {
-                            let piece = &planner.occluders()[k];
-                            let (lo, hi) = piece.bounding_box();
-                            let far = (lo - p).max(p - hi).max(DVec3::ZERO).length();
-                            // Too small from here to cover a whole pixel: drawing it changes
-                            // nothing.
-                            let covers = piece.diameter >= OcclusionCube::SMALLEST_ANGLE * far;
-                            if covers && !piece.faces.contains(&viewer.face) {
-                                cube.draw(&piece.polygon);
-                                if let Some(s) = planner.occluders.solid_of_piece(k)
-                                    && !solids_drawn.contains(&s)
-                                {
-                                    solids_drawn.push(s);
-                                    let solid = &planner.occluders.solids[s];
-                                    let tol = 1e-9 * solid.size;
-                                    if !solid.faces.contains(&viewer.face)
-                                        && solid.is_outside(p, tol)
-                                    {
-                                        cube.draw_solid(&solid.vertices);
-                                        solids_whole.push(s);
-                                    }
-                                }
-                            }
-                        }
+                        self.draw_face(planner, viewer, f, cube, &mut solids);
                     }
                 }
             }
         }
         count
     }
+
+    /// Draws the pieces of face `f` into `cube` as occluders seen by `viewer`, and each solid
+    /// they bound whole, the first time it is met from outside.
+    fn draw_face(
+        &self,
+        planner: &PairPlanner,
+        viewer: &Viewer,
+        f: usize,
+        cube: &mut OcclusionCube,
+        solids: &mut SolidsMet,
+    ) {
+        let p = viewer.position;
+        for &k in &self.pieces_of[f] {
+            let piece = &planner.occluders()[k];
+            let (lo, hi) = piece.bounding_box();
+            let far = (lo - p).max(p - hi).max(DVec3::ZERO).length();
+            // Too small from here to cover a whole pixel: drawing it changes nothing.
+            let covers = piece.diameter >= OcclusionCube::SMALLEST_ANGLE * far;
+            if !covers || piece.faces.contains(&viewer.face) {
+                continue;
+            }
+            cube.draw(&piece.polygon);
+            if let Some(s) = planner.occluders.solid_of_piece(k)
+                && !solids.met.contains(&s)
+            {
+                solids.met.push(s);
+                let solid = &planner.occluders.solids[s];
+                if !solid.faces.contains(&viewer.face) && solid.is_outside(p, 1e-9 * solid.size) {
+                    cube.draw_solid(&solid.vertices);
+                    solids.whole.push(s);
+                }
+            }
+        }
+    }
+}
+
+/// The convex solids one walk has met, and of them those drawn whole.
+#[derive(Default)]
+struct SolidsMet {
+    met: Vec<usize>,
+    whole: Vec<usize>,
 }
 
 /// A set of faces by number (one bit each).
