@@ -51,4 +51,6 @@ pub use stats::PairStats;
 pub use view::{FaceView, Shadows, SkipReason, Visibility};
 
 #[cfg(test)]
+mod boundary_tests;
+#[cfg(test)]
 mod tests;

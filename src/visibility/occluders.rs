@@ -81,22 +81,28 @@ pub(super) struct OccluderIndex {
 impl OccluderIndex {
     pub(super) fn new(scene: &Scene, acceleration: Acceleration) -> Self {
         let pieces = convex_pieces(scene);
+        let (solids, solid_of) = if acceleration == Acceleration::BoxScan {
+            (Vec::new(), vec![None; pieces.len()])
+        } else {
+            convex_solids(&pieces)
+        };
+        // The trees leave out the pieces that bound the scene and no solid (a city's ground, a
+        // room's walls): never a candidate of a view or a shaft. Scans keep them, the
+        // references that the trees are checked against.
+        let on_boundary = boundary_pieces(&pieces);
+        let searched = |k: usize| !(on_boundary[k] && solid_of[k].is_none());
         let tree = (acceleration == Acceleration::Tree).then(|| {
             RTree::bulk_load(
                 pieces
                     .iter()
                     .enumerate()
+                    .filter(|&(k, _)| searched(k))
                     .map(|(k, o)| {
                         GeomWithData::new(Rectangle::from_corners(o.lo.into(), o.hi.into()), k)
                     })
                     .collect(),
             )
         });
-        let (solids, solid_of) = if acceleration == Acceleration::BoxScan {
-            (Vec::new(), vec![None; pieces.len()])
-        } else {
-            convex_solids(&pieces)
-        };
         let mut solid_pieces = vec![Vec::new(); solids.len()];
         for (k, solid) in solid_of.iter().enumerate() {
             if let Some(s) = solid {
@@ -119,7 +125,7 @@ impl OccluderIndex {
             let solids =
                 solid_boxes.iter().enumerate().map(|(s, &b)| boxed(b, OccluderUnit::Solid(s)));
             let free = (0..pieces.len())
-                .filter(|&k| solid_of[k].is_none())
+                .filter(|&k| solid_of[k].is_none() && searched(k))
                 .map(|k| boxed((pieces[k].lo, pieces[k].hi), OccluderUnit::Piece(k)));
             RTree::bulk_load(solids.chain(free).collect())
         });
@@ -413,6 +419,30 @@ fn convex_pieces(scene: &Scene) -> Vec<Occluder> {
         }
     }
     pieces
+}
+
+/// Per piece, whether the whole scene lies on one side of its plane (the box around the pieces,
+/// tested at its corners, on it or beyond it): the ground under a city, the sky over it, the
+/// walls of a room. Such a piece crosses no segment between two points of the scene, which
+/// meets its plane at most at an end or lies in it: it casts no shadow of any area, hides
+/// nothing and blocks no shaft.
+pub(super) fn boundary_pieces(pieces: &[Occluder]) -> Vec<bool> {
+    let (lo, hi) = pieces
+        .iter()
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), o| {
+            (lo.min(o.lo), hi.max(o.hi))
+        });
+    let corners = crate::geometry::box_corners((lo, hi));
+    pieces
+        .iter()
+        .map(|o| {
+            let origin = o.polygon[0];
+            let heights = corners.iter().map(|&c| o.normal.dot(c - origin));
+            let (least, most) =
+                heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), h| (a.min(h), b.max(h)));
+            o.normal != DVec3::ZERO && (least >= 0.0 || most <= 0.0)
+        })
+        .collect()
 }
 
 /// The 27 grid keys around `c` (a corner within the tolerance may round to a neighbouring cell).
