@@ -121,3 +121,44 @@ fn views_without_the_pieces_that_bound_the_scene_see_what_a_scan_of_every_piece_
     }
     assert!(partial > 1000, "{partial} pairs seen in part");
 }
+
+#[test]
+fn the_pieces_that_bound_a_scene_hide_none_of_it_from_its_points() {
+    // Drawn into a node's occlusion cube, they hide neither a face nor a face's box; the other
+    // pieces do (so the walks that find the faces in sight need not draw them).
+    let scenes = [lit_city(4, 3).unwrap(), generated::city(0), generated::room_with_boxes(1)];
+    for scene in &scenes {
+        let planner = PairPlanner::new(scene);
+        let flags = boundary_pieces(planner.occluders());
+        let mesh = Mesh::new(scene, &MeshKind::Uniform, 1).unwrap();
+        let mut cube = OcclusionCube::default();
+        let (mut tested, mut hidden_by_all) = (0, 0);
+        for node in mesh.elements().iter().step_by(3) {
+            let (p, normal) = (node.centroid(), scene.faces[node.face].frame.normal);
+            let drawn = |cube: &mut OcclusionCube, boundary: bool| {
+                cube.reset(p, normal);
+                for (piece, &flag) in planner.occluders().iter().zip(&flags) {
+                    if flag == boundary && !piece.faces.contains(&node.face) {
+                        cube.draw(&piece.polygon);
+                    }
+                }
+            };
+            let in_front = scene.faces.iter().enumerate().filter(|(b, face)| {
+                *b != node.face && face.vertices.iter().any(|&v| normal.dot(v - p) > 1e-9)
+            });
+            drawn(&mut cube, true);
+            for (b, face) in in_front.clone() {
+                let (lo, hi) = face.bounding_box();
+                assert!(!cube.hides_polygon(&face.vertices, lo, hi), "{}: face {b}", scene.name);
+                assert!(!cube.hides_box(lo, hi), "{}: box of face {b}", scene.name);
+                tested += 1;
+            }
+            drawn(&mut cube, false);
+            for (_, face) in in_front {
+                let (lo, hi) = face.bounding_box();
+                hidden_by_all += usize::from(cube.hides_polygon(&face.vertices, lo, hi));
+            }
+        }
+        assert!(tested > 200 && hidden_by_all > 0, "{}: {tested}, {hidden_by_all}", scene.name);
+    }
+}

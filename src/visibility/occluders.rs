@@ -67,6 +67,8 @@ pub(super) struct OccluderIndex {
     /// [`Acceleration::BoxScan`], the core plan, which shadows piece by piece).
     pub(super) solids: Vec<Solid>,
     solid_of: Vec<Option<usize>>,
+    /// Per piece, whether it bounds the scene ([`boundary_pieces`]) and no solid.
+    bounds_scene: Vec<bool>,
     pub(super) acceleration: Acceleration,
     tree: Option<RTree<Boxed>>,
     /// The pieces of each solid, in index order, and the box around them.
@@ -90,7 +92,9 @@ impl OccluderIndex {
         // room's walls): never a candidate of a view or a shaft. Scans keep them, the
         // references that the trees are checked against.
         let on_boundary = boundary_pieces(&pieces);
-        let searched = |k: usize| !(on_boundary[k] && solid_of[k].is_none());
+        let bounds_scene: Vec<bool> =
+            on_boundary.iter().zip(&solid_of).map(|(&on, solid)| on && solid.is_none()).collect();
+        let searched = |k: usize| !bounds_scene[k];
         let tree = (acceleration == Acceleration::Tree).then(|| {
             RTree::bulk_load(
                 pieces
@@ -129,7 +133,23 @@ impl OccluderIndex {
                 .map(|k| boxed((pieces[k].lo, pieces[k].hi), OccluderUnit::Piece(k)));
             RTree::bulk_load(solids.chain(free).collect())
         });
-        Self { pieces, solids, solid_of, acceleration, tree, solid_pieces, solid_boxes, units }
+        Self {
+            pieces,
+            solids,
+            solid_of,
+            bounds_scene,
+            acceleration,
+            tree,
+            solid_pieces,
+            solid_boxes,
+            units,
+        }
+    }
+
+    /// Whether piece `o` bounds the scene and no solid ([`boundary_pieces`]): left out of the
+    /// trees, and hiding nothing from a point of the scene.
+    pub(super) fn bounds_scene(&self, o: usize) -> bool {
+        self.bounds_scene[o]
     }
 
     /// The units that may reach into `volume` (a solid where one of its pieces may), among

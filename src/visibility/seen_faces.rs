@@ -212,7 +212,9 @@ impl FaceHierarchy {
             let far = (lo - p).max(p - hi).max(DVec3::ZERO).length();
             // Too small from here to cover a whole pixel: drawing it changes nothing.
             let covers = piece.diameter >= OcclusionCube::SMALLEST_ANGLE * far;
-            if !covers || piece.faces.contains(&viewer.face) {
+            // A piece that bounds the scene hides none of it: every ray from the viewer meets
+            // its plane, if at all, beyond whatever point of the scene it reaches.
+            if !covers || piece.faces.contains(&viewer.face) || planner.occluders.bounds_scene(k) {
                 continue;
             }
             cube.draw(&piece.polygon);
