@@ -17,8 +17,8 @@ use crate::discretization::{Discretization, Node, Placed};
 use crate::kernels::lanes;
 use crate::mesh::Mesh;
 use crate::visibility::{
-    ElementBoxes, FaceSight, FaceView, KeptViews, PairPlanner, PairStats, RecentHiders, Views,
-    Visibility, by_face,
+    ClusterCandidates, ElementBoxes, FaceSight, FaceView, KeptViews, PairPlanner, PairStats,
+    RecentHiders, Views, Visibility, by_face,
 };
 
 /// Bytes an element placed takes while a cross approximation of its block runs
@@ -37,18 +37,24 @@ pub(super) struct NodeViews<'a> {
     pub(super) rows: Vec<KeptViews>,
     /// The occluders that last hid a face from one of the cluster's nodes.
     pub(super) hiders: RecentHiders,
+    /// The occluders that may come between the cluster's nodes and each face they view.
+    pub(super) candidates: ClusterCandidates,
     tally: Option<&'a FaceTally>,
     /// Where found, the faces each node cluster may see (the others hidden without a view).
     sight: Option<&'a ClusterSight>,
 }
 
 impl NodeViews<'_> {
-    /// Ready for node cluster `t` of `nodes` (cleared when it is another cluster).
-    pub(super) fn prepare(&mut self, t: usize, nodes: &[usize]) {
+    /// Ready for node cluster `t` of `nodes` of `disc` (cleared when it is another cluster).
+    pub(super) fn prepare(&mut self, t: usize, nodes: &[usize], disc: &Discretization) {
         if self.cluster != Some(t) {
             self.cluster = Some(t);
             self.count();
             self.rows.clear();
+            self.candidates.reset(nodes.iter().map(|&i| {
+                let node = disc.node(i);
+                (node.position, node.face())
+            }));
             match self.sight {
                 Some(sight) => self.rows.extend(
                     nodes.iter().map(|&i| KeptViews::limited_to(sight.faces_of_node(i).to_vec())),
@@ -192,11 +198,11 @@ impl Entries<'_> {
     ) -> PairStats {
         let tc = &self.nodes.clusters[t];
         let mut stats = PairStats::default();
-        views.prepare(t, &self.nodes.order[tc.start..tc.end]);
+        views.prepare(t, &self.nodes.order[tc.start..tc.end], self.disc);
         for (r, &i) in self.nodes.order[tc.start..tc.end].iter().enumerate() {
             let viewer = self.disc.node(i).viewer();
             let walked = faces.iter().map(|f| (f.face, f.columns.iter().zip(&f.elements)));
-            let kept = Views::Kept(&mut views.rows[r], &mut views.hiders);
+            let kept = Views::Kept(&mut views.rows[r], &mut views.hiders, &mut views.candidates);
             stats +=
                 self.planner.walk_row(&viewer, walked, kept, |face, list, sight| match sight {
                     FaceSight::Hidden(_) => {}

@@ -9,6 +9,7 @@ use std::borrow::Cow;
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
+use super::cluster_candidates::ClusterCandidates;
 use super::hiders::{Hider, RecentHiders};
 use super::occluders::{Acceleration, OccluderUnit, ViewVolume};
 use super::planner::{HEIGHT_ROUNDING, Height, PairPlanner};
@@ -39,6 +40,21 @@ impl PairPlanner {
         own_face: usize,
         face: usize,
         hiders: &mut RecentHiders,
+    ) -> FaceView {
+        self.face_view_among(p, normal, own_face, face, hiders, None)
+    }
+
+    /// As [`PairPlanner::face_view_with`], for a viewer of the cluster that `shared` holds the
+    /// candidates of: they are filtered for the view instead of a search of the tree. The view
+    /// is the same as without them.
+    pub fn face_view_among(
+        &self,
+        p: DVec3,
+        normal: DVec3,
+        own_face: usize,
+        face: usize,
+        hiders: &mut RecentHiders,
+        shared: Option<&mut ClusterCandidates>,
     ) -> FaceView {
         let pair = self.pairs.as_ref().map(|t| &t[own_face * self.faces.len() + face]);
         let h = self.height(p, face);
@@ -99,19 +115,32 @@ impl PairPlanner {
             let (lo, hi) = pieces[k].bounding_box();
             (OccluderUnit::Piece(k), lo, hi)
         };
-        let found: Box<dyn Iterator<Item = (OccluderUnit, DVec3, DVec3)>> =
-            match (pair, self.occluders.units_reaching(&volume)) {
-                (Some((_, list)), _) => Box::new(
-                    list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])).map(with_box),
-                ),
-                (None, Some(units)) => Box::new(units.filter(|&(unit, _, _)| match unit {
-                    OccluderUnit::Piece(o) => candidate(o),
-                    OccluderUnit::Solid(_) => true,
-                })),
-                (None, None) => {
-                    Box::new(self.occluders.inside(own_face, face, &volume).map(with_box))
-                }
-            };
+        let kept = |&(unit, _, _): &(OccluderUnit, DVec3, DVec3)| match unit {
+            OccluderUnit::Piece(o) => candidate(o),
+            OccluderUnit::Solid(_) => true,
+        };
+        // The cluster's units in the tree's order, each that the tree's search with this volume
+        // would reach ([`ClusterCandidates`]).
+        let listed = match shared {
+            Some(shared) if pair.is_none() && shared.holds(p, own_face) => shared.units(self, face),
+            _ => None,
+        };
+        let found: Box<dyn Iterator<Item = (OccluderUnit, DVec3, DVec3)>> = match (pair, listed) {
+            (Some((_, list)), _) => Box::new(
+                list.iter().copied().filter(|&k| volume.may_hold(&pieces[k])).map(with_box),
+            ),
+            (None, Some(units)) => Box::new(
+                units
+                    .iter()
+                    .copied()
+                    .filter(|&(_, lo, hi)| volume.may_hold_box(lo, hi))
+                    .filter(kept),
+            ),
+            (None, None) => match self.occluders.units_reaching(&volume) {
+                Some(units) => Box::new(units.filter(kept)),
+                None => Box::new(self.occluders.inside(own_face, face, &volume).map(with_box)),
+            },
+        };
         let pyramid =
             Pyramid { apex: p, z, face: f, window: &window, corners: &corners, sides: &sides };
         let solids = &self.occluders.solids;

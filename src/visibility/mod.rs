@@ -22,6 +22,7 @@
 //! runs shadow code, and a scene of thousands of faces does not test every occluder for every
 //! pair ([`Acceleration`]).
 
+mod cluster_candidates;
 mod face_view;
 #[cfg(test)]
 pub(crate) use face_view::PLANE_TOLERANCE;
@@ -39,6 +40,7 @@ mod stats;
 mod view;
 mod visible_part;
 
+pub use cluster_candidates::ClusterCandidates;
 pub use hiders::RecentHiders;
 pub use occluders::{Acceleration, Occluder, OccluderUnit};
 pub use occlusion_cube::OcclusionCube;

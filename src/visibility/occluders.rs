@@ -202,6 +202,11 @@ impl OccluderIndex {
         found
     }
 
+    /// Whether the units have a tree ([`OccluderIndex::units_reaching`]).
+    pub(super) fn has_unit_tree(&self) -> bool {
+        self.units.is_some()
+    }
+
     /// The units whose boxes may reach into `volume`, in the tree's order, each with its box;
     /// `None` without the tree.
     pub(super) fn units_reaching<'a>(
@@ -384,7 +389,7 @@ impl ViewVolume {
     }
 
     /// Whether the box `[lo, hi]` may reach inside (its corner farthest along each normal).
-    fn may_hold_box(&self, lo: DVec3, hi: DVec3) -> bool {
+    pub(super) fn may_hold_box(&self, lo: DVec3, hi: DVec3) -> bool {
         self.box_reaches(lo, hi)
             && self.planes.iter().all(|&(n, d, margin)| {
                 let far = DVec3::select(n.cmpge(DVec3::ZERO), hi, lo);

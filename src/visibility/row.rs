@@ -16,6 +16,7 @@ use std::ops::Range;
 use glam::{DVec2, DVec3};
 use rustc_hash::FxHashMap;
 
+use super::cluster_candidates::ClusterCandidates;
 use super::hiders::RecentHiders;
 use super::planner::PairPlanner;
 use super::stats::PairStats;
@@ -40,8 +41,10 @@ pub enum Views<'a> {
     Fresh(&'a mut RecentHiders),
     /// Views are kept across walks of the same viewer (blocks of the compressed operator that
     /// share faces): each face is viewed once. The recent hiders are shared by the viewers
-    /// walked in turn (the nodes of one cluster, whose hiders are mostly the same).
-    Kept(&'a mut KeptViews, &'a mut RecentHiders),
+    /// walked in turn (the nodes of one cluster, whose hiders are mostly the same), and so are
+    /// the candidate occluders found for each face (where the viewer is among those
+    /// [`ClusterCandidates`] was made for).
+    Kept(&'a mut KeptViews, &'a mut RecentHiders, &'a mut ClusterCandidates),
 }
 
 /// One viewer's views of the faces met so far. A node of a city meets
@@ -75,7 +78,7 @@ impl KeptViews {
         planner: &PairPlanner,
         viewer: &Viewer,
         face: usize,
-        hiders: &mut RecentHiders,
+        (hiders, shared): (&mut RecentHiders, &mut ClusterCandidates),
     ) -> &FaceView {
         // Faces in the viewer's plane or behind it are told by the planes: not kept (most of
         // a node's faces in a city, whose insertions would cost more than the test).
@@ -94,7 +97,7 @@ impl KeptViews {
         let (viewed, unseen) = (&mut self.viewed, &mut self.viewed_unseen);
         self.views.entry(face).or_insert_with(|| {
             let (p, n) = (viewer.position, viewer.normal);
-            let view = planner.face_view_with(p, n, viewer.face, face, hiders);
+            let view = planner.face_view_among(p, n, viewer.face, face, hiders, Some(shared));
             *viewed += 1;
             *unseen += u64::from(matches!(view, FaceView::Skip(_)));
             view
@@ -276,7 +279,9 @@ impl PairPlanner {
                     fresh = self.face_view_with(p, n, viewer.face, face, hiders);
                     &fresh
                 }
-                Views::Kept(kept, hiders) => kept.view(self, viewer, face, hiders),
+                Views::Kept(kept, hiders, shared) => {
+                    kept.view(self, viewer, face, (hiders, shared))
+                }
             };
             let sight = match view {
                 FaceView::Skip(reason) => {
