@@ -205,12 +205,13 @@ impl OcclusionCube {
             let (from, to) = (below.0.max(above.0), below.1.min(above.1).saturating_sub(1));
             // The plane's depth is offset / den with den affine in (u, v): where den has the
             // sign of offset at all four corners, the farthest depth is at the corner where
-            // |den| is least (one division a pixel).
+            // |den| is least (one division a pixel), the corner its slopes point away from.
             let den = |u: f64, v: f64| (na + u * nb + v * nc) * offset.signum();
+            let least_at = least_corner(nb * offset.signum(), nc * offset.signum());
+            let v_least = least_at.1.pick(v_low, v_high);
             for i in from..to {
                 let (u, w) = (-1.0 + i as f64 * PIXEL, -1.0 + (i + 1) as f64 * PIXEL);
-                let least =
-                    den(u, v_low).min(den(w, v_low)).min(den(u, v_high)).min(den(w, v_high));
+                let least = den(least_at.0.pick(u, w), v_least);
                 let farthest = offset.abs() / least;
                 if least > 0.0 && farthest.is_finite() {
                     let pixel = &mut face[j * SIDE + i];
@@ -324,17 +325,18 @@ impl OcclusionCube {
             // bounds it.
             let (na, nb, nc) = (normal.dot(a), normal.dot(b), normal.dot(c));
             let den = |u: f64, v: f64| (na + u * nb + v * nc) * offset.signum();
+            let least_at = least_corner(nb * offset.signum(), nc * offset.signum());
             for j in j0..=j1 {
                 let (va, vb) = (v0 + j as f64 * PIXEL, v0 + (j + 1) as f64 * PIXEL);
+                let (v_least, v_most) = (least_at.1.pick(va, vb), least_at.1.pick(vb, va));
                 for i in i0..=i1 {
                     let stored = face[j * SIDE + i];
                     if !above(f64::INFINITY, stored) {
                         return false;
                     }
                     let (ua, ub) = (-1.0 + i as f64 * PIXEL, -1.0 + (i + 1) as f64 * PIXEL);
-                    let corners = [den(ua, va), den(ub, va), den(ua, vb), den(ub, vb)];
-                    let least = corners.iter().copied().fold(f64::INFINITY, f64::min);
-                    let most = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    let least = den(least_at.0.pick(ua, ub), v_least);
+                    let most = den(least_at.0.pick(ub, ua), v_most);
                     let nearest = if least > 0.0 { (offset.abs() / most).max(gap) } else { gap };
                     if !above(nearest * (1.0 - DEPTH_MARGIN), stored) {
                         return false;
@@ -344,6 +346,32 @@ impl OcclusionCube {
         }
         true
     }
+}
+
+/// One end of a pixel's side: the lower or the upper.
+#[derive(Clone, Copy)]
+enum End {
+    Lower,
+    Upper,
+}
+
+impl End {
+    /// `lower` or `upper`, as this end says.
+    fn pick(self, lower: f64, upper: f64) -> f64 {
+        match self {
+            End::Lower => lower,
+            End::Upper => upper,
+        }
+    }
+}
+
+/// The corner of a pixel where `(a + u su + v sv) * s` is least, given its slopes `su` and `sv`
+/// times s (the opposite corner is where it is largest). Each rounded step of the sum grows
+/// with u where su >= 0 and with v where sv >= 0, so the value there is the least of the four
+/// corners' as computed, to the bit.
+fn least_corner(su: f64, sv: f64) -> (End, End) {
+    let end = |slope: f64| if slope >= 0.0 { End::Lower } else { End::Upper };
+    (end(su), end(sv))
 }
 
 /// Whether `a > b`; never where either is NaN, so that a NaN from a degenerate polygon or box
@@ -594,6 +622,28 @@ mod tests {
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    #[test]
+    fn a_pixel_s_least_and_largest_depth_denominators_are_at_the_corners_its_slopes_tell() {
+        // To the bit: the pixel loops evaluate one corner instead of four.
+        let mut random = uniform(0x5851_f42d_4c95_7f2d_u64);
+        for _ in 0..20_000 {
+            // Slopes of all sizes, some of them naught.
+            let slope = |x: f64, r: f64| if r > 0.8 { 0.0 } else { x * 1e3f64.powf(r) };
+            let (na, nb, nc) = (random(), slope(random(), random()), slope(random(), random()));
+            let sign = if random() > 0.0 { 1.0 } else { -1.0 };
+            let den = |u: f64, v: f64| (na + u * nb + v * nc) * sign;
+            let (i, j) = ((16.0 * (random() + 1.0)) as usize, (16.0 * (random() + 1.0)) as usize);
+            let (u, w) = (-1.0 + i as f64 * PIXEL, -1.0 + (i + 1) as f64 * PIXEL);
+            let (v, z) = (-1.0 + j as f64 * PIXEL, -1.0 + (j + 1) as f64 * PIXEL);
+            let corners = [den(u, v), den(w, v), den(u, z), den(w, z)];
+            let least = corners.iter().copied().fold(f64::INFINITY, f64::min);
+            let most = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let (at_u, at_v) = least_corner(nb * sign, nc * sign);
+            assert_eq!(den(at_u.pick(u, w), at_v.pick(v, z)).to_bits(), least.to_bits());
+            assert_eq!(den(at_u.pick(w, u), at_v.pick(z, v)).to_bits(), most.to_bits());
         }
     }
 
