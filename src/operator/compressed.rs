@@ -104,25 +104,28 @@ impl CompressedOperator {
                 }
             }
         }
-        let mut yp = self
-            .blocks
+        // Each run of blocks adds into its own vector in block order, and the runs' vectors are
+        // summed in run order: a product repeats to the bit on a given number of threads (a
+        // rayon fold would group the sums as its work stealing falls).
+        let runs = block_runs(&self.blocks, rayon::current_num_threads());
+        let mut partial: Vec<Vec<f64>> = runs
             .par_iter()
-            .with_min_len(16)
-            .fold(
-                || vec![0.0; dof * m],
-                |mut y, b| {
+            .map(|run| {
+                let mut y = vec![0.0; dof * m];
+                for b in &self.blocks[run.clone()] {
                     let xs = &xp[b.col_range().start * per * m..b.col_range().end * per * m];
                     add(&b.data, xs, &mut y[b.row_range().start * m..b.row_range().end * m]);
-                    y
-                },
-            )
-            .reduce(
-                || vec![0.0; dof * m],
-                |mut a, b| {
-                    a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
-                    a
-                },
-            );
+                }
+                y
+            })
+            .collect();
+        let mut yp = partial.remove(0);
+        yp.par_chunks_mut(SUM_CHUNK).enumerate().for_each(|(c, out)| {
+            let at = c * SUM_CHUNK..c * SUM_CHUNK + out.len();
+            for p in &partial {
+                out.iter_mut().zip(&p[at.clone()]).for_each(|(a, b)| *a += b);
+            }
+        });
         // The columns are read: their n values need not wait beside the rows' for the sums.
         drop(xp);
         if let Some(share) = &self.share {
@@ -156,6 +159,28 @@ impl CompressedOperator {
             })
             .fold(0.0, f64::max)
     }
+}
+
+/// Entries of a product's sum added by one task.
+const SUM_CHUNK: usize = 1 << 14;
+
+/// `blocks` cut into at most `count` (at least one) contiguous runs of about equal stored bytes,
+/// which the products' work follows: the runs depend on the blocks and `count` alone.
+pub(super) fn block_runs(blocks: &[Block], count: usize) -> Vec<Range<usize>> {
+    let total: u64 = blocks.iter().map(|b| b.data.bytes()).sum();
+    let count = count.clamp(1, blocks.len().max(1)) as u64;
+    let mut runs = Vec::with_capacity(count as usize);
+    let (mut start, mut seen) = (0, 0u64);
+    for (k, b) in blocks.iter().enumerate() {
+        seen += b.data.bytes();
+        // Run r ends once the bytes seen reach r + 1 shares of the total.
+        if seen * count >= (runs.len() as u64 + 1) * total && runs.len() + 1 < count as usize {
+            runs.push(start..k + 1);
+            start = k + 1;
+        }
+    }
+    runs.push(start..blocks.len());
+    runs
 }
 
 impl Block {

@@ -511,6 +511,67 @@ fn products_of_many_vectors_are_each_vector_s_product() {
 }
 
 #[test]
+fn products_repeat_to_the_bit_under_a_parallel_load() {
+    // Four threads, on which another thread keeps queueing work of its own: the blocks' work is
+    // stolen differently each time, but their sums keep their grouping and order.
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 4);
+    let op = compressed(&c, 1e-6, 8);
+    assert!(op.blocks.len() > 400, "{} blocks: too few to split", op.blocks.len());
+    let n = op.dof();
+    let x: Vec<f64> = (0..n).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap();
+    let first = pool.install(|| op.apply(&x));
+    let done = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            while !done.load(Ordering::Relaxed) {
+                pool.install(|| {
+                    (0..50_000u32)
+                        .into_par_iter()
+                        .with_max_len(64)
+                        .map(|k| (k as f64).sqrt())
+                        .sum::<f64>()
+                });
+            }
+        });
+        for round in 0..40 {
+            let again = pool.install(|| op.apply(&x));
+            let same = again.iter().zip(&first).all(|(a, b)| a.to_bits() == b.to_bits());
+            if !same {
+                done.store(true, Ordering::Relaxed);
+            }
+            assert!(same, "round {round}: the product changed in its last bits");
+        }
+        done.store(true, Ordering::Relaxed);
+    });
+}
+
+#[test]
+fn block_runs_cover_the_blocks_in_order_with_about_equal_bytes() {
+    let c = case(five_piece(SurfaceParameters::default()).unwrap(), Method::Centroid, 3);
+    let op = compressed(&c, 1e-6, 8);
+    for count in [1, 2, 3, 7, 16, op.blocks.len(), op.blocks.len() + 5] {
+        let runs = super::compressed::block_runs(&op.blocks, count);
+        assert!(!runs.is_empty() && runs.len() <= count.max(1));
+        assert_eq!(runs[0].start, 0);
+        assert_eq!(runs.last().unwrap().end, op.blocks.len());
+        assert!(runs.windows(2).all(|w| w[0].end == w[1].start));
+        let bytes = |r: &std::ops::Range<usize>| -> u64 {
+            op.blocks[r.clone()].iter().map(|b| b.data.bytes()).sum()
+        };
+        let total = bytes(&(0..op.blocks.len()));
+        let largest = op.blocks.iter().map(|b| b.data.bytes()).max().unwrap();
+        // No run holds more than its share and one block beyond it.
+        for r in &runs {
+            assert!(bytes(r) <= total / runs.len() as u64 + largest + 1, "{count} runs: {r:?}");
+        }
+    }
+    assert_eq!(super::compressed::block_runs(&[], 4), vec![0..0]);
+}
+
+#[test]
 fn an_operator_spread_over_ranks_equals_the_one_process_operator() {
     // Ranks as threads: the block plan walked in parts and gathered, each rank building its
     // share, the products summed over the ranks. The same blocks and pair classes as one
