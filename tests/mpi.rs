@@ -3,6 +3,7 @@
 //! (`apt-get install -y libopenmpi-dev openmpi-bin libclang-dev`; .ci/run does it).
 #![cfg(feature = "mpi")]
 
+#[path = "suite/common/mod.rs"]
 mod common;
 
 use std::process::Command;

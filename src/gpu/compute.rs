@@ -4,13 +4,42 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use super::GpuContext;
+use super::context::PipelineKey;
 use super::layout::{NEAR_HEADER_BYTES, WORKGROUP};
 use super::shaders::Precision;
 use crate::error::{Error, Result};
 
 /// Compute pipelines for `entries` in `source`, with an explicit layout of buffers: `uniforms` lists
-/// the uniform bindings, `writable` the read-write storage bindings, the rest are read-only storage.
+/// the uniform bindings, `writable` the read-write storage bindings, the rest are read-only
+/// storage. Compiled once per device: a second call with the same arguments returns the same
+/// pipelines (wgpu's handles are shared, not copied).
 pub fn pipeline(
+    ctx: &GpuContext,
+    source: &str,
+    entries: &[&str],
+    bindings: u32,
+    uniforms: &[u32],
+    writable: &[u32],
+) -> Result<(wgpu::BindGroupLayout, Vec<wgpu::ComputePipeline>)> {
+    let key: PipelineKey = (
+        source.to_string(),
+        entries.iter().map(|e| e.to_string()).collect(),
+        bindings,
+        uniforms.to_vec(),
+        writable.to_vec(),
+    );
+    // Held while compiling: two threads asking for the same kernels compile them once.
+    let mut compiled = ctx.compiled.lock().expect("pipeline cache lock");
+    if let Some(found) = compiled.get(&key) {
+        return Ok(found.clone());
+    }
+    let made = compile(ctx, source, entries, bindings, uniforms, writable)?;
+    compiled.insert(key, made.clone());
+    Ok(made)
+}
+
+/// [`pipeline`]'s compilation.
+fn compile(
     ctx: &GpuContext,
     source: &str,
     entries: &[&str],

@@ -38,7 +38,20 @@ pub struct GpuContext {
     pub adapter: AdapterSummary,
     /// The device's limits.
     pub limits: wgpu::Limits,
+    /// The pipelines compiled on this device, by what they were compiled from
+    /// ([`super::compute::pipeline`]): an assembler made again for the same kernels (every
+    /// `Assembler::new` of a study's cases, every GPU test) reuses them instead of compiling
+    /// the kernels again, which takes tens of seconds under lavapipe.
+    pub(super) compiled: std::sync::Mutex<CompiledPipelines>,
 }
+
+/// What a call of [`super::compute::pipeline`] compiles from: the source, its entry points and the buffers'
+/// layout (bindings, uniform ones, writable ones).
+pub(super) type PipelineKey = (String, Vec<String>, u32, Vec<u32>, Vec<u32>);
+
+/// Pipelines compiled on a device, by what they were compiled from.
+pub(super) type CompiledPipelines =
+    std::collections::HashMap<PipelineKey, (wgpu::BindGroupLayout, Vec<wgpu::ComputePipeline>)>;
 
 /// Text of the error when no adapter exists, with how to get one.
 pub const INSTALL_HINT: &str = "install Mesa's lavapipe (Debian/Ubuntu: `apt-get install -y mesa-vulkan-drivers libvulkan1`) \
@@ -124,6 +137,7 @@ impl GpuContext {
                 driver: format!("{}, {}", info.driver, info.driver_info),
             },
             limits,
+            compiled: Default::default(),
         })
     }
 }

@@ -2,7 +2,7 @@
 //! solves against the dense one's, the compression study and bench, shadowed blocks, memory
 //! limits and estimates, and saved operators reloaded.
 
-mod common;
+use crate::common;
 
 use common::{json, radiosity};
 use serde_json::Value;

@@ -6,11 +6,11 @@
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
-#[path = "../fuzz/bodies/kernels.rs"]
+#[path = "../../fuzz/bodies/kernels.rs"]
 mod kernels;
-#[path = "../fuzz/bodies/scene_files.rs"]
+#[path = "../../fuzz/bodies/scene_files.rs"]
 mod scene_files;
-#[path = "../fuzz/bodies/scenes.rs"]
+#[path = "../../fuzz/bodies/scenes.rs"]
 mod scenes;
 
 /// `count` inputs of f64 values, each drawn from ordinary sizes, special values (NaN, infinities,

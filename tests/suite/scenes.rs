@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde_json::Value;
 
-mod common;
+use crate::common;
 
 use common::{json, radiosity, temp_dir, translated_scene};
 

@@ -1,7 +1,7 @@
 //! The command-line contract (ARCHITECTURE.md, "The command line"): JSON keys, the paper's numbers, identities and
 //! clear errors, through the real binary.
 
-mod common;
+use crate::common;
 
 use common::{json, radiosity};
 use serde_json::Value;

@@ -1,8 +1,8 @@
 //! The rules that src/ keeps: the import cycles allowed, the layers and the edges they forbid,
 //! and what a crate using the library names of it.
 
-use crate::graph::src;
-use crate::reader::{paths_in, without_tests};
+use super::graph::src;
+use super::reader::{paths_in, without_tests};
 
 /// The groups of modules of one directory that use one another today (found when the scan
 /// learnt to read a directory's mod.rs as a node of its own and to follow its re-exports), and

@@ -4,7 +4,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::reader::{Code, imports_in, is_ident, item_at, paths_in, without_tests};
+use super::reader::{Code, imports_in, is_ident, item_at, paths_in, without_tests};
 
 /// Edges between modules: module (`mesh`, `mesh/constrained`, or `mesh/mod` for what the file
 /// mesh/mod.rs itself holds) to the modules it names, each with the first place it names it
