@@ -127,3 +127,27 @@ mod tests {
         assert!(e.contains("side 'Right'") && e.contains("left, right-hand"), "{e}");
     }
 }
+
+named_options! {
+    /// Floating-point precision: of a GPU kernel (f64 needs `SHADER_F64` and uses software
+    /// transcendentals), of a matrix kept on the device (`--storage`), of the compressed
+    /// operator's stored values.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Precision as "precision" {
+        /// Double precision
+        F64 = "f64",
+        /// Single precision
+        F32 = "f32",
+    }
+}
+
+impl Precision {
+    /// Bytes per real number.
+    pub fn bytes(self) -> usize {
+        match self {
+            Self::F64 => 8,
+            Self::F32 => 4,
+        }
+    }
+}

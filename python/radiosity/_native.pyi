@@ -24,6 +24,7 @@ _Solution = Literal["none", "x2y2", "shadow", "edge"]
 _Backend = Literal["cpu", "gpu"]
 _Precision = Literal["f64", "f32"]
 _OperatorKind = Literal["auto", "dense", "compressed"]
+_ShadowedBlocks = Literal["auto", "on", "off"]
 _Solver = Literal["auto", "lu", "iterative"]
 
 _Path = Union[str, os.PathLike[str]]
@@ -47,8 +48,11 @@ class _RunOptions(TypedDict):
     gamma: Optional[float]
     backend: _Backend
     precision: _Precision
+    storage: _Precision
     operator: _OperatorKind
     compression_tolerance: float
+    shadowed_blocks: _ShadowedBlocks
+    memory_limit: Optional[Union[int, str]]
     solver: _Solver
     tolerance: float
     operator_file: Optional[_Path]
@@ -68,8 +72,11 @@ class _RunKwargs(TypedDict, total=False):
     gamma: Optional[float]
     backend: _Backend
     precision: _Precision
+    storage: _Precision
     operator: _OperatorKind
     compression_tolerance: float
+    shadowed_blocks: _ShadowedBlocks
+    memory_limit: Optional[Union[int, str]]
     solver: _Solver
     tolerance: float
     operator_file: Optional[_Path]

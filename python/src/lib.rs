@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 use radiosity::discretization::MethodName;
 use radiosity::gpu::Precision;
 use radiosity::mesh::LineExtent;
-use radiosity::operator::OperatorChoice;
+use radiosity::operator::{OperatorChoice, ShadowedBlocks};
 use radiosity::pipeline::{
     self, BackendName, BuiltOperator, MeshName, Problem, RunConfig, SceneSource,
 };
@@ -51,6 +51,11 @@ fn keyword<T: Named>() -> String {
 /// The value named `value` of the option `T`, or an error naming the names it accepts (the
 /// library's table: this crate spells no option value).
 fn pick<T: Named>(value: &str) -> PyResult<T> {
+    pick_as(&keyword::<T>(), value)
+}
+
+/// [`pick`] for an option named `keyword` whose values are `T`'s (`storage`: a precision).
+fn pick_as<T: Named>(keyword: &str, value: &str) -> PyResult<T> {
     T::parse(value).map_err(|_| {
         let names: Vec<&str> = T::names().collect();
         let expected = match names.split_last() {
@@ -58,10 +63,7 @@ fn pick<T: Named>(value: &str) -> PyResult<T> {
             Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
             None => String::new(),
         };
-        RadiosityError::new_err(format!(
-            "{} '{value}' is not known: expected {expected}",
-            keyword::<T>()
-        ))
+        RadiosityError::new_err(format!("{keyword} '{value}' is not known: expected {expected}"))
     })
 }
 
@@ -84,7 +86,9 @@ fn option_values() -> std::collections::BTreeMap<String, Vec<&'static str>> {
         vocabulary::<SolutionName>(),
         vocabulary::<BackendName>(),
         vocabulary::<Precision>(),
+        ("storage".into(), Precision::names().collect()),
         vocabulary::<OperatorChoice>(),
+        vocabulary::<ShadowedBlocks>(),
         vocabulary::<SolverChoice>(),
     ]
     .into_iter()
@@ -107,8 +111,11 @@ fn default_options(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
     out.set_item("gamma", d.gamma)?;
     out.set_item("backend", d.backend.name())?;
     out.set_item("precision", d.precision.name())?;
+    out.set_item("storage", d.storage.name())?;
     out.set_item("operator", d.operator.name())?;
     out.set_item("compression_tolerance", d.compression_tolerance)?;
+    out.set_item("shadowed_blocks", d.shadowed_blocks.name())?;
+    out.set_item("memory_limit", d.memory_limit)?;
     out.set_item("solver", d.solver.name())?;
     out.set_item("tolerance", d.tolerance)?;
     out.set_item("operator_file", d.operator_file)?;
@@ -263,12 +270,33 @@ struct RunOptions {
     gamma: Option<f64>,
     backend: String,
     precision: String,
+    storage: String,
     operator: String,
     compression_tolerance: f64,
+    shadowed_blocks: String,
+    memory_limit: Option<Size>,
     solver: String,
     tolerance: f64,
     operator_file: Option<std::path::PathBuf>,
     bands: String,
+}
+
+/// A size in bytes: a number, or text as `--memory-limit` takes it (`"4G"`, `"512M"`).
+#[derive(FromPyObject)]
+enum Size {
+    Bytes(u64),
+    Text(String),
+}
+
+impl Size {
+    /// The bytes, or the command line's refusal of the text.
+    fn bytes(&self) -> PyResult<u64> {
+        match self {
+            Self::Bytes(b) => Ok(*b),
+            Self::Text(t) => radiosity::assembly::parse_size(t)
+                .map_err(|why| RadiosityError::new_err(format!("memory_limit: {why}"))),
+        }
+    }
 }
 
 impl RunOptions {
@@ -287,8 +315,11 @@ impl RunOptions {
             gamma: self.gamma,
             backend: pick(&self.backend)?,
             precision: pick(&self.precision)?,
+            storage: pick_as("storage", &self.storage)?,
             operator: pick(&self.operator)?,
             compression_tolerance: self.compression_tolerance,
+            shadowed_blocks: pick(&self.shadowed_blocks)?,
+            memory_limit: self.memory_limit.as_ref().map(Size::bytes).transpose()?,
             solver: pick(&self.solver)?,
             tolerance: self.tolerance,
             operator_file: self.operator_file.clone(),

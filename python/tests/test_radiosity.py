@@ -65,8 +65,8 @@ def test_the_furnished_room_equals_the_command_line(tmp_path, operator):
     report, u = cli_solve(tmp_path, "--scene", ROOM, "--refine", "2", "--operator", operator,
                           "--solver", solver)
     assert run.operator == report["operator"] == operator
-    # The compressed product's sums are not ordered from run to run.
-    assert relative_max(run.u, u) <= (1e-14 if operator == "dense" else 1e-12)
+    # The compressed operator's products sum their blocks in a fixed order: the same bits.
+    assert relative_max(run.u, u) <= 1e-14
     assert run.error is None and run.report["notes"] == report["notes"]
 
 
@@ -131,6 +131,22 @@ def test_a_mesh_from_arrays_is_the_same_scene_as_its_stl_file(tmp_path):
     kept = radiosity.solve(radiosity.from_arrays(v, triangles, 0.5, emission, coplanar="keep"),
                            refine=1)
     assert relative_max(run.u, kept.u) <= 1e-13
+
+
+def test_the_memory_limit_refuses_as_on_the_command_line():
+    # The louvre room at refine 3 (n = 3 584): its compressed operator takes about 40 MB, its
+    # dense matrix 0.1 GB (tests/suite/cli_operator.rs makes the same runs).
+    room = radiosity.Scene.load(str(ROOT / "examples" / "louvre-room.toml"))
+    for operator in ["dense", "compressed"]:
+        with pytest.raises(radiosity.RadiosityError, match="3584"):
+            radiosity.operator(room, refine=3, operator=operator, memory_limit="40M")
+    op = radiosity.operator(room, refine=3, operator="compressed", memory_limit=1 << 30)
+    assert op.shape == (3584, 3584)
+    for limit, needle in [("12X", "K, M, G or T"), ("manyG", "no size"), (0, "at least one")]:
+        with pytest.raises(radiosity.RadiosityError, match=needle):
+            radiosity.operator(room, refine=0, memory_limit=limit)
+    # A later run without a limit is not held to the last one's.
+    assert radiosity.operator(room, refine=3, operator="dense").shape == (3584, 3584)
 
 
 def test_errors_carry_the_library_s_message():

@@ -55,6 +55,31 @@ pub fn allowance_source() -> String {
     }
 }
 
+/// A size in bytes: digits, optionally with K, M, G or T (powers of 1024; `B` or `iB` may
+/// follow), as `--memory-limit` and Python's `memory_limit` take it.
+pub fn parse_size(text: &str) -> std::result::Result<u64, String> {
+    let t = text.trim();
+    let t = t.strip_suffix("iB").or_else(|| t.strip_suffix('B')).unwrap_or(t);
+    let (digits, shift) = match t.char_indices().last() {
+        Some((k, c)) if c.is_ascii_alphabetic() => {
+            let shift = match c.to_ascii_uppercase() {
+                'K' => 10,
+                'M' => 20,
+                'G' => 30,
+                'T' => 40,
+                _ => return Err(format!("'{text}': the unit must be K, M, G or T")),
+            };
+            (&t[..k], shift)
+        }
+        _ => (t, 0),
+    };
+    let value: f64 = digits.trim().parse().map_err(|_| format!("'{text}' is no size in bytes"))?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("'{text}': the limit must be at least one byte"));
+    }
+    Ok(bytes as u64)
+}
 /// `bytes` in GiB.
 pub fn gib(bytes: f64) -> f64 {
     bytes / (1u64 << 30) as f64
@@ -80,6 +105,11 @@ pub fn available_memory() -> Option<u64> {
 /// Memory the process holds resident now, in bytes (`VmRSS` of /proc/self/status), if known.
 pub fn resident_bytes() -> Option<u64> {
     kib_field("/proc/self/status", "VmRSS:").map(|kib| kib * 1024)
+}
+
+/// Peak resident set size of this process (`VmHWM` of /proc/self/status), in bytes, if known.
+pub fn peak_rss_bytes() -> Option<u64> {
+    kib_field("/proc/self/status", "VmHWM:").map(|kib| kib * 1024)
 }
 
 /// The number after `key` on its line of the /proc file `path` (a size in KiB there).

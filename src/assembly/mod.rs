@@ -18,7 +18,7 @@ pub(crate) use integrator::{FullPair, LaneObserver, push_fan};
 pub use matrix::CollocationMatrix;
 pub use memory::{
     MEMORY_SHARE, allowance_source, available_memory, check_fits, gib, memory_allowance,
-    memory_limit, resident_bytes, set_memory_limit, size_text,
+    memory_limit, parse_size, peak_rss_bytes, resident_bytes, set_memory_limit, size_text,
 };
 pub use options::{AssemblyOptions, Quadrature, QuadratureRule};
 pub use pairs::{CpuPairs, CutEvaluation, CutValues, FaceCut, PairEvaluation, PairTask};

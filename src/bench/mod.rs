@@ -324,7 +324,7 @@ pub fn run_compressed(
         dof,
         backend: backend.name(),
         device: op.device.clone(),
-        operator: "compressed",
+        operator: crate::operator::OperatorChoice::Compressed.name(),
         compression_tolerance: config.compression.tolerance,
         setup_seconds: best,
         operator_bytes: op.stats.operator_bytes,

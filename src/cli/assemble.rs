@@ -7,9 +7,9 @@ use radiosity::pipeline;
 use super::args::AssembleArgs;
 
 pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
-    let mut config = args.geometry.config()?;
-    config.backend = args.device.backend();
-    args.operator.apply(&mut config)?;
+    let mut options = args.geometry.options()?;
+    args.device.fill(&mut options);
+    args.operator.fill(&mut options);
     if args.output.is_none() && args.save.is_none() {
         return Err(Error::InvalidParameter {
             name: "output",
@@ -20,7 +20,7 @@ pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
         });
     }
     if args.output.is_some() {
-        if config.operator == OperatorChoice::Compressed {
+        if options.operator == OperatorChoice::Compressed {
             return Err(Error::InvalidParameter {
                 name: "output",
                 value: args.output.clone().unwrap_or_default(),
@@ -29,8 +29,9 @@ pub(crate) fn run_assemble(args: &AssembleArgs) -> Result<()> {
                     .into(),
             });
         }
-        config.operator = OperatorChoice::Dense;
+        options.operator = OperatorChoice::Dense;
     }
+    let config = args.geometry.scene.config_of(&options)?;
     let problem = pipeline::build(&config)?;
     super::output::print_notes(&problem.scene);
     let built = pipeline::build_operator(&config, &problem)?;

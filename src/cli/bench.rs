@@ -9,7 +9,9 @@ use super::args::BenchArgs;
 use super::ranks::is_root;
 
 pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
-    let mut config = args.geometry.config()?;
+    let mut options = args.geometry.options()?;
+    args.operator.fill(&mut options);
+    let mut config = args.geometry.scene.config_of(&options)?;
     config.progress = radiosity::progress::ProgressSink::default();
     let named = match &args.backends {
         Some(named) => named.clone(),
@@ -35,14 +37,16 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
         }
         backends.push(b);
     }
-    args.operator.apply(&mut config)?;
     let built = pipeline::build(&config)?;
     // Under auto only a CPU-only bench of a large system switches to the compressed operator;
     // asked for, it is built on each named backend and benched against the dense CPU assembly.
     let gpu_named = backends.iter().any(|b| *b != Backend::Cpu);
     let compressed_bench = match config.operator {
         OperatorChoice::Compressed => true,
-        OperatorChoice::Auto => !gpu_named && pipeline::compresses(&config, &built),
+        OperatorChoice::Auto => {
+            !gpu_named
+                && pipeline::operator_kind(&config, &built)? == pipeline::OperatorKind::Compressed
+        }
         OperatorChoice::Dense => false,
     };
     if compressed_bench {

@@ -150,7 +150,7 @@ fn print_inspection(out: &Inspection, tolerance: f64) {
              rank <= {}), {} empty blocks, {} admissible blocks kept exact{}; the exact blocks' \
              row walks viewed {:.0} faces per node ({:.1} of them finding nothing seen)",
             tolerance,
-            radiosity::operator::Precision::for_tolerance(tolerance).name(),
+            radiosity::operator::precision_for(tolerance).name(),
             out.operator_bytes as f64 / 1e6,
             b.low_rank_bytes as f64 / 1e6,
             b.near_blocks,

@@ -1,28 +1,7 @@
 //! The WGSL sources and how they are joined: `alias real = f64|f32;`, then the math library of that
 //! precision, then the kernel. This is the only place shader text is assembled.
 
-crate::vocabulary::named_options! {
-    /// Floating-point precision of a GPU kernel (f64 needs `SHADER_F64` and uses software
-    /// transcendentals; f32 the math library of `shaders/math_f32.wgsl`).
-    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum Precision as "precision" {
-        /// Double precision
-        F64 = "f64",
-        /// Single precision
-        F32 = "f32",
-    }
-}
-
-impl Precision {
-    /// Bytes per real number.
-    pub fn bytes(&self) -> usize {
-        match self {
-            Self::F64 => 8,
-            Self::F32 => 4,
-        }
-    }
-}
+pub use crate::vocabulary::Precision;
 
 const MATH_F64: &str = include_str!("../../shaders/math_f64.wgsl");
 const MATH_F32: &str = include_str!("../../shaders/math_f32.wgsl");

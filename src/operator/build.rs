@@ -13,7 +13,7 @@ use super::options::{CompressionOptions, ProblemShape};
 use super::sampling::{build_list_bytes, estimate_memory};
 use super::sight::ClusterSight;
 use super::stats::{order_bytes, summed_over};
-use super::stored::Precision;
+use super::stored::{Precision, precision_for};
 use super::{batched, shadowed, share};
 use crate::assembly::{AssemblyOptions, PairEvaluation, PairIntegrator, Problem};
 use crate::discretization::Discretization;
@@ -73,7 +73,7 @@ impl CompressedOperator {
         // Everything the build holds counts from here on (the guard's look at the resident
         // memory): the cluster trees, the plan, the lists, the blocks.
         let mut guard = MemoryGuard::new(disc.dof());
-        let precision = Precision::for_tolerance(options.tolerance);
+        let precision = precision_for(options.tolerance);
         let integrator = match precision {
             Precision::F32 => PairIntegrator::for_single_precision(disc.method, assembly),
             Precision::F64 => PairIntegrator::new(disc.method, assembly),
@@ -152,7 +152,7 @@ impl CompressedOperator {
             // the build stops where it would pass the allowance.
             let reflects = |i: usize| disc.node_rho(i) != 0.0;
             let certain = plan.certain_near_entries(&nodes, &elements, per, reflects);
-            guard.check(precision.bytes() * certain + build_list_bytes(plan))?;
+            guard.check(precision.bytes() as u64 * certain + build_list_bytes(plan))?;
             let sub_blocks = shadowed::sub_blocks(&plan.shadowed);
             progress.start(stage, plan.near.len() + plan.far.len() + sub_blocks);
             let built = match batches {
@@ -179,7 +179,7 @@ impl CompressedOperator {
                 for round in rounds {
                     let held: u64 = built.blocks.iter().map(Block::bytes).sum();
                     let held: Vec<u64> = ranks.gather(&[held]).iter().map(|v| v[0]).collect();
-                    let mine = share::dealt(round, &held, precision.bytes(), rank);
+                    let mine = share::dealt(round, &held, precision.bytes() as u64, rank);
                     built = built.joined(build(&mine, "compression")?);
                 }
                 (built, empty)

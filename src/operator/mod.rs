@@ -46,7 +46,7 @@ pub use options::{
 };
 pub use saved::{BinaryReader, BinaryWriter};
 pub use stats::OperatorStats;
-pub use stored::{F32_FROM_TOLERANCE, Precision};
+pub use stored::{F32_FROM_TOLERANCE, Precision, precision_for};
 
 #[cfg(test)]
 mod plan_tests;

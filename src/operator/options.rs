@@ -77,7 +77,7 @@ impl OperatorChoice {
                 } else {
                     (true, format!("{} unknowns, {per_face:.0} elements per face", shape.dof))
                 };
-                let name = if compressed { "compressed" } else { "dense" };
+                let name = if compressed { Self::Compressed.name() } else { Self::Dense.name() };
                 (compressed, Some(format!("operator auto: {name} ({why})")))
             }
         }
@@ -122,18 +122,19 @@ pub struct CompressionOptions {
     pub refine: Option<u32>,
 }
 
-/// Whether the compressed operator has shadowed blocks ([`CompressionOptions::shadowed_blocks`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ShadowedBlocks {
-    /// Where faces hold at least [`SHADOWED_FROM_ELEMENTS_PER_FACE`] elements on average
-    /// ([`ShadowedBlocks::decide`]).
-    #[default]
-    Auto,
-    /// Always.
-    On,
-    /// Never: such blocks are split down to exact leaves and low-rank blocks.
-    Off,
+crate::vocabulary::named_options! {
+    /// Whether the compressed operator has shadowed blocks
+    /// ([`CompressionOptions::shadowed_blocks`]).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum ShadowedBlocks as "shadowed-blocks" {
+        /// Where faces hold many elements on average
+        Auto = "auto" default,
+        /// Always
+        On = "on",
+        /// Never: such blocks are split down to exact leaves and low-rank blocks
+        Off = "off",
+    }
 }
 
 impl ShadowedBlocks {

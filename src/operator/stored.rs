@@ -10,41 +10,18 @@ use std::sync::Arc;
 
 use super::aca::{LowRank, dot};
 
-/// The precision of a compressed operator's stored values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Precision {
-    /// Values as computed.
-    F64,
-    /// Values rounded to f32 (relative error at most 2^-24 each), arithmetic in f64.
-    F32,
-}
+/// The precision of a compressed operator's stored values: f64 as computed, or rounded to f32
+/// (relative error at most 2^-24 each, arithmetic in f64).
+pub use crate::vocabulary::Precision;
 
 /// The smallest compression tolerance at which values are stored in f32: 16 times f32's unit
 /// roundoff, so that rounding adds at most a sixteenth of the tolerance to a product. The
 /// default tolerance 1e-6 is above it; at 1e-9 the values stay in f64.
 pub const F32_FROM_TOLERANCE: f64 = 16.0 * f32::EPSILON as f64 / 2.0;
 
-impl Precision {
-    /// The precision an operator of compression tolerance `tolerance` stores its values in.
-    pub fn for_tolerance(tolerance: f64) -> Self {
-        if tolerance >= F32_FROM_TOLERANCE { Precision::F32 } else { Precision::F64 }
-    }
-
-    /// Bytes of a value.
-    pub fn bytes(self) -> u64 {
-        match self {
-            Precision::F64 => 8,
-            Precision::F32 => 4,
-        }
-    }
-
-    /// Its name, as reports print it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F64 => "f64",
-            Precision::F32 => "f32",
-        }
-    }
+/// The precision an operator of compression tolerance `tolerance` stores its values in.
+pub fn precision_for(tolerance: f64) -> Precision {
+    if tolerance >= F32_FROM_TOLERANCE { Precision::F32 } else { Precision::F64 }
 }
 
 /// Stored values: f64, or rounded to f32 (boxed slices: a block's values do not grow, and
@@ -169,8 +146,9 @@ impl BlockData {
             return BlockData::Dense(Values::F64(Box::default()));
         }
         let width = d.len() / rows;
-        let masked = SparseRows::mask_bytes(rows, width) + precision.bytes() * non_zero as u64;
-        if masked < precision.bytes() * d.len() as u64 {
+        let masked =
+            SparseRows::mask_bytes(rows, width) + (precision.bytes() as u64) * non_zero as u64;
+        if masked < (precision.bytes() as u64) * d.len() as u64 {
             BlockData::Sparse(SparseRows::from_dense(&d, width, precision))
         } else {
             BlockData::Dense(Values::new(d.into_vec(), precision))
@@ -696,7 +674,7 @@ mod tests {
                 assert!((yy[2 * r + 1] - 2.0 * b[r]).abs() <= 1e-15 * scale);
             }
         }
-        assert_eq!(Precision::for_tolerance(1e-6), Precision::F32);
+        assert_eq!(precision_for(1e-6), Precision::F32);
     }
 
     /// Sparse rows of one or several mask words give the dense block's product to rounding, and
@@ -764,7 +742,7 @@ mod tests {
                 assert!(empty.is_some_and(|e| e.masks.iter().all(|&w| w == 0)));
             }
         }
-        assert_eq!(Precision::for_tolerance(1e-9), Precision::F64);
+        assert_eq!(precision_for(1e-9), Precision::F64);
     }
 
     /// The runs of set bits, within and across mask words.

@@ -194,6 +194,9 @@ pub struct RunConfig {
     pub operator: OperatorChoice,
     /// How the compressed operator is built.
     pub compression: CompressionOptions,
+    /// Most memory the run may hold resident, in bytes (`None`: a share of what is available
+    /// for each large structure); installed for the run's allocations by [`super::build_on`].
+    pub memory_limit: Option<u64>,
     /// Colour channels (indices into [`CHANNELS`]) to solve for, each with its own rho and E on
     /// the one assembled operator; empty: the grey problem (the channels' means).
     pub bands: Vec<usize>,
@@ -238,6 +241,7 @@ impl RunConfig {
             surface_lattice: None,
             operator: OperatorChoice::Dense,
             compression: CompressionOptions::default(),
+            memory_limit: None,
             bands: Vec::new(),
             cases: None,
             operator_file: None,

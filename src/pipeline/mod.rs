@@ -7,23 +7,29 @@
 
 mod backend;
 mod bands;
+mod built;
 mod cases;
+mod choice;
 mod config;
+mod device;
 mod operator;
 mod options;
 mod report;
 mod saved;
+mod summary;
 
 pub use crate::assembly::Problem;
+pub use crate::assembly::peak_rss_bytes;
 pub use backend::{Assembler, assemble_on};
+pub use built::{BuiltOperator, TimedAssembly, distributed_report};
+pub use choice::{OperatorKind, operator_kind};
 pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
-pub use operator::{
-    BuiltOperator, DeviceTransfers, OperatorSummary, TimedAssembly, build_compressed,
-    build_operator, compressed_on_device, compresses, distributed_report,
-};
+pub use device::compressed_on_device;
+pub use operator::{build_compressed, build_operator};
 pub use options::{BackendName, MeshName, RunOptions};
-pub use report::{BandReport, CaseReport, RunLabel, RunReport, peak_rss_bytes};
+pub use report::{BandReport, CaseReport, RunLabel, RunReport};
 pub use saved::{OperatorHeader, load_operator, save_operator};
+pub use summary::{DeviceTransfers, OperatorSummary};
 
 use std::time::Instant;
 
@@ -72,8 +78,12 @@ pub fn build(config: &RunConfig) -> Result<Problem> {
     build_on(config, scene)
 }
 
-/// The problem of `config` on a scene built already (`config.scene` is not read).
+/// The problem of `config` on a scene built already (`config.scene` is not read). Every run
+/// starts here, so here its memory limit is installed for the checks made before each large
+/// allocation ([`crate::assembly::check_fits`], the compressed operator's guard), which read it
+/// deep below the configuration.
 pub fn build_on(config: &RunConfig, scene: Scene) -> Result<Problem> {
+    crate::assembly::set_memory_limit(config.memory_limit);
     let progress = &*config.progress;
     let (planner, plan_seconds) = in_stage(progress, "occluders", || Problem::plan(&scene));
     let (mesh, disc) = in_stage(progress, "mesh", || {

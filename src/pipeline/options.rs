@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Precision;
 use crate::kernels::graded;
 use crate::mesh::{LineExtent, S5Diagonals};
-use crate::operator::{self, OperatorChoice};
+use crate::operator::{self, OperatorChoice, ShadowedBlocks};
 use crate::problems::{SolutionName, TrueSolution};
 use crate::scene::SurfaceParameters;
 use crate::solve::{self, SolverChoice, SolverOptions};
@@ -106,10 +106,17 @@ pub struct RunOptions {
     pub backend: BackendName,
     /// The GPU kernels' precision.
     pub precision: Precision,
+    /// Precision of a dense K kept in the GPU's memory (`--backend gpu --solver iterative`).
+    pub storage: Precision,
     /// Which operator is stored.
     pub operator: OperatorChoice,
     /// The compressed operator's tolerance.
     pub compression_tolerance: f64,
+    /// Whether the compressed operator has shadowed blocks.
+    pub shadowed_blocks: ShadowedBlocks,
+    /// Most memory the run may hold resident, in bytes; `None`: each large structure may take
+    /// [`crate::assembly::MEMORY_SHARE`] of the memory available when it is built.
+    pub memory_limit: Option<u64>,
     /// The linear solver.
     pub solver: SolverChoice,
     /// The iterative solver's relative residual.
@@ -143,8 +150,11 @@ impl Default for RunOptions {
             gamma: None,
             backend: BackendName::Cpu,
             precision: Precision::F64,
+            storage: Precision::F64,
             operator: OperatorChoice::Auto,
             compression_tolerance: operator::DEFAULT_TOLERANCE,
+            shadowed_blocks: ShadowedBlocks::Auto,
+            memory_limit: None,
             solver: SolverChoice::Auto,
             tolerance: solve::DEFAULT_TOLERANCE,
             bands: "grey".into(),
@@ -155,10 +165,17 @@ impl Default for RunOptions {
 
 impl RunOptions {
     /// The configuration of these options on `scene`, every combination checked: α with the
-    /// linear method only, β and γ with the solutions that take them, the quadrature's levels
-    /// and the compression tolerance in range.
+    /// linear method only, β and γ with the solutions that take them, the quadrature's levels,
+    /// the compression tolerance and the memory limit in range.
     pub fn config(&self, scene: SceneSource) -> Result<RunConfig> {
         self.params.validate()?;
+        if self.memory_limit == Some(0) {
+            return Err(Error::InvalidParameter {
+                name: "memory-limit",
+                value: "0".into(),
+                reason: "the limit must be at least one byte".into(),
+            });
+        }
         if self.imt_nodes < 2 {
             return Err(Error::InvalidParameter {
                 name: "imt-nodes",
@@ -192,13 +209,16 @@ impl RunOptions {
                 ..Default::default()
             },
             backend: Backend::named(self.backend, self.precision),
+            storage: self.storage,
             operator: self.operator,
+            memory_limit: self.memory_limit,
             solver: SolverOptions { choice: self.solver, tolerance: self.tolerance },
             bands: crate::scene::parse_bands(&self.bands)?,
             operator_file: self.operator_file.clone(),
             ..RunConfig::of(scene)
         };
         config.compression.tolerance = self.compression_tolerance;
+        config.compression.shadowed_blocks = self.shadowed_blocks;
         config.compression.validate()?;
         Ok(config)
     }
@@ -228,6 +248,8 @@ mod tests {
         assert!(beta.config(cube()).is_err());
         let tolerance = RunOptions { compression_tolerance: 2.0, ..Default::default() };
         assert!(tolerance.config(cube()).is_err());
+        let nothing = RunOptions { memory_limit: Some(0), ..Default::default() };
+        assert!(nothing.config(cube()).unwrap_err().to_string().contains("memory-limit"));
         let linear = RunOptions { method: MethodName::Linear, ..Default::default() };
         let method = linear.config(cube()).unwrap().method;
         assert_eq!(method, Method::linear(Method::PAPER_ALPHA).unwrap());

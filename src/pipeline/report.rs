@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use super::summary::DeviceTransfers;
 use super::{Problem, RunConfig};
 use crate::assembly::Quadrature;
 use crate::distributed::DistributedReport;
@@ -116,7 +117,7 @@ pub struct RunReport {
     /// Where a dense K assembled on the GPU is kept and what crossed (`operator_location`,
     /// `bytes_uploaded`, `bytes_read_back`, `gpu_submissions`, `device_idle_fraction`).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
-    pub transfers: Option<super::DeviceTransfers>,
+    pub transfers: Option<DeviceTransfers>,
     /// Peak resident memory of the whole process so far, from the OS (Linux), in bytes.
     pub peak_rss_bytes: Option<u64>,
     /// Smallest, mean and largest nodal value of the solution.
@@ -175,12 +176,4 @@ pub(super) fn range(u: &[f64]) -> [f64; 3] {
             (lo.min(v), hi.max(v), s + v)
         });
     [lo, sum / u.len() as f64, hi]
-}
-
-/// Peak resident set size of this process (`VmHWM` of /proc/self/status), in bytes.
-pub fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
 }

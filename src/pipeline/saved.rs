@@ -14,11 +14,12 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::operator::TimedAssembly;
-use super::{BuiltOperator, Problem, RunConfig};
+use super::device::blocks_on_device;
+use super::{BuiltOperator, Problem, RunConfig, TimedAssembly};
 use crate::assembly::{Assembly, CollocationMatrix, check_fits};
 use crate::error::{Error, Result};
 use crate::operator::{BinaryReader, BinaryWriter, CompressedOperator, OperatorChoice};
+use crate::vocabulary::Named;
 
 /// The first bytes of every operator file.
 const MAGIC: &[u8] = b"radiosity operator\n";
@@ -52,15 +53,15 @@ pub struct OperatorHeader {
 }
 
 impl OperatorHeader {
-    /// The header of the operator (`dense` or `compressed`) that `config` builds for `problem`.
-    fn of(config: &RunConfig, problem: &Problem, operator: &str) -> Self {
+    /// The header of the operator (dense or compressed) that `config` builds for `problem`.
+    fn of(config: &RunConfig, problem: &Problem, operator: OperatorChoice) -> Self {
         let method = match config.method.alpha() {
             Some(alpha) => format!("{} (alpha {alpha})", config.method.name()),
             None => config.method.name().to_string(),
         };
         let a = &config.assembly;
         Self {
-            operator: operator.to_string(),
+            operator: operator.name().to_string(),
             surface: problem.scene.name.clone(),
             geometry_hash: format!("{:016x}", geometry_hash(problem)),
             mesh: config.mesh.name().to_string(),
@@ -73,7 +74,7 @@ impl OperatorHeader {
             }),
             n: problem.mesh.len(),
             dof: problem.disc.dof(),
-            compression_tolerance: (operator == "compressed")
+            compression_tolerance: (operator == OperatorChoice::Compressed)
                 .then_some(config.compression.tolerance),
         }
     }
@@ -145,16 +146,19 @@ pub fn save_operator(
     config: &RunConfig,
     problem: &Problem,
 ) -> Result<()> {
-    if let BuiltOperator::Device { .. } = operator {
-        return Err(Error::InvalidParameter {
-            name: "save",
-            value: path.display().to_string(),
-            reason: "this matrix is in the GPU's memory; build it for the host (the CPU, or \
-                     without the iterative solver) to save it"
-                .into(),
-        });
-    }
-    let kind = operator.summary(config).operator;
+    let kind = match operator {
+        BuiltOperator::Dense(_) => OperatorChoice::Dense,
+        BuiltOperator::Compressed { .. } => OperatorChoice::Compressed,
+        BuiltOperator::Device { .. } => {
+            return Err(Error::InvalidParameter {
+                name: "save",
+                value: path.display().to_string(),
+                reason: "this matrix is in the GPU's memory; build it for the host (the CPU, or \
+                         without the iterative solver) to save it"
+                    .into(),
+            });
+        }
+    };
     let header = OperatorHeader::of(config, problem, kind);
     let mut out = BinaryWriter::new(BufWriter::new(File::create(path)?));
     out.raw(MAGIC)?;
@@ -191,25 +195,29 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
     }
     let header: OperatorHeader = serde_json::from_slice(&input.bytes("the header")?)
         .map_err(|e| input.error(format!("damaged header: {e}")))?;
-    let asked = match config.operator {
-        OperatorChoice::Auto => header.operator.as_str(),
-        OperatorChoice::Dense => "dense",
-        OperatorChoice::Compressed => "compressed",
+    let held = match OperatorChoice::parse(&header.operator) {
+        Ok(kind @ (OperatorChoice::Dense | OperatorChoice::Compressed)) => kind,
+        _ => return Err(input.error(format!("damaged header: operator '{}'", header.operator))),
     };
-    if asked != header.operator {
+    let asked = match config.operator {
+        OperatorChoice::Auto => held,
+        kind => kind,
+    };
+    if asked != held {
         return Err(input.error(format!(
-            "holds the {} operator, this run asks for the {asked} one",
-            header.operator
+            "holds the {} operator, this run asks for the {} one",
+            held.name(),
+            asked.name()
         )));
     }
     // The header this run would write for the kind the file holds.
-    let run = OperatorHeader::of(config, problem, asked);
+    let run = OperatorHeader::of(config, problem, held);
     if let Some(differ) = header.differences(&run) {
         return Err(input.error(format!("saved for another problem: {differ}")));
     }
     let dof = problem.disc.dof();
-    let built = match header.operator.as_str() {
-        "dense" => {
+    let built = match held {
+        OperatorChoice::Dense => {
             check_fits(8.0 * (dof as f64) * (dof as f64), dof)?;
             let values = input.f64s("the matrix")?;
             if values.len() != dof * dof {
@@ -220,13 +228,14 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
             let assembled = Assembly { matrix, stats: Default::default() };
             BuiltOperator::Dense(TimedAssembly::loaded(assembled, setup_seconds))
         }
-        "compressed" => {
+        OperatorChoice::Auto => unreachable!("a file holds a dense or a compressed operator"),
+        OperatorChoice::Compressed => {
             let op = CompressedOperator::read(&mut input)?;
             if op.dof() != dof {
                 return Err(input.error(format!("damaged: {} unknowns for dof {dof}", op.dof())));
             }
             let setup_seconds = started.elapsed().as_secs_f64();
-            let on_device = super::operator::blocks_on_device(config, &op);
+            let on_device = blocks_on_device(config, &op);
             BuiltOperator::Compressed {
                 op: Box::new(op),
                 on_device,
@@ -235,7 +244,6 @@ pub fn load_operator(path: &Path, config: &RunConfig, problem: &Problem) -> Resu
                 preparation_seconds: 0.0,
             }
         }
-        other => return Err(input.error(format!("damaged header: operator '{other}'"))),
     };
     input.finish()?;
     Ok(built)

@@ -2,7 +2,7 @@
 
 use clap::Args;
 use radiosity::gpu::Precision;
-use radiosity::pipeline::{Backend, BackendName, RunOptions};
+use radiosity::pipeline::{BackendName, RunOptions};
 
 use super::named::named;
 
@@ -26,8 +26,9 @@ pub(crate) struct DeviceArgs {
 }
 
 impl DeviceArgs {
-    /// The backend these arguments name.
-    pub(crate) fn backend(&self) -> Backend {
-        Backend::named(self.backend, self.precision)
+    /// The backend and its precision, into `options`.
+    pub(crate) fn fill(&self, options: &mut RunOptions) {
+        options.backend = self.backend;
+        options.precision = self.precision;
     }
 }

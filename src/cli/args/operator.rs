@@ -2,7 +2,7 @@
 //! `OperatorArgs`.
 
 use clap::Args;
-use radiosity::operator::OperatorChoice;
+use radiosity::operator::{OperatorChoice, ShadowedBlocks};
 use radiosity::pipeline::RunOptions;
 
 use super::named::named;
@@ -35,32 +35,20 @@ pub(crate) struct OperatorArgs {
     /// its build where the estimate of its peak (from a sample of its blocks) cannot fit, or
     /// else where its build reaches it [default: 80 % of the available memory for each large
     /// structure]
-    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    #[arg(long, value_name = "BYTES", value_parser = radiosity::assembly::parse_size)]
     pub(crate) memory_limit: Option<u64>,
 }
 
-/// A size in bytes: digits, optionally with K, M, G or T (powers of 1024; `B` or `iB` may
-/// follow).
-fn parse_bytes(text: &str) -> std::result::Result<u64, String> {
-    let t = text.trim();
-    let t = t.strip_suffix("iB").or_else(|| t.strip_suffix('B')).unwrap_or(t);
-    let (digits, shift) = match t.char_indices().last() {
-        Some((k, c)) if c.is_ascii_alphabetic() => {
-            let shift = match c.to_ascii_uppercase() {
-                'K' => 10,
-                'M' => 20,
-                'G' => 30,
-                'T' => 40,
-                _ => return Err(format!("'{text}': the unit must be K, M, G or T")),
-            };
-            (&t[..k], shift)
-        }
-        _ => (t, 0),
-    };
-    let value: f64 = digits.trim().parse().map_err(|_| format!("'{text}' is no size in bytes"))?;
-    let bytes = value * (1u64 << shift) as f64;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(format!("'{text}': the limit must be at least one byte"));
+impl OperatorArgs {
+    /// The operator's options, into `options`.
+    pub(crate) fn fill(&self, options: &mut RunOptions) {
+        options.operator = self.operator;
+        options.compression_tolerance = self.compression_tolerance;
+        options.shadowed_blocks = match (self.shadowed_blocks, self.no_shadowed_blocks) {
+            (true, _) => ShadowedBlocks::On,
+            (_, true) => ShadowedBlocks::Off,
+            _ => ShadowedBlocks::Auto,
+        };
+        options.memory_limit = self.memory_limit;
     }
-    Ok(bytes as u64)
 }

@@ -1,9 +1,8 @@
 //! The arguments into the library's `RunOptions`, and from there (`RunOptions::config`, the
 //! one place Python's keywords go too) into a `RunConfig`; then what only the command line
-//! sets: progress on standard error, the ranks, the GPU storage, the memory limit.
+//! sets: progress on standard error, the ranks, `solve`'s emission cases and surface lattice.
 
 use radiosity::error::{Error, Result};
-use radiosity::operator::ShadowedBlocks;
 use radiosity::pipeline::{RunConfig, RunOptions, SceneSource};
 use radiosity::problems::{EmissionCases, SolutionName};
 
@@ -12,7 +11,6 @@ use crate::cli::ranks::{is_root, world};
 
 use super::commands::SolveArgs;
 use super::geometry::{CollocationArgs, GeometryArgs, SceneArgs};
-use super::operator::OperatorArgs;
 use super::values::parse_params;
 
 impl CollocationArgs {
@@ -51,7 +49,7 @@ impl SceneArgs {
 
     /// The configuration of `options` on this scene, progress on standard error (the root
     /// rank's) and the ranks of `mpirun`.
-    fn config_of(&self, options: &RunOptions) -> Result<RunConfig> {
+    pub(crate) fn config_of(&self, options: &RunOptions) -> Result<RunConfig> {
         let scene = SceneSource::parse(&self.scene)?.with_import(self.import.options());
         Ok(RunConfig {
             progress: if is_root() { progress::on_stderr() } else { Default::default() },
@@ -63,25 +61,19 @@ impl SceneArgs {
 
 impl GeometryArgs {
     /// The scene's, its mesh's and the method's options.
-    fn options(&self) -> Result<RunOptions> {
+    pub(crate) fn options(&self) -> Result<RunOptions> {
         let mut options = self.scene.options()?;
         self.collocation.fill(&mut options);
         Ok(options)
-    }
-
-    /// A configuration of the scene, its mesh and the collocation method.
-    pub(crate) fn config(&self) -> Result<RunConfig> {
-        self.scene.config_of(&self.options()?)
     }
 }
 
 impl SolveArgs {
     pub(crate) fn config(&self) -> Result<RunConfig> {
         let mut options = self.geometry.options()?;
-        options.backend = self.device.backend;
-        options.precision = self.device.precision;
-        options.operator = self.operator.operator;
-        options.compression_tolerance = self.operator.compression_tolerance;
+        self.device.fill(&mut options);
+        options.storage = self.storage;
+        self.operator.fill(&mut options);
         // Emission cases give E: no true solution unless one is asked for (and then refused).
         let cases_without_solution = self.emission_file.is_some() && self.solution.is_none();
         options.solution =
@@ -93,8 +85,6 @@ impl SolveArgs {
         options.bands = self.colour.bands.clone();
         options.operator_file = self.operator_file.as_ref().map(std::path::PathBuf::from);
         let mut config = self.geometry.scene.config_of(&options)?;
-        config.storage = self.storage;
-        self.operator.apply(&mut config)?;
         if let Some(m) = self.surface_lattice {
             if m < 3 {
                 return Err(Error::InvalidParameter {
@@ -109,20 +99,5 @@ impl SolveArgs {
             config.cases = Some(EmissionCases::read_csv(std::path::Path::new(path))?);
         }
         Ok(config)
-    }
-}
-
-impl OperatorArgs {
-    /// Sets the operator of `config`, refusing a tolerance outside (0, 1), and the memory limit.
-    pub(crate) fn apply(&self, config: &mut RunConfig) -> Result<()> {
-        config.operator = self.operator;
-        config.compression.tolerance = self.compression_tolerance;
-        config.compression.shadowed_blocks = match (self.shadowed_blocks, self.no_shadowed_blocks) {
-            (true, _) => ShadowedBlocks::On,
-            (_, true) => ShadowedBlocks::Off,
-            _ => ShadowedBlocks::Auto,
-        };
-        radiosity::assembly::set_memory_limit(self.memory_limit);
-        config.compression.validate()
     }
 }

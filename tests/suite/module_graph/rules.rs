@@ -24,9 +24,6 @@ pub const ALLOWED_CYCLES: &[&[&str]] = &[
     // Between files: gpu/assembly.rs names resident.rs's `DeviceTraffic`, resident.rs
     // assembly.rs's `GpuAssembler`.
     &["gpu/assembly", "gpu/resident"],
-    // Between files: operator.rs names report.rs's `peak_rss_bytes` and saved.rs, which names
-    // operator.rs's `TimedAssembly`, as report.rs names its `DeviceTransfers`.
-    &["pipeline/operator", "pipeline/report", "pipeline/saved"],
     // Between files: occluders.rs builds solids.rs's `Solid`s, solids.rs names `Occluder`.
     &["visibility/occluders", "visibility/solids"],
 ];
