@@ -1,7 +1,7 @@
 // f64 math library: the transcendental functions the kernels need, from + - * / sqrt and ldexp.
 //
 // Why: naga emits GLSL.std.450 Atan/Log/Exp for f64, which that instruction set defines only for
-// 16/32-bit floats; on lavapipe they return garbage (DESIGN.md sec. 4). naga also rejects frexp
+// 16/32-bit floats; on lavapipe they return garbage (docs/gpu.md, "f64 transcendentals"). naga also rejects frexp
 // and bitcast on f64 here, so exponents come from the f32 log2 and an exact correction, or a
 // cascade of comparisons with powers of two outside f32's range. Worst errors, measured against Rust's f64 functions, are in docs/gpu.md.
 //
