@@ -1,7 +1,7 @@
 //! Collocation assembler and solver for the occluded radiosity equation on polyhedral surfaces.
 //!
 //! The modules are listed by layer, lowest first, as ARCHITECTURE.md's table has them: a module
-//! uses only modules of lower layers, listed above it (`tests/module_graph/` checks both).
+//! uses only modules of lower layers, listed above it (`tests/suite/module_graph/` checks both).
 //! Each layer is a group of its own, since rustfmt sorts the modules within a group.
 #![warn(missing_docs)]
 

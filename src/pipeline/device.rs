@@ -8,13 +8,15 @@ use crate::error::{Error, Result};
 use crate::gpu::{self, DeviceBlocks, DeviceOperator};
 use crate::operator::CompressedOperator;
 
-/// K assembled on the GPU and left in its memory.
-pub(super) fn assemble_on_device(config: &RunConfig, problem: &Problem) -> Result<BuiltOperator> {
-    let started = Instant::now();
-    let assembler =
-        Assembler::new(config.backend, problem.disc.method, config.assembly.quadrature)?;
-    let preparation_seconds = started.elapsed().as_secs_f64();
-    let Assembler::Gpu(gpu) = &assembler else {
+/// K assembled on the GPU by `assembler` (prepared in `preparation_seconds`) and left in its
+/// memory.
+pub(super) fn assemble_on_device(
+    config: &RunConfig,
+    problem: &Problem,
+    assembler: &Assembler,
+    preparation_seconds: f64,
+) -> Result<BuiltOperator> {
+    let Assembler::Gpu(gpu) = assembler else {
         unreachable!("a GPU backend gives the GPU's assembler")
     };
     let started = Instant::now();

@@ -14,13 +14,14 @@ use crate::operator::{CompressedOperator, CompressionOptions};
 use crate::solve;
 
 /// Assembles K for `config` up to `config.setup_repeats` times (fewer once one assembly takes over
-/// [`REPEAT_BELOW_SECONDS`]) with one prepared backend; the setup time is the pair planner's
-/// plus the fastest assembly's.
-fn assemble_timed(config: &RunConfig, problem: &Problem) -> Result<TimedAssembly> {
-    let started = Instant::now();
-    let assembler =
-        Assembler::new(config.backend, problem.disc.method, config.assembly.quadrature)?;
-    let preparation_seconds = started.elapsed().as_secs_f64();
+/// [`REPEAT_BELOW_SECONDS`]) with the backend `assembler`, prepared in `preparation_seconds`;
+/// the setup time is the pair planner's plus the fastest assembly's.
+fn assemble_timed(
+    config: &RunConfig,
+    problem: &Problem,
+    assembler: &Assembler,
+    preparation_seconds: f64,
+) -> Result<TimedAssembly> {
     let progress = &*config.progress;
     let mut timed = None;
     let mut fastest = f64::INFINITY;
@@ -49,22 +50,27 @@ pub fn build_operator(config: &RunConfig, problem: &Problem) -> Result<BuiltOper
         check_saved(config)?;
         return load_operator(path, config, problem);
     }
-    match operator_kind(config, problem)? {
-        OperatorKind::DenseOnDevice => match assemble_on_device(config, problem) {
-            Ok(built) => Ok(built),
-            Err(e) => {
-                config.progress.note(&format!(
-                    "the matrix is kept on the host in f64 ({e}); the products run there"
-                ));
-                Ok(BuiltOperator::Dense(assemble_timed(config, problem)?))
+    let kind = operator_kind(config, problem)?;
+    // The run's backend, prepared once (on the GPU: its kernels compiled) for whichever build.
+    let started = Instant::now();
+    let assembler =
+        Assembler::new(config.backend, problem.disc.method, config.assembly.quadrature)?;
+    let preparation_seconds = started.elapsed().as_secs_f64();
+    let dense = || assemble_timed(config, problem, &assembler, preparation_seconds);
+    match kind {
+        OperatorKind::DenseOnDevice => {
+            match assemble_on_device(config, problem, &assembler, preparation_seconds) {
+                Ok(built) => Ok(built),
+                Err(e) => {
+                    config.progress.note(&format!(
+                        "the matrix is kept on the host in f64 ({e}); the products run there"
+                    ));
+                    Ok(BuiltOperator::Dense(dense()?))
+                }
             }
-        },
-        OperatorKind::Dense => Ok(BuiltOperator::Dense(assemble_timed(config, problem)?)),
+        }
+        OperatorKind::Dense => Ok(BuiltOperator::Dense(dense()?)),
         OperatorKind::Compressed => {
-            let started = Instant::now();
-            let method = problem.disc.method;
-            let assembler = Assembler::new(config.backend, method, config.assembly.quadrature)?;
-            let preparation_seconds = started.elapsed().as_secs_f64();
             let started = Instant::now();
             let (op, build_traffic) = build_compressed(config, &assembler, problem)?;
             let setup_seconds = problem.plan_seconds + started.elapsed().as_secs_f64();

@@ -126,7 +126,7 @@ mod tests {
 
     /// 3 x 4 with an empty row, a negative entry, and a value that needs all 17 digits, stored
     /// as the view factors store theirs. (The `.npz` is read back, through the binary, in
-    /// `tests/scenes.rs`.)
+    /// `tests/suite/scenes.rs`.)
     fn example() -> (Vec<usize>, Vec<u32>, Vec<f64>) {
         let dense = [0.0, 1.5, 0.0, -2.0, 0.0, 0.0, 0.0, 0.0, 0.1 + 0.2, 0.0, 0.0, 7e-300];
         let (mut indptr, mut indices, mut data) = (vec![0], Vec::new(), Vec::new());
