@@ -2,7 +2,7 @@
 //! floating boxes, louvres, small cities of rotated buildings far from the origin, slivers
 //! touching walls): every row of K/rho sums to 1 in a closed scene (Lemma 2.1), both methods; the
 //! compressed operator's products are within ten times its tolerance of the dense matrix's, with
-//! and without shadowed blocks. (GPU = CPU on the same families: `tests/gpu.rs`.)
+//! and without shadowed blocks. (GPU = CPU on the same families: `tests/suite/gpu.rs`.)
 
 use radiosity::assembly::{AssemblyOptions, CollocationMatrix, Problem, assemble};
 use radiosity::discretization::{Discretization, Method};
