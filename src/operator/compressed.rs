@@ -104,26 +104,39 @@ impl CompressedOperator {
                 }
             }
         }
-        // Each run of blocks adds into its own vector in block order, and the runs' vectors are
-        // summed in run order: a product repeats to the bit on a given number of threads (a
-        // rayon fold would group the sums as its work stealing falls).
-        let runs = block_runs(&self.blocks, rayon::current_num_threads());
-        let mut partial: Vec<Vec<f64>> = runs
+        // Each run of blocks adds into its own rows in block order, and the runs' rows are summed
+        // in run order: a product repeats to the bit on a given number of threads (a rayon fold
+        // would group the sums as its work stealing falls). Four runs a thread let the threads
+        // share the work as it comes; a run holds only the rows its blocks span (blocks follow
+        // the block tree, so a run's rows are mostly near one another).
+        let runs = block_runs(&self.blocks, RUNS_PER_THREAD * rayon::current_num_threads());
+        let partial: Vec<(Range<usize>, Vec<f64>)> = runs
             .par_iter()
             .map(|run| {
-                let mut y = vec![0.0; dof * m];
-                for b in &self.blocks[run.clone()] {
-                    let xs = &xp[b.col_range().start * per * m..b.col_range().end * per * m];
-                    add(&b.data, xs, &mut y[b.row_range().start * m..b.row_range().end * m]);
+                let blocks = &self.blocks[run.clone()];
+                let start = blocks.iter().map(|b| b.row_range().start).min().unwrap_or(0);
+                let end = blocks.iter().map(|b| b.row_range().end).max().unwrap_or(0);
+                let mut y = vec![0.0; (end - start) * m];
+                for b in blocks {
+                    let (rows, cols) = (b.row_range(), b.col_range());
+                    let xs = &xp[cols.start * per * m..cols.end * per * m];
+                    add(&b.data, xs, &mut y[(rows.start - start) * m..(rows.end - start) * m]);
                 }
-                y
+                (start * m..end * m, y)
             })
             .collect();
-        let mut yp = partial.remove(0);
+        let mut yp = vec![0.0; dof * m];
         yp.par_chunks_mut(SUM_CHUNK).enumerate().for_each(|(c, out)| {
             let at = c * SUM_CHUNK..c * SUM_CHUNK + out.len();
-            for p in &partial {
-                out.iter_mut().zip(&p[at.clone()]).for_each(|(a, b)| *a += b);
+            for (span, y) in &partial {
+                let (lo, hi) = (span.start.max(at.start), span.end.min(at.end));
+                if lo < hi {
+                    let part = &y[lo - span.start..hi - span.start];
+                    out[lo - at.start..hi - at.start]
+                        .iter_mut()
+                        .zip(part)
+                        .for_each(|(a, b)| *a += b);
+                }
             }
         });
         // The columns are read: their n values need not wait beside the rows' for the sums.
@@ -163,6 +176,9 @@ impl CompressedOperator {
 
 /// Entries of a product's sum added by one task.
 const SUM_CHUNK: usize = 1 << 14;
+
+/// Runs of blocks per thread in a product.
+const RUNS_PER_THREAD: usize = 16;
 
 /// `blocks` cut into at most `count` (at least one) contiguous runs of about equal stored bytes,
 /// which the products' work follows: the runs depend on the blocks and `count` alone.
