@@ -98,6 +98,30 @@ macro_rules! named_options {
 
 pub(crate) use named_options;
 
+named_options! {
+    /// Floating-point precision: of a GPU kernel (f64 needs `SHADER_F64` and uses software
+    /// transcendentals), of a matrix kept on the device (`--storage`), of the compressed
+    /// operator's stored values.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Precision as "precision" {
+        /// Double precision
+        F64 = "f64",
+        /// Single precision
+        F32 = "f32",
+    }
+}
+
+impl Precision {
+    /// Bytes per real number.
+    pub fn bytes(self) -> usize {
+        match self {
+            Self::F64 => 8,
+            Self::F32 => 4,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -125,29 +149,5 @@ mod tests {
         assert_eq!(Side::CHOICES[0].help.trim(), "The left one, over two lines.");
         let e = Side::parse("Right").unwrap_err().to_string();
         assert!(e.contains("side 'Right'") && e.contains("left, right-hand"), "{e}");
-    }
-}
-
-named_options! {
-    /// Floating-point precision: of a GPU kernel (f64 needs `SHADER_F64` and uses software
-    /// transcendentals), of a matrix kept on the device (`--storage`), of the compressed
-    /// operator's stored values.
-    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum Precision as "precision" {
-        /// Double precision
-        F64 = "f64",
-        /// Single precision
-        F32 = "f32",
-    }
-}
-
-impl Precision {
-    /// Bytes per real number.
-    pub fn bytes(self) -> usize {
-        match self {
-            Self::F64 => 8,
-            Self::F32 => 4,
-        }
     }
 }

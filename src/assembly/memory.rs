@@ -80,6 +80,7 @@ pub fn parse_size(text: &str) -> std::result::Result<u64, String> {
     }
     Ok(bytes as u64)
 }
+
 /// `bytes` in GiB.
 pub fn gib(bytes: f64) -> f64 {
     bytes / (1u64 << 30) as f64

@@ -106,9 +106,10 @@ impl CompressedOperator {
         }
         // Each run of blocks adds into its own rows in block order, and the runs' rows are summed
         // in run order: a product repeats to the bit on a given number of threads (a rayon fold
-        // would group the sums as its work stealing falls). Four runs a thread let the threads
-        // share the work as it comes; a run holds only the rows its blocks span (blocks follow
-        // the block tree, so a run's rows are mostly near one another).
+        // would group the sums as its work stealing falls). Several runs a thread
+        // ([`RUNS_PER_THREAD`]) let the threads share the work as it comes; a run holds only the
+        // rows its blocks span (blocks follow the block tree, so a run's rows are mostly near one
+        // another).
         let runs = block_runs(&self.blocks, RUNS_PER_THREAD * rayon::current_num_threads());
         let partial: Vec<(Range<usize>, Vec<f64>)> = runs
             .par_iter()

@@ -85,7 +85,8 @@ fn check_storage(config: &RunConfig, compressed: bool) -> Result<()> {
     let why = if config.operator_file.is_some() {
         "a saved operator is applied in f64"
     } else if compressed {
-        "the compressed operator stores its values by its tolerance, not by --storage; choose --operator dense"
+        "the compressed operator stores its values by its tolerance, not by --storage; choose \
+         --operator dense"
     } else {
         "only a matrix kept on the GPU is stored in f32: it needs --backend gpu (f64 kernels) \
          and --solver iterative"
