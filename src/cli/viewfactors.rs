@@ -22,6 +22,15 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         ..Default::default()
     };
     options.validate()?;
+    if let Some(v) = args.drop_below
+        && !(v.is_finite() && v > 0.0 && v <= 1.0)
+    {
+        return Err(Error::InvalidParameter {
+            name: "drop-below",
+            value: v.to_string(),
+            reason: "a view factor threshold in (0, 1]".into(),
+        });
+    }
     if args.tolerance < ROUNDING_FLOOR {
         // Rounding in the closed forms and the sums of a pair's cells alone is about this: the
         // adaptive rule would split every cell to the limit and still miss it.
@@ -39,9 +48,14 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     let started = std::time::Instant::now();
     let progress = super::progress::on_stderr();
     progress.start("viewfactors", mesh.len());
-    let f = view_factors(scene, mesh, planner, &options, &*progress)?;
+    let mut f = view_factors(scene, mesh, planner, &options, &*progress)?;
     progress.finish();
-    let summary = f.summary(&scene.name, problem.plan_seconds + started.elapsed().as_secs_f64());
+    let conditioning = if args.condition { Some(f.condition()?) } else { None };
+    let dropped = args.drop_below.map(|threshold| f.drop_below(threshold));
+    let mut summary =
+        f.summary(&scene.name, problem.plan_seconds + started.elapsed().as_secs_f64());
+    summary.conditioning = conditioning;
+    summary.dropped = dropped;
     if summary.error_estimate > args.tolerance {
         // Cells deeper than the split limit are settled with the error they have.
         eprintln!(
@@ -51,8 +65,12 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
             summary.error_estimate, args.tolerance
         );
     }
+    let sky = f.sky_view_factors();
     if let Some(path) = &args.output {
-        write_matrix(path, &f, &scene.name)?;
+        write_matrix(path, &f, &sky, &scene.name)?;
+    }
+    if let Some(path) = &args.sky_view_factors {
+        write_sky_view_factors(path, &sky, &f.areas, mesh, scene)?;
     }
     if let Some(target) = &args.json {
         return report::write_json(&summary, target);
@@ -62,11 +80,12 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
 }
 
 /// F as a NumPy file (`.npy`) or as CSV (`.csv`), one row per element, or only its non-zero
-/// entries: SciPy's sparse CSR (`.npz`, `scipy.sparse.load_npz`) or Matrix Market (`.mtx`).
-fn write_matrix(path: &str, f: &ViewFactors, surface: &str) -> Result<()> {
+/// entries: SciPy's sparse CSR (`.npz`, `scipy.sparse.load_npz`, with the `sky` view factors
+/// beside it) or Matrix Market (`.mtx`).
+fn write_matrix(path: &str, f: &ViewFactors, sky: &[f64], surface: &str) -> Result<()> {
     let sparse = report::CsrRows::of_view_factors(f);
     if path.ends_with(".npz") {
-        report::write_npz(path, sparse)?;
+        report::write_npz(path, sparse, &[("sky_view_factors", sky)])?;
     } else if path.ends_with(".mtx") {
         report::write_mtx(path, sparse, &format!("view factors F_ij of {surface}, row i"))?;
     } else if path.ends_with(".npy") {
@@ -88,6 +107,33 @@ fn write_matrix(path: &str, f: &ViewFactors, surface: &str) -> Result<()> {
     Ok(())
 }
 
+/// Each element's sky view factor as CSV (element, face, area, sky_view_factor) or NumPy.
+fn write_sky_view_factors(
+    path: &str,
+    sky: &[f64],
+    areas: &[f64],
+    mesh: &Mesh,
+    scene: &Scene,
+) -> Result<()> {
+    if path.ends_with(".npy") {
+        return report::write_npy_vector(path, sky);
+    }
+    if !path.ends_with(".csv") {
+        return Err(Error::InvalidParameter {
+            name: "sky-view-factors",
+            value: path.to_string(),
+            reason: "expected a .csv or .npy file".into(),
+        });
+    }
+    let mut text = String::from("element,face,area,sky_view_factor\n");
+    for (i, e) in mesh.elements().iter().enumerate() {
+        let face = &scene.faces[e.face].name;
+        text.push_str(&format!("{i},{face},{:e},{:e}\n", areas[i], sky[i]));
+    }
+    std::fs::write(path, text)?;
+    Ok(())
+}
+
 /// The summary as text, and the face-to-face view factors of scenes of at most 12 faces.
 fn print_summary(summary: &ViewFactorSummary, f: &ViewFactors, scene: &Scene, mesh: &Mesh) {
     println!("{}: n = {} elements, {:.2} s", summary.surface, summary.n, summary.seconds);
@@ -102,6 +148,24 @@ fn print_summary(summary: &ViewFactorSummary, f: &ViewFactors, scene: &Scene, me
             "quadrature error estimate {:.2e}; reciprocity by construction (each pair integrated \
              once, over the smaller element; --each-direction integrates both to check it)",
             summary.error_estimate
+        );
+    }
+    println!(
+        "sky view factors (1 - row sum): min {:.15}, max {:.15}",
+        summary.sky_view_factor_min, summary.sky_view_factor_max
+    );
+    if let Some(c) = &summary.conditioning {
+        println!(
+            "conditioned: reciprocity exact, {} rows scaled to 1; largest change of an entry \
+             {:.2e} (estimate {:.2e})",
+            c.rows_scaled, c.largest_change, summary.error_estimate
+        );
+    }
+    if let Some(d) = &summary.dropped {
+        println!(
+            "dropped {} entries below {:e} (both directions); largest row sum dropped {:.2e}, \
+             counted as sky",
+            d.entries, d.below, d.largest_row_sum
         );
     }
     if scene.faces.len() <= 12 {

@@ -20,7 +20,7 @@ pub use compression_study::{compression_table, write_compression_figure};
 pub use estimate_study::estimate_table;
 pub use json::write_json;
 pub use nodes_csv::write_node_csv;
-pub use npy::write_npy;
+pub use npy::{write_npy, write_npy_vector};
 pub use render::{Camera, DEFAULT_VIEW, Tone, render_png};
 pub use sparse::{CsrRows, write_mtx, write_npz};
 pub use stability_tables::{stability_table, stiff_table};

@@ -76,8 +76,10 @@ fn write_le<T: Copy, const N: usize>(
 const WRITE_BLOCK: usize = 1 << 16;
 
 /// Writes `m` as SciPy's sparse `.npz` (an uncompressed zip of `data`, `indices`, `indptr`,
-/// `format` and `shape`), streamed: memory beyond the matrix's stays a few blocks.
-pub fn write_npz(path: &str, m: CsrRows<'_>) -> Result<()> {
+/// `format` and `shape`), and the named f64 arrays `beside` it (which `scipy.sparse.load_npz`
+/// leaves alone; `numpy.load` reads them), streamed: memory beyond the matrix's stays a few
+/// blocks.
+pub fn write_npz(path: &str, m: CsrRows<'_>, beside: &[(&str, &[f64])]) -> Result<()> {
     let as_i64 = |k: usize| i64::try_from(k).expect("an index fits in i64");
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);
     let mut zip = zip::ZipWriter::new(file);
@@ -98,6 +100,10 @@ pub fn write_npz(path: &str, m: CsrRows<'_>) -> Result<()> {
     zip.write_all(b"csr")?;
     start(&mut zip, "shape.npy", "<i8", &[2])?;
     write_le(&mut zip, &[m.rows, m.cols], |k| as_i64(k).to_le_bytes())?;
+    for (name, values) in beside {
+        start(&mut zip, &format!("{name}.npy"), "<f8", &[values.len()])?;
+        write_le(&mut zip, values, f64::to_le_bytes)?;
+    }
     zip.finish().map_err(std::io::Error::from)?;
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Scenes generated from seeds, for invariants checked on families nobody tuned for: slivers
 //! touching walls, closed rooms with floating boxes, louvres, small cities of rotated buildings
-//! (the tests' families, and `study estimates`'). The same seed gives the same scene.
+//! and every kind of contact between two triangles (the tests' families, and `study estimates`').
+//! The same seed gives the same scene.
 
 use glam::DVec3;
 use rand::rngs::StdRng;
@@ -218,4 +219,143 @@ pub fn city(seed: u64) -> Scene {
             .push(face(format!("b{k}-roof"), ring.iter().map(|&(x, y)| corner(x, y, h)).collect()));
     }
     Scene::new(format!("city-{seed}"), faces).expect("a generated scene is valid")
+}
+
+/// How two triangles of [`contact`] touch: every configuration of a contact between two
+/// triangles in different planes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contact {
+    /// A vertex of each at one point.
+    SharedVertex,
+    /// A vertex of the first on the interior of an edge of the second that lies in the first's
+    /// plane (a T-junction: a ground triangulation meeting a wall's foot).
+    VertexOnEdge,
+    /// A vertex of the second on the interior of an edge of the first.
+    EdgeOnVertex,
+    /// A whole edge of each.
+    SharedEdge,
+    /// Collinear edges that overlap over part of each.
+    OverlappingEdges,
+    /// An edge of the second in the first's plane, crossing an edge of the first: the second
+    /// stands on the first (a partition on a floor element).
+    CrossingEdges,
+    /// A vertex on an edge's interior, either way, moved apart by 1e-9 to 1e-3 of the size.
+    NearMiss,
+}
+
+impl Contact {
+    /// Every kind, in the order of their families.
+    pub const ALL: [Contact; 7] = [
+        Contact::SharedVertex,
+        Contact::VertexOnEdge,
+        Contact::EdgeOnVertex,
+        Contact::SharedEdge,
+        Contact::OverlappingEdges,
+        Contact::CrossingEdges,
+        Contact::NearMiss,
+    ];
+
+    /// Its name in scene names, kebab-case.
+    pub fn name(self) -> &'static str {
+        match self {
+            Contact::SharedVertex => "shared-vertex",
+            Contact::VertexOnEdge => "vertex-on-edge",
+            Contact::EdgeOnVertex => "edge-on-vertex",
+            Contact::SharedEdge => "shared-edge",
+            Contact::OverlappingEdges => "overlapping-edges",
+            Contact::CrossingEdges => "crossing-edges",
+            Contact::NearMiss => "near-miss",
+        }
+    }
+}
+
+/// Two triangles touching as `kind` says, facing each other, of random shapes and sizes (1 to 20
+/// m), the second at a random angle of 20 to 160 degrees from the first's plane about the line
+/// of the contact, turned at random in space and far from the origin.
+pub fn contact(kind: Contact, seed: u64) -> Scene {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    // Locally the first lies in z = 0 on the side y < 0 of the x axis, the second in the plane
+    // through the x axis that rises at `tilt` from +y.
+    let size = rng.random_range(1.0..20.0);
+    let mut length = || size * rng.random_range(0.3..1.0);
+    let (p, q, r, s, t) = (length(), length(), length(), length(), length());
+    let tilt: f64 = rng.random_range(20.0f64..160.0).to_radians();
+    let up = v(0.0, tilt.cos(), tilt.sin());
+    // Two directions into y < 0, at least 20 degrees apart.
+    let mut below = |from: f64, to: f64| {
+        let angle: f64 = rng.random_range(from..to).to_radians();
+        v(angle.cos(), angle.sin(), 0.0)
+    };
+    let (low, high) = (below(200.0, 260.0), below(280.0, 340.0));
+    let mut along = |lo: f64, hi: f64| rng.random_range(lo..hi);
+    let (x1, x2) = (along(-1.0, 1.0) * size, along(-1.0, 1.0) * size);
+    let kind_here = match kind {
+        Contact::NearMiss if seed.is_multiple_of(2) => Contact::VertexOnEdge,
+        Contact::NearMiss => Contact::EdgeOnVertex,
+        other => other,
+    };
+    let apex = |x: f64, height: f64| DVec3::X * x + up * height;
+    let (first, mut second) = match kind_here {
+        Contact::SharedVertex => {
+            (vec![DVec3::ZERO, low * p, high * q], vec![DVec3::ZERO, apex(x1, r), apex(x2, s)])
+        }
+        Contact::VertexOnEdge => (
+            vec![DVec3::ZERO, low * p, high * q],
+            vec![v(-r, 0.0, 0.0), v(s, 0.0, 0.0), apex(x1, t)],
+        ),
+        Contact::EdgeOnVertex => (
+            vec![v(-p, 0.0, 0.0), v(q, 0.0, 0.0), low * r],
+            vec![DVec3::ZERO, apex(x1, s), apex(x2, t)],
+        ),
+        Contact::SharedEdge => (
+            vec![v(-p, 0.0, 0.0), v(q, 0.0, 0.0), low * r],
+            vec![v(-p, 0.0, 0.0), v(q, 0.0, 0.0), apex(x1, s)],
+        ),
+        Contact::OverlappingEdges => {
+            let start = along(-0.8, 0.8) * p.min(q);
+            (
+                vec![v(-p, 0.0, 0.0), v(q, 0.0, 0.0), low * r],
+                vec![v(start, 0.0, 0.0), v(q + s, 0.0, 0.0), apex(x1, t)],
+            )
+        }
+        Contact::CrossingEdges => {
+            // The second's foot runs through the origin into the first, at 30 to 150 degrees
+            // to its edge, and its apex leans either way.
+            let heading: f64 = rng.random_range(30.0f64..150.0).to_radians();
+            let foot = v(heading.cos(), -heading.sin(), 0.0);
+            let lean = DVec3::Z.cross(foot) * tilt.cos() + DVec3::Z * tilt.sin();
+            (
+                vec![v(-p, 0.0, 0.0), v(q, 0.0, 0.0), low * r],
+                vec![-foot * s, foot * t, foot * (x1 * 0.5) + lean * size],
+            )
+        }
+        Contact::NearMiss => unreachable!("a near miss is built as another kind"),
+    };
+    if kind == Contact::NearMiss {
+        let gap = size * 10f64.powf(-rng.random_range(3.0..9.0));
+        second.iter_mut().for_each(|x| *x += up * gap);
+    }
+    // Facing each other: the first up (the second lies over z >= 0), the second towards the
+    // first's centroid.
+    let mut first = first;
+    if (first[1] - first[0]).cross(first[2] - first[0]).z < 0.0 {
+        first.reverse();
+    }
+    let centre = (first[0] + first[1] + first[2]) / 3.0;
+    if (second[1] - second[0]).cross(second[2] - second[0]).dot(centre - second[0]) < 0.0 {
+        second.reverse();
+    }
+    let turn = glam::DQuat::from_euler(
+        glam::EulerRot::ZXZ,
+        rng.random_range(0.0..std::f64::consts::TAU),
+        rng.random_range(0.0..std::f64::consts::PI),
+        rng.random_range(0.0..std::f64::consts::TAU),
+    );
+    let origin = v(rng.random_range(-1e3..1e3), rng.random_range(-1e3..1e3), 0.0);
+    let place = |t: Vec<DVec3>| t.into_iter().map(|x| origin + turn * x).collect::<Vec<_>>();
+    let name = format!("{}-{seed}", kind.name());
+    let faces =
+        vec![face(format!("{name}-a"), place(first)), face(format!("{name}-b"), place(second))];
+    Scene::new(name, faces).expect("a generated scene is valid")
 }

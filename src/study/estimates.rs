@@ -1,6 +1,7 @@
 //! `study estimates`: whether the view factors' error estimate keeps its promise on scenes nobody
 //! tuned for. Each scene of the generated families ([`crate::scene::generated`]: slivers touching
-//! walls, rooms with boxes, louvres, cities of rotated buildings, seeds 0, 1, ...) and of the
+//! walls, rooms with boxes, louvres, cities of rotated buildings, two triangles touching in each
+//! way two triangles can, seeds 0, 1, ...) and of the
 //! scenes asked for (the command line adds the generated city:4x4) is run at each tolerance, each pair once and each
 //! direction, and checked against a run at [`REFERENCE_TOLERANCE`]
 //! ([`crate::viewfactors::ViewFactors::check_against`]): every entry within the two runs'
@@ -14,6 +15,7 @@ use crate::error::Result;
 use crate::mesh::{Mesh, MeshKind};
 use crate::pipeline::SceneSource;
 use crate::progress::{Progress, Silent};
+use crate::scene::generated::Contact;
 use crate::scene::{Scene, SurfaceParameters, generated};
 use crate::viewfactors::{ViewFactorOptions, ViewFactors, view_factors};
 use crate::visibility::PairPlanner;
@@ -93,7 +95,11 @@ fn generated_scenes(seeds: u64) -> Vec<Scene> {
         generated::louvre,
         generated::city,
     ];
-    families.iter().flat_map(|family| (0..seeds).map(family)).collect()
+    let scenes = families.iter().flat_map(|family| (0..seeds).map(family));
+    let contacts = Contact::ALL
+        .into_iter()
+        .flat_map(|kind| (0..seeds).map(move |seed| generated::contact(kind, seed)));
+    scenes.chain(contacts).collect()
 }
 
 /// View factors of `scene` on `mesh` at `tolerance`.
@@ -175,8 +181,8 @@ mod tests {
     fn a_small_sweep_checks_every_scene_both_ways_and_keeps_its_promise() {
         let series = EstimateSeries { seeds: 1, tolerances: vec![1e-4], scenes: Vec::new() };
         let study = run_estimates(&series, &Silent).unwrap();
-        // Four families of one seed; each pair once and each direction.
-        assert_eq!(study.rows.len(), 4 * 2);
+        // Four families and seven contacts of one seed; each pair once and each direction.
+        assert_eq!(study.rows.len(), (4 + 7) * 2);
         assert!(study.rows.iter().all(|r| r.evaluations > 0 && r.error_estimate > 0.0));
         assert_eq!(study.failed, 0, "{:#?}", study.rows);
         assert_eq!(study.worst_ratio.len(), 1);

@@ -46,7 +46,14 @@ pub fn view_factors(
             let mut between: Vec<Option<Between>> = (0..faces).map(|_| None).collect();
             for j in (0..n).filter(|&j| integrated(i, j)) {
                 let other = &mut between[mesh.elements()[j].face];
-                let value = context.pair(i, j, other, &rules, &mut tally);
+                let mut own = Tally::default();
+                let mut value = context.pair(i, j, other, &rules, &mut own);
+                let mut estimate = own.error;
+                tally.evaluations += own.evaluations;
+                if value > 0.0 && context.close(i, j) {
+                    (value, estimate) = context.reconciled((i, j), (value, estimate), &mut tally);
+                }
+                tally.error = tally.error.max(estimate);
                 // A view factor is not negative: where rounding of the signed pieces leaves
                 // one below 0 (a pair seen through a hair's width), it is 0, and counted.
                 if value < 0.0 {

@@ -59,6 +59,7 @@
 
 mod cells;
 mod check;
+mod closure;
 mod compute;
 mod context;
 mod events;
@@ -72,12 +73,14 @@ mod pair;
 mod part;
 mod patch;
 mod poles;
+mod reconcile;
 mod row;
 mod sight;
 mod summary;
 mod touching;
 
 pub use check::EstimateCheck;
+pub use closure::{Conditioning, Dropped};
 pub use compute::view_factors;
 pub use matrix::ViewFactors;
 pub use options::{MAX_SPLITS, ViewFactorOptions};

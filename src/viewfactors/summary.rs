@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::closure::{Conditioning, Dropped};
 use super::matrix::ViewFactors;
 
 /// Summary of a view factor computation, for reports.
@@ -16,6 +17,10 @@ pub struct ViewFactorSummary {
     pub row_sum_min: f64,
     /// See `row_sum_min`.
     pub row_sum_max: f64,
+    /// Smallest and largest sky view factor, 1 - Σ_j F_ij (0 for a closed scene).
+    pub sky_view_factor_min: f64,
+    /// See `sky_view_factor_min`.
+    pub sky_view_factor_max: f64,
     /// max |A_i F_ij - A_j F_ji| / max(A_i F_ij).
     pub reciprocity_error: f64,
     /// Largest estimated quadrature error of an entry.
@@ -29,6 +34,12 @@ pub struct ViewFactorSummary {
     pub nonzeros: usize,
     /// Entries that came out below zero by rounding and were stored as zero.
     pub clamped_negative: usize,
+    /// What conditioning for closure changed, where asked ([`ViewFactors::condition`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub conditioning: Option<Conditioning>,
+    /// What a threshold dropped, where asked ([`ViewFactors::drop_below`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dropped: Option<Dropped>,
     /// Wall time.
     pub seconds: f64,
 }
@@ -42,12 +53,16 @@ impl ViewFactors {
             n: self.len(),
             row_sum_min,
             row_sum_max,
+            sky_view_factor_min: 1.0 - row_sum_max,
+            sky_view_factor_max: 1.0 - row_sum_min,
             reciprocity_error: self.reciprocity_error(),
             error_estimate: self.error_estimate,
             evaluations: self.evaluations,
             each_direction: self.each_direction,
             nonzeros: self.nonzeros(),
             clamped_negative: self.clamped,
+            conditioning: None,
+            dropped: None,
             seconds,
         }
     }

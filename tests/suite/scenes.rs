@@ -194,7 +194,23 @@ fn sparse_view_factors_hold_the_dense_output_s_non_zero_entries() {
     let arrays = npz_arrays(&dir.join("F.npz"));
     let mut names: Vec<&str> = arrays.keys().map(String::as_str).collect();
     names.sort_unstable();
-    assert_eq!(names, ["data.npy", "format.npy", "indices.npy", "indptr.npy", "shape.npy"]);
+    assert_eq!(
+        names,
+        [
+            "data.npy",
+            "format.npy",
+            "indices.npy",
+            "indptr.npy",
+            "shape.npy",
+            "sky_view_factors.npy"
+        ]
+    );
+    // Beside the matrix, each element's sky view factor: 1 less its row's sum (0 in a box).
+    let sky: Vec<f64> = npy_values(&arrays["sky_view_factors.npy"]);
+    let row_sums: Vec<f64> = dense.chunks(n).map(|row| row.iter().sum()).collect();
+    assert!(
+        sky.iter().zip(&row_sums).all(|(s, r)| (s - (1.0 - r)).abs() <= 1e-15 && s.abs() < 1e-9)
+    );
     let shape: Vec<i64> = npy_values(&arrays["shape.npy"]);
     assert_eq!(shape, vec![n as i64, n as i64]);
     // A 0-d array of the bytes "csr", as numpy writes `np.array(b"csr")`.
@@ -226,6 +242,50 @@ fn sparse_view_factors_hold_the_dense_output_s_non_zero_entries() {
     assert_eq!(from_mtx, dense);
     let v = json(&["viewfactors", "--scene", "cube", "--refine", "0", "--json", "-"]);
     assert_eq!(v["nonzeros"].as_u64(), Some(nonzeros as u64), "{v}");
+}
+
+/// An open scene's sky view factors as CSV and in the summary, the matrix conditioned for
+/// closure and its small entries dropped, each said in the JSON; bad values refused by name.
+#[test]
+fn view_factors_give_sky_view_factors_and_condition_for_closure() {
+    let dir = temp_dir("vf-closure");
+    let file = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let (sky_csv, matrix) = (file("sky.csv"), file("F.npz"));
+    let base = ["viewfactors", "--scene", "city:3x2", "--refine", "0", "--tolerance", "1e-4"];
+    let v = json(
+        &[
+            &base[..],
+            &["--each-direction", "--condition", "--drop-below", "1e-4"],
+            &["--sky-view-factors", &sky_csv, "--output", &matrix, "--json", "-"],
+        ]
+        .concat(),
+    );
+    let estimate = v["error_estimate"].as_f64().unwrap();
+    let change = v["conditioning"]["largest_change"].as_f64().unwrap();
+    assert!(change > 0.0 && change <= estimate, "{v}");
+    assert!(v["reciprocity_error"].as_f64().unwrap() <= 1e-15, "{v}");
+    assert!(v["dropped"]["entries"].as_u64().unwrap() > 0, "{v}");
+    assert_eq!(v["dropped"]["below"].as_f64(), Some(1e-4), "{v}");
+    let (lo, hi) = (v["sky_view_factor_min"].as_f64().unwrap(), v["sky_view_factor_max"].as_f64());
+    assert!(lo >= 0.0 && hi == Some(1.0), "{v}");
+    // One line per element, the same values as the npz holds beside the matrix.
+    let text = std::fs::read_to_string(&sky_csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("element,face,area,sky_view_factor"));
+    let from_csv: Vec<f64> =
+        lines.map(|l| l.rsplit(',').next().unwrap().parse().unwrap()).collect();
+    let sky: Vec<f64> =
+        npy_values(&npz_arrays(std::path::Path::new(&matrix))["sky_view_factors.npy"]);
+    assert_eq!(from_csv.len(), v["n"].as_u64().unwrap() as usize);
+    assert_eq!(from_csv, sky);
+    for (option, value, says) in [
+        ("--drop-below", "2", "drop-below"),
+        ("--drop-below", "nan", "drop-below"),
+        ("--sky-view-factors", "sky.txt", ".csv or .npy"),
+    ] {
+        let (ok, _, err) = radiosity(&[&base[..], &[option, value]].concat());
+        assert!(!ok && err.contains(says), "{option} {value}: {err}");
+    }
 }
 
 #[test]
@@ -668,8 +728,9 @@ fn a_triangle_soup_merged_into_faces_gives_the_solution_of_its_triangles() {
 
 #[test]
 fn the_estimates_study_checks_every_scene_both_ways() {
-    // One seed of each generated family and the cube, at one tolerance: each run against the
-    // reference, each pair once and each direction, and every promise kept.
+    // One seed of each generated family (four scenes and seven contacts of two triangles) and
+    // the cube, at one tolerance: each run against the reference, each pair once and each
+    // direction, and every promise kept.
     let v = json(&[
         "study",
         "estimates",
@@ -683,7 +744,7 @@ fn the_estimates_study_checks_every_scene_both_ways() {
         "-",
     ]);
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 5 * 2, "{v}");
+    assert_eq!(rows.len(), (4 + 7 + 1) * 2, "{v}");
     assert!(rows.iter().any(|r| r["scene"] == "cube"), "{v}");
     for r in rows {
         assert!(r["error_ratio"].as_f64().unwrap() <= 1.0, "{r}");

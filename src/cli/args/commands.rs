@@ -153,6 +153,20 @@ pub(crate) struct ViewFactorArgs {
     /// entries as SciPy sparse CSR .npz (scipy.sparse.load_npz) or Matrix Market .mtx
     #[arg(long, value_name = "FILE")]
     pub(crate) output: Option<String>,
+    /// Write each element's sky view factor (1 - Σ_j F_ij, after --condition and
+    /// --drop-below) to FILE: .csv (element, face, area, sky_view_factor) or .npy
+    #[arg(long, value_name = "FILE")]
+    pub(crate) sky_view_factors: Option<String>,
+    /// Condition F for models that need closure: reciprocity made exact, rows above 1 scaled to
+    /// 1 (every sky view factor at least 0), no entry moved by more than the run's error
+    /// estimate (refused, naming the entry, where one would be)
+    #[arg(long)]
+    pub(crate) condition: bool,
+    /// Drop each pair whose F_ij and F_ji are both below V (after --condition, so reciprocity
+    /// holds for what stays); the summary says how many went and the largest row sum dropped,
+    /// which the sky view factors then count as sky
+    #[arg(long, value_name = "V")]
+    pub(crate) drop_below: Option<f64>,
     /// Write the summary as JSON to PATH (`-` for standard output) instead of text
     #[arg(long, value_name = "PATH")]
     pub(crate) json: Option<String>,

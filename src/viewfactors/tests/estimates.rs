@@ -28,8 +28,9 @@ fn walls_seen_whole_meet_the_default_tolerance() {
 
 /// city:4x4 at loose tolerances: every entry within the tolerance of a run at 1e-8, and the
 /// work falling with the tolerance: at loose tolerances the corner rule takes fewer orders and
-/// small patches are settled by a bound, so 1e-3 needs about a third of 1e-6's evaluations
-/// (0.35: the probes of a patch's rim cost alike at every tolerance).
+/// small patches are settled by a bound, so 1e-3 needs well under half of 1e-6's evaluations
+/// (0.43: the probes of a patch's rim, and the reverse integrals that check touching pairs by
+/// reciprocity, cost about alike at every tolerance).
 #[test]
 fn city_entries_meet_loose_tolerances_with_less_work() {
     let fixture = Fixture::new(crate::scene::city(4, 4).unwrap());
@@ -46,7 +47,7 @@ fn city_entries_meet_loose_tolerances_with_less_work() {
         evaluations.push(f.evaluations);
     }
     assert!(evaluations.windows(2).all(|w| w[0] < w[1]), "{evaluations:?}");
-    assert!(100 * evaluations[1] <= 37 * evaluations[4], "{evaluations:?}");
+    assert!(100 * evaluations[1] <= 45 * evaluations[4], "{evaluations:?}");
 }
 
 /// The bound that settles small patches ([`Context::bounded_cell`]) holds: from every point of

@@ -3,6 +3,7 @@
 //!
 //! By concept: the fixture the tests compute on (`fixture.rs`); whole matrices against closed
 //! forms (`closed_forms.rs`) and closed scenes' row sums and reciprocity (`closed_scenes.rs`);
+//! sky view factors, conditioning and thresholds (`closure.rs`);
 //! entries where elements or occluders touch (`contacts.rs`); the estimates and bounds that
 //! choose the work (`estimates.rs`); shadows, openings and the lanes against the scalar closed
 //! forms (`shadows.rs`); partly shadowed pairs against brute force and Monte Carlo
@@ -10,6 +11,7 @@
 
 mod closed_forms;
 mod closed_scenes;
+mod closure;
 mod contacts;
 mod estimates;
 mod fixture;
