@@ -45,6 +45,11 @@ fn main() -> ExitCode {
     quiet_vulkan_device_select();
     #[cfg(feature = "mpi")]
     let _mpi = start_mpi();
+    let argv: Vec<String> = std::env::args().collect();
+    if let Some(help) = cli::study::help_for_one_study(&argv) {
+        print!("{help}");
+        return ExitCode::SUCCESS;
+    }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => match cli::ranks::world() {

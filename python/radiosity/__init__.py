@@ -187,10 +187,12 @@ def operator(
 
 class ViewFactors(scipy.sparse.csr_matrix):
     """Element-to-element view factors F_ij as a SciPy CSR matrix of the non-zero entries,
-    with the element ``areas`` and the ``summary`` of ``radiosity viewfactors --json``
-    (reciprocity, row sums, error estimate)."""
+    with the element ``areas``, each element's ``sky_view_factors`` (1 - its row's sum) and
+    the ``summary`` of ``radiosity viewfactors --json`` (reciprocity, row sums, error
+    estimate, what conditioning and a threshold changed)."""
 
     areas: npt.NDArray[np.float64]
+    sky_view_factors: npt.NDArray[np.float64]
     summary: dict[str, Any]
 
 
@@ -200,17 +202,30 @@ def view_factors(
     tolerance: float = 1e-10,
     max_depth: int = 0,
     each_direction: bool = False,
+    condition: bool = False,
+    drop_below: Optional[float] = None,
     progress: Optional[_Progress] = None,
 ) -> ViewFactors:
     """View factors between the elements of the scene's uniform mesh at ``refine``, each to
     the absolute ``tolerance``, as ``radiosity viewfactors`` computes them: each pair
     integrated once, over the smaller element (F_ji = A_i F_ij / A_j), or with
-    ``each_direction`` both, so that reciprocity checks the accuracy."""
-    indptr, indices, data, n, areas, summary = _native.view_factors(
-        scene, refine, tolerance, max_depth, each_direction, progress
+    ``each_direction`` both, so that reciprocity checks the accuracy. ``condition``: made
+    reciprocal exactly with no row above 1, no entry moved beyond the run's error estimate
+    (``RadiosityError`` naming the entry otherwise); ``drop_below``: pairs whose two entries
+    are below it dropped."""
+    indptr, indices, data, n, areas, sky, summary = _native.view_factors(
+        scene,
+        refine,
+        tolerance,
+        max_depth,
+        each_direction,
+        condition=condition,
+        drop_below=drop_below,
+        progress=progress,
     )
     f = ViewFactors((data, indices, indptr), shape=(n, n))
     f.areas = areas
+    f.sky_view_factors = sky
     f.summary = json.loads(summary)
     return f
 

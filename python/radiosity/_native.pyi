@@ -156,9 +156,11 @@ def view_factors(
     tolerance: float,
     max_depth: int,
     each_direction: bool = False,
+    condition: bool = False,
+    drop_below: Optional[float] = None,
     progress: Optional[_Progress] = None,
 ) -> tuple[
-    npt.NDArray[np.int64], npt.NDArray[np.int64], _Floats, int, _Floats, str
+    npt.NDArray[np.int64], npt.NDArray[np.int64], _Floats, int, _Floats, _Floats, str
 ]: ...
 def option_values() -> dict[str, list[str]]: ...
 def default_options() -> _RunOptions: ...

@@ -28,7 +28,9 @@ use radiosity::progress::{Progress, ProgressSink};
 use radiosity::scene::{Coplanar, Duplicates, ImportOptions, NonPlanar};
 use radiosity::scene::{Scene, SurfaceParameters};
 use radiosity::solve::SolverChoice;
-use radiosity::viewfactors::{ViewFactorOptions, view_factors as compute_view_factors};
+use radiosity::viewfactors::{
+    ViewFactorOptions, check_drop_threshold, view_factors as compute_view_factors,
+};
 use radiosity::vocabulary::Named;
 
 create_exception!(
@@ -594,11 +596,15 @@ fn operator(
 }
 
 /// Element-to-element view factors of the scene's uniform mesh at `refine`, as `radiosity
-/// viewfactors` computes them: (indptr, indices, data, n, areas, summary JSON) of the CSR
-/// matrix of its non-zero entries.
+/// viewfactors` computes them (with `--condition` and `--drop-below` where asked): (indptr,
+/// indices, data, n, areas, sky view factors, summary JSON) of the CSR matrix of its non-zero
+/// entries.
 #[pyfunction]
-#[pyo3(signature = (scene, refine, tolerance, max_depth, each_direction=false, progress=None))]
-#[allow(clippy::type_complexity)]
+#[pyo3(signature = (
+    scene, refine, tolerance, max_depth, each_direction=false, condition=false, drop_below=None,
+    progress=None
+))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn view_factors<'py>(
     py: Python<'py>,
     scene: &PyScene,
@@ -606,6 +612,8 @@ fn view_factors<'py>(
     tolerance: f64,
     max_depth: u32,
     each_direction: bool,
+    condition: bool,
+    drop_below: Option<f64>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(
     Bound<'py, PyArray1<i64>>,
@@ -613,10 +621,12 @@ fn view_factors<'py>(
     Bound<'py, PyArray1<f64>>,
     usize,
     Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
     String,
 )> {
     let options = ViewFactorOptions { tolerance, max_depth, each_direction, ..Default::default() };
     options.validate().map_err(raised)?;
+    drop_below.map(check_drop_threshold).transpose().map_err(raised)?;
     let run = pipeline::RunOptions { refine, params: scene.params, ..Default::default() };
     let config = run.config(scene.source.clone()).map_err(raised)?;
     let config = RunConfig { progress: progress_to(progress), ..config };
@@ -626,9 +636,13 @@ fn view_factors<'py>(
             let problem = pipeline::build_on(&config, Scene::clone(&scene.scene))?;
             let Problem { scene, mesh, planner, .. } = &problem;
             config.progress.start("viewfactors", mesh.len());
-            let f = compute_view_factors(scene, mesh, planner, &options, &*config.progress)?;
+            let mut f = compute_view_factors(scene, mesh, planner, &options, &*config.progress)?;
             config.progress.finish();
-            let summary = f.summary(&scene.name, started.elapsed().as_secs_f64());
+            let conditioning = if condition { Some(f.condition()?) } else { None };
+            let dropped = drop_below.map(|threshold| f.drop_below(threshold)).transpose()?;
+            let mut summary = f.summary(&scene.name, started.elapsed().as_secs_f64());
+            summary.conditioning = conditioning;
+            summary.dropped = dropped;
             Ok::<_, radiosity::Error>((f, summary))
         })
         .map_err(raised)?;
@@ -636,13 +650,14 @@ fn view_factors<'py>(
     let indptr: Vec<i64> = f.row_starts.iter().map(|&k| as_i64(k)).collect();
     let indices: Vec<i64> = f.columns.iter().map(|&j| i64::from(j)).collect();
     let summary = serde_json::to_string(&summary).expect("the summary is JSON");
-    let n = f.len();
+    let (n, sky) = (f.len(), f.sky_view_factors());
     Ok((
         indptr.into_pyarray(py),
         indices.into_pyarray(py),
         f.values.into_pyarray(py),
         n,
         f.areas.into_pyarray(py),
+        sky.into_pyarray(py),
         summary,
     ))
 }

@@ -98,6 +98,23 @@ def test_view_factors_in_each_direction_are_reciprocal_to_their_accuracy():
     assert abs(once - both).max() < 1e-8
 
 
+def test_view_factors_give_sky_view_factors_and_condition_as_the_command_line(tmp_path):
+    path = tmp_path / "f.npz"
+    cli("viewfactors", "--scene", "city:3x2", "--refine", "0", "--tolerance", "1e-4",
+        "--each-direction", "--condition", "--drop-below", "1e-4", "--output", str(path))
+    scene = radiosity.Scene.builtin("city:3x2")
+    f = radiosity.view_factors(scene, refine=0, tolerance=1e-4, each_direction=True,
+                               condition=True, drop_below=1e-4)
+    assert (f != scipy.sparse.load_npz(path)).nnz == 0
+    assert np.array_equal(f.sky_view_factors, np.load(path)["sky_view_factors"])
+    assert np.allclose(f.sky_view_factors, 1.0 - np.asarray(f.sum(axis=1)).ravel(), atol=1e-15)
+    assert f.sky_view_factors.min() >= 0.0 and f.summary["reciprocity_error"] <= 1e-15
+    assert 0 < f.summary["conditioning"]["largest_change"] <= f.summary["error_estimate"]
+    assert f.summary["dropped"]["entries"] > 0
+    with pytest.raises(radiosity.RadiosityError, match="drop-below"):
+        radiosity.view_factors(scene, refine=0, drop_below=2.0)
+
+
 def test_an_operator_solves_many_cases_as_each_solve():
     scene = radiosity.Scene.load(ROOM)
     op = radiosity.operator(scene, refine=2)

@@ -1,6 +1,8 @@
 //! `radiosity study`: the paper's tables and figures, and the stability studies.
 
+use clap::CommandFactory;
 use radiosity::error::{Error, Result};
+use radiosity::gpu::Precision;
 use radiosity::pipeline::{BackendName, SceneSource};
 use radiosity::report;
 use radiosity::report::TableFormat;
@@ -11,31 +13,78 @@ use radiosity::study::estimates::{
 };
 use radiosity::study::{StudyDevice, StudyOptions};
 
-use super::args::StudyArgs;
+use super::args::{DEFAULT_FIGURES, StudyArgs};
 use super::output::emit;
 use super::ranks::{is_root, world};
+
+/// The studies that take options of their own; every other id is one of the paper's tables or
+/// figures (or error-vs-time, grading: `study::run_study`), named "paper" in [`OPTION_OWNERS`].
+const OWN_STUDIES: [&str; 5] = ["compression", "estimates", "cities", "stability", "stiff"];
+
+/// The options of `study` that only some studies take, and the studies that take them (every
+/// study takes `--json` and `--markdown`): the one table that both the refusal of an option a
+/// study does not take and each study's `--help` read.
+const OPTION_OWNERS: [(&str, &[&str]); 8] = [
+    ("max-n", &["paper", "compression", "cities"]),
+    ("backend", &["paper", "compression", "stability", "stiff"]),
+    ("precision", &["paper", "compression", "stability", "stiff"]),
+    ("figures", &["paper", "compression"]),
+    ("scene", &["compression", "estimates"]),
+    ("tolerances", &["compression", "estimates"]),
+    ("seeds", &["estimates"]),
+    ("shadowed-blocks", &["compression"]),
+];
+
+/// The study `id`'s name in [`OPTION_OWNERS`].
+fn owner_name(id: &str) -> &str {
+    OWN_STUDIES.into_iter().find(|&own| own == id).unwrap_or("paper")
+}
+
+/// The options of `study` that the study `id` does not take.
+pub(crate) fn options_not_taken(id: &str) -> impl Iterator<Item = &'static str> {
+    let owner = owner_name(id).to_string();
+    OPTION_OWNERS
+        .into_iter()
+        .filter(move |(_, owners)| !owners.contains(&owner.as_str()))
+        .map(|(flag, _)| flag)
+}
 
 /// Runs the study `args.id` and prints it (JSON to `--json` when given, and the table unless
 /// the JSON goes to standard output); plots go to `--figures`.
 pub(crate) fn run(args: &StudyArgs) -> Result<()> {
-    let StudyArgs { id, max_n, backend: device, precision, figures, markdown, .. } = args;
+    let StudyArgs { id, max_n, backend: device, markdown, .. } = args;
     let (id, max_n, markdown) = (id.as_str(), *max_n, *markdown);
     let json = args.json.as_deref();
-    let given = [
-        ("scene", !args.scene.is_empty(), &["compression", "estimates"][..]),
-        ("tolerances", args.tolerances.is_some(), &["compression", "estimates"]),
-        ("shadowed-blocks", args.shadowed_blocks, &["compression"]),
-        ("seeds", args.seeds.is_some(), &["estimates"]),
-    ];
-    if let Some((flag, _, owners)) =
-        given.iter().find(|(_, given, owners)| *given && !owners.contains(&id))
-    {
+    let given = |flag: &str| match flag {
+        "max-n" => max_n.is_some(),
+        "backend" => device.is_some(),
+        "precision" => args.precision.is_some(),
+        "figures" => args.figures.is_some(),
+        "scene" => !args.scene.is_empty(),
+        "tolerances" => args.tolerances.is_some(),
+        "seeds" => args.seeds.is_some(),
+        _ => args.shadowed_blocks,
+    };
+    if let Some(flag) = options_not_taken(id).find(|flag| given(flag)) {
+        let (_, owners) = OPTION_OWNERS.iter().find(|(f, _)| *f == flag).expect("an owned option");
+        let owners: Vec<String> = owners
+            .iter()
+            .map(|&o| {
+                if o == "paper" {
+                    "the paper's tables and figures".into()
+                } else {
+                    format!("study {o}")
+                }
+            })
+            .collect();
         return Err(Error::InvalidParameter {
             name: flag,
             value: id.to_string(),
-            reason: format!("--{flag} belongs to study {}", owners.join(" and study ")),
+            reason: format!("--{flag} belongs to {}", owners.join(" and ")),
         });
     }
+    let precision = args.precision.unwrap_or(Precision::F64);
+    let figures = args.figures.as_deref().unwrap_or(DEFAULT_FIGURES);
     if id == "compression" && args.scene.len() > 1 {
         return Err(Error::InvalidParameter {
             name: "scene",
@@ -46,7 +95,7 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
     let device = match *device {
         None => StudyDevice::Auto,
         Some(BackendName::Cpu) => StudyDevice::Cpu,
-        Some(BackendName::Gpu) => StudyDevice::Gpu(*precision),
+        Some(BackendName::Gpu) => StudyDevice::Gpu(precision),
     };
     let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
     match id {
@@ -108,4 +157,24 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             emit(&result, json, || report::study_table(&result, format))
         }
     }
+}
+
+/// `radiosity study ID --help` (or `-h`): `study`'s help with only the options that the study
+/// ID takes; `None` where the arguments (`argv`, the program's name first) ask for anything
+/// else, which clap then parses as usual.
+pub(crate) fn help_for_one_study(argv: &[String]) -> Option<String> {
+    let [_, command, id, rest @ ..] = argv else { return None };
+    let long = rest.iter().any(|a| a == "--help");
+    if command != "study" || id.starts_with('-') || !(long || rest.iter().any(|a| a == "-h")) {
+        return None;
+    }
+    let mut study = super::Cli::command().find_subcommand("study")?.clone();
+    for flag in options_not_taken(id) {
+        study = study.mut_arg(flag.replace('-', "_"), |arg| arg.hide(true));
+    }
+    let mut study = study
+        .mut_arg("id", |arg| arg.hide(true))
+        .override_usage(format!("radiosity study {id} [OPTIONS]"));
+    let help = if long { study.render_long_help() } else { study.render_help() };
+    Some(help.to_string())
 }

@@ -6,7 +6,8 @@ use radiosity::pipeline::{self, Problem};
 use radiosity::report;
 use radiosity::scene::Scene;
 use radiosity::viewfactors::{
-    MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors,
+    MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, check_drop_threshold,
+    view_factors,
 };
 
 use super::args::ViewFactorArgs;
@@ -22,15 +23,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         ..Default::default()
     };
     options.validate()?;
-    if let Some(v) = args.drop_below
-        && !(v.is_finite() && v > 0.0 && v <= 1.0)
-    {
-        return Err(Error::InvalidParameter {
-            name: "drop-below",
-            value: v.to_string(),
-            reason: "a view factor threshold in (0, 1]".into(),
-        });
-    }
+    args.drop_below.map(check_drop_threshold).transpose()?;
     if args.tolerance < ROUNDING_FLOOR {
         // Rounding in the closed forms and the sums of a pair's cells alone is about this: the
         // adaptive rule would split every cell to the limit and still miss it.
@@ -51,7 +44,7 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     let mut f = view_factors(scene, mesh, planner, &options, &*progress)?;
     progress.finish();
     let conditioning = if args.condition { Some(f.condition()?) } else { None };
-    let dropped = args.drop_below.map(|threshold| f.drop_below(threshold));
+    let dropped = args.drop_below.map(|threshold| f.drop_below(threshold)).transpose()?;
     let mut summary =
         f.summary(&scene.name, problem.plan_seconds + started.elapsed().as_secs_f64());
     summary.conditioning = conditioning;

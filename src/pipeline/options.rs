@@ -157,7 +157,7 @@ impl Default for RunOptions {
             memory_limit: None,
             solver: SolverChoice::Auto,
             tolerance: solve::DEFAULT_TOLERANCE,
-            bands: "grey".into(),
+            bands: crate::scene::BandSet::Grey.name().into(),
             operator_file: None,
         }
     }

@@ -63,20 +63,36 @@ pub struct Colour {
 /// The names of the colour channels, in order.
 pub const CHANNELS: [&str; 3] = ["r", "g", "b"];
 
-/// `rgb`, `grey`, or comma-separated channel names (each once).
-pub fn parse_bands(text: &str) -> Result<Vec<usize>> {
-    if text == "grey" {
-        return Ok(Vec::new());
+crate::vocabulary::named_options! {
+    /// The sets of colour bands named as a whole (`--bands`); any other value lists channels.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum BandSet as "bands" {
+        /// One grey band: each face's rho and E (the channels' means where it has colour)
+        Grey = "grey" default,
+        /// Every channel of CHANNELS, in order
+        Rgb = "rgb",
     }
-    let names: Vec<&str> =
-        if text == "rgb" { CHANNELS.to_vec() } else { text.split(',').map(str::trim).collect() };
+}
+
+/// The channels of `--bands`: a [`BandSet`]'s name, or channel names of [`CHANNELS`],
+/// comma-separated, each once. Empty: grey.
+pub fn parse_bands(text: &str) -> Result<Vec<usize>> {
+    match text.parse::<BandSet>() {
+        Ok(BandSet::Grey) => return Ok(Vec::new()),
+        Ok(BandSet::Rgb) => return Ok((0..CHANNELS.len()).collect()),
+        Err(_) => {}
+    }
     let mut channels = Vec::new();
-    for name in names {
+    for name in text.split(',').map(str::trim) {
         let channel =
             CHANNELS.iter().position(|&c| c == name).ok_or_else(|| Error::UnknownName {
                 kind: "band",
                 name: name.into(),
-                expected: "rgb, grey, or a comma-separated list of r, g, b".into(),
+                expected: format!(
+                    "{}, or a comma-separated list of {}",
+                    <BandSet as crate::vocabulary::Named>::names().collect::<Vec<_>>().join(", "),
+                    CHANNELS.join(", ")
+                ),
             })?;
         if channels.contains(&channel) {
             return Err(Error::InvalidParameter {

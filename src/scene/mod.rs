@@ -11,7 +11,7 @@ mod merge;
 pub use builtin::{BuiltinScene, SurfaceParameters, baffled_box, cube, five_piece, four_piece};
 pub use city::{city, lit_city};
 pub use face::{
-    CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA, parse_bands,
+    BandSet, CHANNELS, COPLANAR_DISTANCE, Colour, Diagonal, Face, MIN_RELATIVE_AREA, parse_bands,
 };
 pub use file::{
     Coplanar, Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, from_triangles,

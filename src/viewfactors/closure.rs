@@ -45,11 +45,11 @@ impl ViewFactors {
     /// F unchanged, where an entry would move by more than the run's error estimate: the
     /// entries are then not accurate enough for closure (a tighter tolerance is).
     pub fn condition(&mut self) -> Result<Conditioning> {
-        let n = self.len();
         let allowed = self.error_estimate;
-        let mut moved = 0.0f64;
+        self.store_both_entries_of_each_pair();
+        let n = self.len();
         let refuse =
-            |(i, j): (usize, u32), from: f64, to: f64, why: &str| Error::InvalidParameter {
+            |(i, j): (usize, usize), from: f64, to: f64, why: &str| Error::InvalidParameter {
                 name: "condition",
                 value: format!("F({i}, {j}) = {from:e}"),
                 reason: format!(
@@ -57,62 +57,110 @@ impl ViewFactors {
                  {allowed:.2e}: tighten --tolerance"
                 ),
             };
-        // Reciprocity: every pair of the union of both rows' entries, both ways.
-        let mut rows: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-        for i in 0..n {
-            let (columns, values) = self.row(i);
-            for (&j, &f_ij) in columns.iter().zip(values) {
-                let ju = j as usize;
-                let f_ji = self.get(ju, i);
-                // Each pair once: from its first row, or from row i where row j lacks it.
-                if ju < i && f_ji != 0.0 {
-                    continue;
+        // The rows' sums once reciprocity is exact, and the factor that leaves each at most 1
+        // (a sum of k terms rounds by at most k - 1 ulp of it).
+        let mut factors = vec![1.0; n];
+        for (i, factor) in factors.iter_mut().enumerate() {
+            let range = self.row_starts[i]..self.row_starts[i + 1];
+            let mut sum = 0.0;
+            for k in range.clone() {
+                let [(at, _, to), _] = self.conditioned_pair(i, k, 1.0);
+                if (to - self.values[k]).abs() > allowed {
+                    return Err(refuse(at, self.values[k], to, "making reciprocity exact"));
                 }
-                let shared = 0.5 * (self.areas[i] * f_ij + self.areas[ju] * f_ji);
-                let (to_ij, to_ji) = (shared / self.areas[i], shared / self.areas[ju]);
-                for (at, from, to) in [((i, j), f_ij, to_ij), ((ju, i as u32), f_ji, to_ji)] {
-                    if (to - from).abs() > allowed {
-                        return Err(refuse(at, from, to, "making reciprocity exact"));
-                    }
-                }
-                rows[i].push((j, to_ij));
-                if ju != i {
-                    rows[ju].push((i as u32, to_ji));
+                sum += to;
+            }
+            let margin = 1.0 + (range.len() + 1) as f64 * f64::EPSILON;
+            if sum * margin > 1.0 {
+                *factor = 1.0 / (sum * margin);
+            }
+        }
+        // Each pair once, from its entry above the diagonal; every pair checked before any is
+        // written, so that a refusal leaves F as it was.
+        for (i, k) in self.above_the_diagonal() {
+            let factor = factors[i].min(factors[self.columns[k] as usize]);
+            for (at, place, to) in self.conditioned_pair(i, k, factor) {
+                if (to - self.values[place]).abs() > allowed {
+                    return Err(refuse(at, self.values[place], to, "scaling its row's sum to 1"));
                 }
             }
         }
-        // Rows above 1, each by a factor that leaves its rounded sum at most 1: a sum of k
-        // terms is off by at most (k - 1) ulp of it.
-        let factors: Vec<f64> = rows
-            .iter()
-            .map(|row| {
-                let sum: f64 = row.iter().map(|&(_, v)| v).sum();
-                let margin = 1.0 + (row.len() + 1) as f64 * f64::EPSILON;
-                if sum * margin > 1.0 { 1.0 / (sum * margin) } else { 1.0 }
-            })
-            .collect();
-        for (i, row) in rows.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut() {
-                let scaled = *v * factors[i].min(factors[*j as usize]);
-                let from = self.get(i, *j as usize);
-                if (from - scaled).abs() > allowed {
-                    return Err(refuse((i, *j), from, scaled, "scaling its row's sum to 1"));
-                }
-                moved = moved.max((from - scaled).abs());
-                *v = scaled;
+        let mut largest_change = 0.0f64;
+        let pairs: Vec<(usize, usize)> = self.above_the_diagonal().collect();
+        for (i, k) in pairs {
+            let factor = factors[i].min(factors[self.columns[k] as usize]);
+            for (_, place, to) in self.conditioned_pair(i, k, factor) {
+                largest_change = largest_change.max((to - self.values[place]).abs());
+                self.values[place] = to;
             }
-            row.sort_unstable_by_key(|&(j, _)| j);
         }
-        self.set_rows(rows);
         Ok(Conditioning {
-            largest_change: moved,
+            largest_change,
             rows_scaled: factors.iter().filter(|&&c| c < 1.0).count(),
         })
     }
 
+    /// The pair of the entry `k` of row `i` (F_ij), both its entries: each one's (row,
+    /// column), place among the values and value once reciprocity is exact (the mean of
+    /// A_i F_ij and A_j F_ji, over each area) and scaled by `factor`.
+    fn conditioned_pair(
+        &self,
+        i: usize,
+        k: usize,
+        factor: f64,
+    ) -> [((usize, usize), usize, f64); 2] {
+        let j = self.columns[k] as usize;
+        let (columns, _) = self.row(j);
+        let m = self.row_starts[j] + columns.binary_search(&(i as u32)).expect("a stored mirror");
+        let mean = 0.5 * (self.areas[i] * self.values[k] + self.areas[j] * self.values[m]);
+        [((i, j), k, mean / self.areas[i] * factor), ((j, i), m, mean / self.areas[j] * factor)]
+    }
+
+    /// Each stored entry above the diagonal: its row and its place among the values.
+    fn above_the_diagonal(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        (0..self.len()).flat_map(move |i| {
+            (self.row_starts[i]..self.row_starts[i + 1])
+                .filter(move |&k| self.columns[k] as usize > i)
+                .map(move |k| (i, k))
+        })
+    }
+
+    /// The columns j of row i whose F_ji is not stored.
+    fn unmirrored(&self, i: usize) -> impl Iterator<Item = u32> + '_ {
+        let (columns, _) = self.row(i);
+        columns
+            .iter()
+            .copied()
+            .filter(move |&j| self.row(j as usize).0.binary_search(&(i as u32)).is_err())
+    }
+
+    /// Stores F_ji = 0 where F_ij is stored and F_ji is not (with each direction integrated,
+    /// one may have come out zero), so that every pair has both its entries.
+    fn store_both_entries_of_each_pair(&mut self) {
+        let n = self.len();
+        if (0..n).all(|i| self.unmirrored(i).next().is_none()) {
+            return;
+        }
+        let mut rows: Vec<Vec<(u32, f64)>> = (0..n)
+            .map(|i| {
+                let (columns, values) = self.row(i);
+                columns.iter().copied().zip(values.iter().copied()).collect()
+            })
+            .collect();
+        for i in 0..n {
+            for j in self.unmirrored(i) {
+                rows[j as usize].push((i as u32, 0.0));
+            }
+        }
+        rows.iter_mut().for_each(|row| row.sort_unstable_by_key(|&(j, _)| j));
+        self.set_rows(rows);
+    }
+
     /// Drops each pair whose entries F_ij and F_ji are both below `threshold` (so that what
-    /// stays keeps reciprocity), and says how many and how much of a row's sum went.
-    pub fn drop_below(&mut self, threshold: f64) -> Dropped {
+    /// stays keeps reciprocity), and says how many and how much of a row's sum went. Refuses a
+    /// threshold outside (0, 1].
+    pub fn drop_below(&mut self, threshold: f64) -> Result<Dropped> {
+        check_drop_threshold(threshold)?;
         let n = self.len();
         let mut lost = vec![0.0f64; n];
         let mut rows: Vec<Vec<(u32, f64)>> = Vec::with_capacity(n);
@@ -130,11 +178,11 @@ impl ViewFactors {
         }
         let before = self.nonzeros();
         self.set_rows(rows);
-        Dropped {
+        Ok(Dropped {
             below: threshold,
             entries: before - self.nonzeros(),
             largest_row_sum: lost.into_iter().fold(0.0, f64::max),
-        }
+        })
     }
 
     /// Replaces the entries by `rows`, each sorted by column.
@@ -148,4 +196,17 @@ impl ViewFactors {
         self.columns = rows.iter().flatten().map(|&(j, _)| j).collect();
         self.values = rows.iter().flatten().map(|&(_, v)| v).collect();
     }
+}
+
+/// Refuses a threshold for [`ViewFactors::drop_below`] outside (0, 1] (before the work that
+/// computes the matrix).
+pub fn check_drop_threshold(threshold: f64) -> Result<()> {
+    if threshold > 0.0 && threshold <= 1.0 {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter {
+        name: "drop-below",
+        value: threshold.to_string(),
+        reason: "a view factor threshold in (0, 1]".into(),
+    })
 }

@@ -42,10 +42,19 @@
 //! Each pair is integrated once, over the element of smaller area: F_ji = A_i F_ij / A_j then
 //! has the error of F_ij times A_i / A_j <= 1 (as View3D computes A_i F_ij once per pair). With
 //! [`ViewFactorOptions::each_direction`] both are integrated, and reciprocity measures the
-//! accuracy (1e-12 on the paper's surfaces, 1e-9 on the occluded box).
+//! accuracy (1e-12 on the paper's surfaces, 1e-9 on the occluded box). Pairs that touch or
+//! nearly touch are integrated both ways whatever the option, and reconciled: a gap beyond
+//! F_ij's estimate is integrated again at tighter tolerances, or counted in the estimate
+//! (`reconcile.rs`), so that no kind of contact needs a rule of its own for the estimate to
+//! hold.
 //!
-//! The files: [`view_factors`] (`compute.rs`) drives the rows; `options.rs`, `matrix.rs`,
-//! `summary.rs` and `check.rs` hold what a caller sets and gets. One pair's integral is
+//! For open scenes, `closure.rs` gives each element's sky view factor (1 - Σ_j F_ij), conditions
+//! the matrix for models that need closure (reciprocity exact, no row above 1, no entry moved
+//! beyond the run's estimate) and drops pairs below a threshold.
+//!
+//! The files: [`view_factors`] (`compute.rs`) drives the rows, checking close pairs by
+//! `reconcile.rs`; `options.rs`, `matrix.rs`, `summary.rs`, `closure.rs` and `check.rs` hold
+//! what a caller sets and gets. One pair's integral is
 //! `Context::pair` (`pair.rs`), on the `Context` the pairs share (`context.rs`) and what its
 //! row keeps (`row.rs`): T_i cut along `events.rs`'s planes, each piece a `Part` (`part.rs`;
 //! its poles from `poles.rs`, an opening from `opening.rs`) covered by patches (`patch.rs`)
@@ -80,7 +89,7 @@ mod summary;
 mod touching;
 
 pub use check::EstimateCheck;
-pub use closure::{Conditioning, Dropped};
+pub use closure::{Conditioning, Dropped, check_drop_threshold};
 pub use compute::view_factors;
 pub use matrix::ViewFactors;
 pub use options::{MAX_SPLITS, ViewFactorOptions};

@@ -173,6 +173,9 @@ fn bad_input_is_a_clear_error_naming_the_culprit() {
             "the GPU backend evaluates the exact method only",
         ),
         (&["study", "stiff", "--backend", "cpu", "--max-n", "x"], "--max-n"),
+        (&["study", "stiff", "--max-n", "100"], "--max-n belongs to the paper's tables"),
+        (&["study", "estimates", "--backend", "gpu"], "--backend belongs to the paper's"),
+        (&["study", "cities", "--figures", "x"], "--figures belongs to"),
     ];
     for (args, needle) in cases {
         let (ok, _, stderr) = radiosity(args);
@@ -463,4 +466,48 @@ fn solve_reports_the_condition_estimate_of_a_closed_box() {
     let v = json(&["solve", "--scene", "baffled-box", "--refine", "1", "--json", "-"]);
     let kappa = v["condition_estimate"].as_f64().unwrap();
     assert!(kappa > 1.0 && kappa < 10.0, "rho = 0.5 inside a closed box: condition {kappa}");
+}
+
+/// `study ID --help` lists the options that study takes and none of the others'.
+#[test]
+fn each_study_s_help_shows_its_own_options() {
+    let cases: [(&str, &[&str]); 4] = [
+        ("estimates", &["--seeds", "--scene", "--tolerances"]),
+        (
+            "compression",
+            &[
+                "--scene",
+                "--tolerances",
+                "--shadowed-blocks",
+                "--max-n",
+                "--backend",
+                "--precision",
+                "--figures",
+            ],
+        ),
+        ("table-3.1", &["--max-n", "--backend", "--precision", "--figures"]),
+        ("stability", &["--backend", "--precision"]),
+    ];
+    let every = [
+        "--max-n",
+        "--backend",
+        "--precision",
+        "--figures",
+        "--scene",
+        "--tolerances",
+        "--seeds",
+        "--shadowed-blocks",
+    ];
+    for (id, own) in cases {
+        for flag in ["--help", "-h"] {
+            let (ok, help, err) = radiosity(&["study", id, flag]);
+            assert!(ok && help.contains(&format!("radiosity study {id}")), "{id}: {err}");
+            assert!(help.contains("--json") && help.contains("--markdown"), "{id}: {help}");
+            for option in every {
+                let shown =
+                    help.contains(&format!("{option} ")) || help.contains(&format!("{option}\n"));
+                assert_eq!(shown, own.contains(&option), "{id} {flag}: {option} in\n{help}");
+            }
+        }
+    }
 }

@@ -13,7 +13,11 @@ use super::named::named;
 use super::operator::OperatorArgs;
 use super::outputs::OutputArgs;
 
-/// `radiosity study`'s arguments.
+/// Where `study` writes its plots unless `--figures` says.
+pub(crate) const DEFAULT_FIGURES: &str = "figures";
+
+/// `radiosity study`'s arguments: every study's, each of which takes only its own
+/// (`cli::study`'s table, which `radiosity study ID --help` shows).
 #[derive(Args)]
 pub(crate) struct StudyArgs {
     /// Study id
@@ -26,12 +30,13 @@ pub(crate) struct StudyArgs {
     /// GPU); default: the CPU, plus the study's GPU series where an adapter is found
     #[arg(long, value_parser = named::<BackendName>())]
     pub(crate) backend: Option<BackendName>,
-    /// Precision of the GPU kernels with --backend gpu
-    #[arg(long, value_parser = named::<Precision>(), default_value_t = Precision::F64)]
-    pub(crate) precision: Precision,
-    /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies
-    #[arg(long, value_name = "DIR", default_value = "figures")]
-    pub(crate) figures: String,
+    /// Precision of the GPU kernels with --backend gpu [default: f64]
+    #[arg(long, value_parser = named::<Precision>())]
+    pub(crate) precision: Option<Precision>,
+    /// Directory for the plots (PNG and SVG) of the figure and error-vs-time studies [default:
+    /// figures]
+    #[arg(long, value_name = "DIR")]
+    pub(crate) figures: Option<String>,
     /// Also write JSON to PATH; `-`: JSON on standard output instead of the text table
     #[arg(long, value_name = "PATH")]
     pub(crate) json: Option<String>,

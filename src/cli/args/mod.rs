@@ -12,7 +12,9 @@ mod outputs;
 mod run_config;
 mod values;
 
-pub(crate) use commands::{AssembleArgs, BenchArgs, SolveArgs, StudyArgs, ViewFactorArgs};
+pub(crate) use commands::{
+    AssembleArgs, BenchArgs, DEFAULT_FIGURES, SolveArgs, StudyArgs, ViewFactorArgs,
+};
 pub(crate) use named::named;
 pub(crate) use outputs::OutputArgs;
 pub(crate) use values::parse_point;

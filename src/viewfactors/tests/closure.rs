@@ -76,7 +76,10 @@ fn dropping_small_entries_goes_by_pairs_and_says_what_each_row_lost() {
     let fixture = Fixture::new(crate::scene::city(3, 2).unwrap());
     let full = at(&fixture, 1e-6, false);
     let mut f = full.clone();
-    let dropped = f.drop_below(1e-3);
+    for bad in [0.0, -1.0, 1.5, f64::NAN] {
+        assert!(f.drop_below(bad).unwrap_err().to_string().contains("drop-below"), "{bad}");
+    }
+    let dropped = f.drop_below(1e-3).unwrap();
     assert!(dropped.entries > 0 && f.nonzeros() + dropped.entries == full.nonzeros());
     assert!(f.reciprocity_error() <= 1e-15);
     let (n, dense, kept) = (full.len(), full.to_dense(), f.to_dense());
