@@ -29,7 +29,7 @@ use radiosity::scene::{Coplanar, Duplicates, ImportOptions, NonPlanar};
 use radiosity::scene::{Scene, SurfaceParameters};
 use radiosity::solve::SolverChoice;
 use radiosity::viewfactors::{
-    ViewFactorOptions, check_drop_threshold, view_factors as compute_view_factors,
+    ClosureOptions, ViewFactorOptions, view_factors as compute_view_factors,
 };
 use radiosity::vocabulary::Named;
 
@@ -626,7 +626,8 @@ fn view_factors<'py>(
 )> {
     let options = ViewFactorOptions { tolerance, max_depth, each_direction, ..Default::default() };
     options.validate().map_err(raised)?;
-    drop_below.map(check_drop_threshold).transpose().map_err(raised)?;
+    let closure = ClosureOptions { condition, drop_below };
+    closure.validate().map_err(raised)?;
     let run = pipeline::RunOptions { refine, params: scene.params, ..Default::default() };
     let config = run.config(scene.source.clone()).map_err(raised)?;
     let config = RunConfig { progress: progress_to(progress), ..config };
@@ -638,11 +639,9 @@ fn view_factors<'py>(
             config.progress.start("viewfactors", mesh.len());
             let mut f = compute_view_factors(scene, mesh, planner, &options, &*config.progress)?;
             config.progress.finish();
-            let conditioning = if condition { Some(f.condition()?) } else { None };
-            let dropped = drop_below.map(|threshold| f.drop_below(threshold)).transpose()?;
+            let closure = f.close(&closure)?;
             let mut summary = f.summary(&scene.name, started.elapsed().as_secs_f64());
-            summary.conditioning = conditioning;
-            summary.dropped = dropped;
+            summary.closure = closure;
             Ok::<_, radiosity::Error>((f, summary))
         })
         .map_err(raised)?;

@@ -21,18 +21,19 @@ use super::ranks::{is_root, world};
 /// figures (or error-vs-time, grading: `study::run_study`), named "paper" in [`OPTION_OWNERS`].
 const OWN_STUDIES: [&str; 5] = ["compression", "estimates", "cities", "stability", "stiff"];
 
-/// The options of `study` that only some studies take, and the studies that take them (every
-/// study takes `--json` and `--markdown`): the one table that both the refusal of an option a
-/// study does not take and each study's `--help` read.
-const OPTION_OWNERS: [(&str, &[&str]); 8] = [
-    ("max-n", &["paper", "compression", "cities"]),
-    ("backend", &["paper", "compression", "stability", "stiff"]),
-    ("precision", &["paper", "compression", "stability", "stiff"]),
-    ("figures", &["paper", "compression"]),
-    ("scene", &["compression", "estimates"]),
-    ("tolerances", &["compression", "estimates"]),
-    ("seeds", &["estimates"]),
-    ("shadowed-blocks", &["compression"]),
+/// The options of `study` that only some studies take, the studies that take them (every
+/// study takes `--json` and `--markdown`) and whether the arguments give it: the one table that
+/// both the refusal of an option a study does not take and each study's `--help` read.
+type OptionOwners = (&'static str, &'static [&'static str], fn(&StudyArgs) -> bool);
+const OPTION_OWNERS: [OptionOwners; 8] = [
+    ("max-n", &["paper", "compression", "cities"], |a| a.max_n.is_some()),
+    ("backend", &["paper", "compression", "stability", "stiff"], |a| a.backend.is_some()),
+    ("precision", &["paper", "compression", "stability", "stiff"], |a| a.precision.is_some()),
+    ("figures", &["paper", "compression"], |a| a.figures.is_some()),
+    ("scene", &["compression", "estimates"], |a| !a.scene.is_empty()),
+    ("tolerances", &["compression", "estimates"], |a| a.tolerances.is_some()),
+    ("seeds", &["estimates"], |a| a.seeds.is_some()),
+    ("shadowed-blocks", &["compression"], |a| a.shadowed_blocks),
 ];
 
 /// The study `id`'s name in [`OPTION_OWNERS`].
@@ -41,12 +42,9 @@ fn owner_name(id: &str) -> &str {
 }
 
 /// The options of `study` that the study `id` does not take.
-pub(crate) fn options_not_taken(id: &str) -> impl Iterator<Item = &'static str> {
+fn options_not_taken(id: &str) -> impl Iterator<Item = OptionOwners> {
     let owner = owner_name(id).to_string();
-    OPTION_OWNERS
-        .into_iter()
-        .filter(move |(_, owners)| !owners.contains(&owner.as_str()))
-        .map(|(flag, _)| flag)
+    OPTION_OWNERS.into_iter().filter(move |(_, owners, _)| !owners.contains(&owner.as_str()))
 }
 
 /// Runs the study `args.id` and prints it (JSON to `--json` when given, and the table unless
@@ -55,18 +53,7 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
     let StudyArgs { id, max_n, backend: device, markdown, .. } = args;
     let (id, max_n, markdown) = (id.as_str(), *max_n, *markdown);
     let json = args.json.as_deref();
-    let given = |flag: &str| match flag {
-        "max-n" => max_n.is_some(),
-        "backend" => device.is_some(),
-        "precision" => args.precision.is_some(),
-        "figures" => args.figures.is_some(),
-        "scene" => !args.scene.is_empty(),
-        "tolerances" => args.tolerances.is_some(),
-        "seeds" => args.seeds.is_some(),
-        _ => args.shadowed_blocks,
-    };
-    if let Some(flag) = options_not_taken(id).find(|flag| given(flag)) {
-        let (_, owners) = OPTION_OWNERS.iter().find(|(f, _)| *f == flag).expect("an owned option");
+    if let Some((flag, owners, _)) = options_not_taken(id).find(|(_, _, given)| given(args)) {
         let owners: Vec<String> = owners
             .iter()
             .map(|&o| {
@@ -169,7 +156,7 @@ pub(crate) fn help_for_one_study(argv: &[String]) -> Option<String> {
         return None;
     }
     let mut study = super::Cli::command().find_subcommand("study")?.clone();
-    for flag in options_not_taken(id) {
+    for (flag, _, _) in options_not_taken(id) {
         study = study.mut_arg(flag.replace('-', "_"), |arg| arg.hide(true));
     }
     let mut study = study

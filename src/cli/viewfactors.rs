@@ -6,8 +6,7 @@ use radiosity::pipeline::{self, Problem};
 use radiosity::report;
 use radiosity::scene::Scene;
 use radiosity::viewfactors::{
-    MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, check_drop_threshold,
-    view_factors,
+    ClosureOptions, MAX_SPLITS, ViewFactorOptions, ViewFactorSummary, ViewFactors, view_factors,
 };
 
 use super::args::ViewFactorArgs;
@@ -23,7 +22,8 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
         ..Default::default()
     };
     options.validate()?;
-    args.drop_below.map(check_drop_threshold).transpose()?;
+    let closure = ClosureOptions { condition: args.condition, drop_below: args.drop_below };
+    closure.validate()?;
     if args.tolerance < ROUNDING_FLOOR {
         // Rounding in the closed forms and the sums of a pair's cells alone is about this: the
         // adaptive rule would split every cell to the limit and still miss it.
@@ -43,12 +43,10 @@ pub(crate) fn run_viewfactors(args: &ViewFactorArgs) -> Result<()> {
     progress.start("viewfactors", mesh.len());
     let mut f = view_factors(scene, mesh, planner, &options, &*progress)?;
     progress.finish();
-    let conditioning = if args.condition { Some(f.condition()?) } else { None };
-    let dropped = args.drop_below.map(|threshold| f.drop_below(threshold)).transpose()?;
+    let closure = f.close(&closure)?;
     let mut summary =
         f.summary(&scene.name, problem.plan_seconds + started.elapsed().as_secs_f64());
-    summary.conditioning = conditioning;
-    summary.dropped = dropped;
+    summary.closure = closure;
     if summary.error_estimate > args.tolerance {
         // Cells deeper than the split limit are settled with the error they have.
         eprintln!(
@@ -147,14 +145,14 @@ fn print_summary(summary: &ViewFactorSummary, f: &ViewFactors, scene: &Scene, me
         "sky view factors (1 - row sum): min {:.15}, max {:.15}",
         summary.sky_view_factor_min, summary.sky_view_factor_max
     );
-    if let Some(c) = &summary.conditioning {
+    if let Some(c) = &summary.closure.conditioning {
         println!(
             "conditioned: reciprocity exact, {} rows scaled to 1; largest change of an entry \
              {:.2e} (estimate {:.2e})",
             c.rows_scaled, c.largest_change, summary.error_estimate
         );
     }
-    if let Some(d) = &summary.dropped {
+    if let Some(d) = &summary.closure.dropped {
         println!(
             "dropped {} entries below {:e} (both directions); largest row sum dropped {:.2e}, \
              counted as sky",

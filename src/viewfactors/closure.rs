@@ -10,6 +10,33 @@ use serde::Serialize;
 use super::matrix::ViewFactors;
 use crate::error::{Error, Result};
 
+/// The closure a caller asks for (`viewfactors --condition --drop-below V`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClosureOptions {
+    /// Condition the matrix ([`ViewFactors::condition`]).
+    pub condition: bool,
+    /// Then drop the pairs below this threshold ([`ViewFactors::drop_below`]).
+    pub drop_below: Option<f64>,
+}
+
+impl ClosureOptions {
+    /// Refuses a threshold outside (0, 1], before the work that computes the matrix.
+    pub fn validate(&self) -> Result<()> {
+        self.drop_below.map(check_threshold).transpose().map(|_| ())
+    }
+}
+
+/// What closure changed: each part where it was asked for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Closure {
+    /// What conditioning changed ([`ViewFactors::condition`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub conditioning: Option<Conditioning>,
+    /// What the threshold dropped ([`ViewFactors::drop_below`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dropped: Option<Dropped>,
+}
+
 /// What [`ViewFactors::condition`] changed.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Conditioning {
@@ -35,6 +62,13 @@ impl ViewFactors {
     /// (0 for an element of a closed scene, to the entries' estimates).
     pub fn sky_view_factors(&self) -> Vec<f64> {
         (0..self.len()).map(|i| 1.0 - self.row(i).1.iter().sum::<f64>()).collect()
+    }
+
+    /// Closes F as `options` ask: conditioned, then its small pairs dropped.
+    pub fn close(&mut self, options: &ClosureOptions) -> Result<Closure> {
+        let conditioning = if options.condition { Some(self.condition()?) } else { None };
+        let dropped = options.drop_below.map(|threshold| self.drop_below(threshold)).transpose()?;
+        Ok(Closure { conditioning, dropped })
     }
 
     /// Conditions F in place for models that need closure: each pair's A_i F_ij and A_j F_ji
@@ -77,21 +111,29 @@ impl ViewFactors {
         }
         // Each pair once, from its entry above the diagonal; every pair checked before any is
         // written, so that a refusal leaves F as it was.
-        for (i, k) in self.above_the_diagonal() {
-            let factor = factors[i].min(factors[self.columns[k] as usize]);
-            for (at, place, to) in self.conditioned_pair(i, k, factor) {
-                if (to - self.values[place]).abs() > allowed {
-                    return Err(refuse(at, self.values[place], to, "scaling its row's sum to 1"));
+        let factor_of =
+            |f: &Self, i: usize, k: usize| factors[i].min(factors[f.columns[k] as usize]);
+        for i in 0..n {
+            for k in self.above_the_diagonal(i) {
+                for (at, place, to) in self.conditioned_pair(i, k, factor_of(self, i, k)) {
+                    if (to - self.values[place]).abs() > allowed {
+                        return Err(refuse(
+                            at,
+                            self.values[place],
+                            to,
+                            "scaling its row's sum to 1",
+                        ));
+                    }
                 }
             }
         }
         let mut largest_change = 0.0f64;
-        let pairs: Vec<(usize, usize)> = self.above_the_diagonal().collect();
-        for (i, k) in pairs {
-            let factor = factors[i].min(factors[self.columns[k] as usize]);
-            for (_, place, to) in self.conditioned_pair(i, k, factor) {
-                largest_change = largest_change.max((to - self.values[place]).abs());
-                self.values[place] = to;
+        for i in 0..n {
+            for k in self.above_the_diagonal(i) {
+                for (_, place, to) in self.conditioned_pair(i, k, factor_of(self, i, k)) {
+                    largest_change = largest_change.max((to - self.values[place]).abs());
+                    self.values[place] = to;
+                }
             }
         }
         Ok(Conditioning {
@@ -116,13 +158,11 @@ impl ViewFactors {
         [((i, j), k, mean / self.areas[i] * factor), ((j, i), m, mean / self.areas[j] * factor)]
     }
 
-    /// Each stored entry above the diagonal: its row and its place among the values.
-    fn above_the_diagonal(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
-        (0..self.len()).flat_map(move |i| {
-            (self.row_starts[i]..self.row_starts[i + 1])
-                .filter(move |&k| self.columns[k] as usize > i)
-                .map(move |k| (i, k))
-        })
+    /// The places among the values of row i's entries above the diagonal (F_ij with j > i).
+    fn above_the_diagonal(&self, i: usize) -> std::ops::Range<usize> {
+        let (columns, _) = self.row(i);
+        let first = columns.partition_point(|&j| j as usize <= i);
+        self.row_starts[i] + first..self.row_starts[i + 1]
     }
 
     /// The columns j of row i whose F_ji is not stored.
@@ -160,27 +200,39 @@ impl ViewFactors {
     /// stays keeps reciprocity), and says how many and how much of a row's sum went. Refuses a
     /// threshold outside (0, 1].
     pub fn drop_below(&mut self, threshold: f64) -> Result<Dropped> {
-        check_drop_threshold(threshold)?;
+        check_threshold(threshold)?;
         let n = self.len();
-        let mut lost = vec![0.0f64; n];
-        let mut rows: Vec<Vec<(u32, f64)>> = Vec::with_capacity(n);
+        // Which entries go, decided on the whole matrix before any moves.
+        let f: &Self = self;
+        let keep: Vec<bool> = (0..n)
+            .flat_map(|i| {
+                let (columns, values) = f.row(i);
+                columns
+                    .iter()
+                    .zip(values)
+                    .map(move |(&j, &v)| v >= threshold || f.get(j as usize, i) >= threshold)
+            })
+            .collect();
+        let (mut lost, mut kept) = (vec![0.0f64; n], 0);
         for (i, lost) in lost.iter_mut().enumerate() {
-            let (columns, values) = self.row(i);
-            let mut row = Vec::with_capacity(columns.len());
-            for (&j, &v) in columns.iter().zip(values) {
-                if v < threshold && self.get(j as usize, i) < threshold {
-                    *lost += v;
+            let range = self.row_starts[i]..self.row_starts[i + 1];
+            self.row_starts[i] = kept;
+            for k in range {
+                if keep[k] {
+                    (self.columns[kept], self.values[kept]) = (self.columns[k], self.values[k]);
+                    kept += 1;
                 } else {
-                    row.push((j, v));
+                    *lost += self.values[k];
                 }
             }
-            rows.push(row);
         }
         let before = self.nonzeros();
-        self.set_rows(rows);
+        self.row_starts[n] = kept;
+        self.columns.truncate(kept);
+        self.values.truncate(kept);
         Ok(Dropped {
             below: threshold,
-            entries: before - self.nonzeros(),
+            entries: before - kept,
             largest_row_sum: lost.into_iter().fold(0.0, f64::max),
         })
     }
@@ -198,9 +250,8 @@ impl ViewFactors {
     }
 }
 
-/// Refuses a threshold for [`ViewFactors::drop_below`] outside (0, 1] (before the work that
-/// computes the matrix).
-pub fn check_drop_threshold(threshold: f64) -> Result<()> {
+/// Refuses a threshold for [`ViewFactors::drop_below`] outside (0, 1].
+fn check_threshold(threshold: f64) -> Result<()> {
     if threshold > 0.0 && threshold <= 1.0 {
         return Ok(());
     }

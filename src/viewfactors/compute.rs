@@ -51,7 +51,8 @@ pub fn view_factors(
                 let mut estimate = own.error;
                 tally.evaluations += own.evaluations;
                 if value > 0.0 && context.close(i, j) {
-                    (value, estimate) = context.reconciled((i, j), (value, estimate), &mut tally);
+                    (value, estimate) =
+                        context.reconciled((i, j), (value, estimate), &rules, &mut tally);
                 }
                 tally.error = tally.error.max(estimate);
                 // A view factor is not negative: where rounding of the signed pieces leaves

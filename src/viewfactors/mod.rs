@@ -89,7 +89,7 @@ mod summary;
 mod touching;
 
 pub use check::EstimateCheck;
-pub use closure::{Conditioning, Dropped, check_drop_threshold};
+pub use closure::{Closure, ClosureOptions, Conditioning, Dropped};
 pub use compute::view_factors;
 pub use matrix::ViewFactors;
 pub use options::{MAX_SPLITS, ViewFactorOptions};

@@ -216,7 +216,7 @@ const ALONG: f64 = 1e-7;
 pub(super) const TOUCHING: f64 = 1e-9;
 
 /// Distance between two boxes (0 when they overlap or touch).
-fn box_distance((alo, ahi): (DVec3, DVec3), (blo, bhi): (DVec3, DVec3)) -> f64 {
+pub(super) fn box_distance((alo, ahi): (DVec3, DVec3), (blo, bhi): (DVec3, DVec3)) -> f64 {
     (blo - ahi).max(alo - bhi).max(DVec3::ZERO).length()
 }
 

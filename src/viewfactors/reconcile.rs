@@ -10,6 +10,7 @@
 use super::context::Context;
 use super::options::ViewFactorOptions;
 use super::outer_rules::OuterRules;
+use super::part::box_distance;
 use super::row::{Between, Tally};
 use crate::geometry::{bounding_box_3d, convex_polygons_distance};
 
@@ -33,27 +34,28 @@ impl Context<'_> {
     pub(super) fn close(&self, i: usize, j: usize) -> bool {
         let (ei, ej) = (&self.mesh.elements()[i], &self.mesh.elements()[j]);
         let gap = CLOSE * ei.diameter().min(ej.diameter());
-        let (a, b) = (bounding_box_3d(&ei.vertices), bounding_box_3d(&ej.vertices));
-        let boxes_apart = (0..3).any(|k| a.0[k] > b.1[k] + gap || b.0[k] > a.1[k] + gap);
-        !boxes_apart && convex_polygons_distance(&ei.vertices, &ej.vertices) <= gap
+        let boxes = (bounding_box_3d(&ei.vertices), bounding_box_3d(&ej.vertices));
+        box_distance(boxes.0, boxes.1) <= gap
+            && convex_polygons_distance(&ei.vertices, &ej.vertices) <= gap
     }
 
     /// F_ij of a close pair, already integrated over T_i as `(value, estimate)`, checked
     /// against F_ji integrated over T_j: where `|F_ij - (A_j / A_i) F_ji|` exceeds F_ij's
     /// estimate, both are integrated again at a tenth of the tolerance, up to [`ROUNDS`] times;
     /// a gap that remains counts in F_ij's estimate with F_ji's (in F_ij's units), which then
-    /// bounds its error wherever either direction is within its own estimate. Returns F_ij and
-    /// its estimate; the work done goes to `tally`.
+    /// bounds its error wherever either direction is within its own estimate. `rules` are the
+    /// run's, at its tolerance. Returns F_ij and its estimate; the work done goes to `tally`.
     pub(super) fn reconciled(
         &self,
         (i, j): (usize, usize),
         (mut f_ij, mut e_ij): (f64, f64),
+        rules: &OuterRules,
         tally: &mut Tally,
     ) -> (f64, f64) {
         let elements = self.mesh.elements();
         let ratio = elements[j].area() / elements[i].area();
         let mut tolerance = self.options.tolerance;
-        let (mut f_ji, mut e_ji) = self.pair_alone((j, i), tolerance, tally);
+        let (mut f_ji, mut e_ji) = self.pair_alone((j, i), rules, tally);
         for round in 0..=ROUNDS {
             let gap = (f_ij - ratio * f_ji).abs();
             // F_ij's own estimate must explain the gap: where only the two estimates together
@@ -67,18 +69,24 @@ impl Context<'_> {
                 break;
             }
             tolerance = (0.1 * tolerance).max(TIGHTEST);
-            (f_ij, e_ij) = self.pair_alone((i, j), tolerance, tally);
-            (f_ji, e_ji) = self.pair_alone((j, i), tolerance, tally);
+            let options = ViewFactorOptions { tolerance, ..*self.options };
+            let (tighter, rules) =
+                (Context { options: &options, ..*self }, OuterRules::new(&options));
+            (f_ij, e_ij) = tighter.pair_alone((i, j), &rules, tally);
+            (f_ji, e_ji) = tighter.pair_alone((j, i), &rules, tally);
         }
         (f_ij, e_ij)
     }
 
-    /// F_ij at `tolerance` with what comes between found for it alone, and its estimate.
-    fn pair_alone(&self, (i, j): (usize, usize), tolerance: f64, tally: &mut Tally) -> (f64, f64) {
-        let options = ViewFactorOptions { tolerance, ..*self.options };
-        let context = Context { options: &options, ..*self };
+    /// F_ij with what comes between found for it alone, and its estimate.
+    fn pair_alone(
+        &self,
+        (i, j): (usize, usize),
+        rules: &OuterRules,
+        tally: &mut Tally,
+    ) -> (f64, f64) {
         let mut own = Tally::default();
-        let value = context.pair(i, j, &mut None::<Between>, &OuterRules::new(&options), &mut own);
+        let value = self.pair(i, j, &mut None::<Between>, rules, &mut own);
         tally.evaluations += own.evaluations;
         (value, own.error)
     }

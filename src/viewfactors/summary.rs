@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::closure::{Conditioning, Dropped};
+use super::closure::Closure;
 use super::matrix::ViewFactors;
 
 /// Summary of a view factor computation, for reports.
@@ -34,12 +34,10 @@ pub struct ViewFactorSummary {
     pub nonzeros: usize,
     /// Entries that came out below zero by rounding and were stored as zero.
     pub clamped_negative: usize,
-    /// What conditioning for closure changed, where asked ([`ViewFactors::condition`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub conditioning: Option<Conditioning>,
-    /// What a threshold dropped, where asked ([`ViewFactors::drop_below`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub dropped: Option<Dropped>,
+    /// What closure changed, where asked ([`ViewFactors::close`]): `conditioning` and
+    /// `dropped`.
+    #[serde(flatten)]
+    pub closure: Closure,
     /// Wall time.
     pub seconds: f64,
 }
@@ -61,8 +59,7 @@ impl ViewFactors {
             each_direction: self.each_direction,
             nonzeros: self.nonzeros(),
             clamped_negative: self.clamped,
-            conditioning: None,
-            dropped: None,
+            closure: Closure::default(),
             seconds,
         }
     }

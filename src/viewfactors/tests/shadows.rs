@@ -36,7 +36,7 @@ fn occluders_found_once_per_face_give_each_pair_s_entry() {
             let mut own = Tally::default();
             let mut searched = context.pair(i, j, &mut Some(Between::Search), &rules, &mut own);
             if searched > 0.0 && context.close(i, j) {
-                searched = context.reconciled((i, j), (searched, own.error), &mut tally).0;
+                searched = context.reconciled((i, j), (searched, own.error), &rules, &mut tally).0;
             }
             assert_eq!(f.get(i, j), searched, "({i}, {j})");
             match context.between(i, fixture.mesh.elements()[j].face) {
