@@ -2,7 +2,7 @@
 
 use radiosity::error::{Error, Result};
 use radiosity::operator::OperatorChoice;
-use radiosity::pipeline::{self, Backend, BackendName};
+use radiosity::pipeline::{self, Backend};
 use radiosity::report;
 
 use super::args::BenchArgs;
@@ -13,30 +13,31 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     args.operator.fill(&mut options);
     let mut config = args.geometry.scene.config_of(&options)?;
     config.progress = radiosity::progress::ProgressSink::default();
-    let named = match &args.backends {
-        Some(named) => named.clone(),
-        // Under mpirun the ranks build on their CPUs.
-        None if config.ranks.is_some() => vec![BackendName::Cpu],
-        None => match radiosity::gpu::context_for(args.precision) {
-            Ok(_) => vec![BackendName::Cpu, BackendName::Gpu],
-            Err(e) => {
-                eprintln!("note: the GPU is left out: {e}");
-                vec![BackendName::Cpu]
+    let backends = match &args.backends {
+        Some(named) => {
+            let mut backends: Vec<Backend> = Vec::new();
+            for &b in named {
+                let b = Backend::named(b, args.precision);
+                if backends.iter().any(|x| x.name() == b.name()) {
+                    return Err(Error::InvalidParameter {
+                        name: "backends",
+                        value: b.name().into(),
+                        reason: "each backend may be named once".into(),
+                    });
+                }
+                backends.push(b);
             }
-        },
-    };
-    let mut backends: Vec<Backend> = Vec::new();
-    for &b in &named {
-        let b = Backend::named(b, args.precision);
-        if backends.iter().any(|x| x.name() == b.name()) {
-            return Err(Error::InvalidParameter {
-                name: "backends",
-                value: b.name().into(),
-                reason: "each backend may be named once".into(),
-            });
+            backends
         }
-        backends.push(b);
-    }
+        // Under mpirun the ranks build on their CPUs.
+        None if config.ranks.is_some() => vec![Backend::Cpu],
+        None => {
+            let mut notes = Vec::new();
+            let backends = pipeline::cpu_and_found_gpus(&[args.precision], &mut notes);
+            notes.iter().for_each(|note| eprintln!("note: {note}"));
+            backends
+        }
+    };
     let built = pipeline::build(&config)?;
     // Under auto only a CPU-only bench of a large system switches to the compressed operator;
     // asked for, it is built on each named backend and benched against the dense CPU assembly.

@@ -3,15 +3,15 @@
 use clap::CommandFactory;
 use radiosity::error::{Error, Result};
 use radiosity::gpu::Precision;
-use radiosity::pipeline::{BackendName, SceneSource};
+use radiosity::pipeline::{Backend, SceneSource};
 use radiosity::report;
 use radiosity::report::TableFormat;
+use radiosity::study::StudyOptions;
 use radiosity::study::cities::{CitySeries, SIZES, run_cities};
 use radiosity::study::compression::{CompressionSeries, TOLERANCES, run_compression};
 use radiosity::study::estimates::{
     DEFAULT_SEEDS, EstimateSeries, TOLERANCES as ESTIMATE_TOLERANCES, run_estimates,
 };
-use radiosity::study::{StudyDevice, StudyOptions};
 
 use super::args::{DEFAULT_FIGURES, StudyArgs};
 use super::output::emit;
@@ -50,7 +50,7 @@ fn options_not_taken(id: &str) -> impl Iterator<Item = OptionOwners> {
 /// Runs the study `args.id` and prints it (JSON to `--json` when given, and the table unless
 /// the JSON goes to standard output); plots go to `--figures`.
 pub(crate) fn run(args: &StudyArgs) -> Result<()> {
-    let StudyArgs { id, max_n, backend: device, markdown, .. } = args;
+    let StudyArgs { id, max_n, backend, markdown, .. } = args;
     let (id, max_n, markdown) = (id.as_str(), *max_n, *markdown);
     let json = args.json.as_deref();
     if let Some((flag, owners, _)) = options_not_taken(id).find(|(_, _, given)| given(args)) {
@@ -79,25 +79,17 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             reason: "study compression runs on one scene".into(),
         });
     }
-    let device = match *device {
-        None => StudyDevice::Auto,
-        Some(BackendName::Cpu) => StudyDevice::Cpu,
-        Some(BackendName::Gpu) => StudyDevice::Gpu(precision),
-    };
+    let backend = backend.map(|name| Backend::named(name, precision));
     let format = if markdown { TableFormat::Markdown } else { TableFormat::Text };
     match id {
         "stability" => {
-            let result = radiosity::study::stability::run_stability(device)?;
+            let result = radiosity::study::stability::run_stability(backend)?;
             emit(&result, json, || report::stability_table(&result, format))
         }
         "compression" => {
             let progress =
                 if is_root() { super::progress::on_stderr() } else { Default::default() };
             // The study measures the CPU unless the GPU is asked for.
-            let backend = match device {
-                StudyDevice::Gpu(p) => radiosity::pipeline::Backend::Gpu(p),
-                _ => radiosity::pipeline::Backend::Cpu,
-            };
             let ranks = world();
             let series = CompressionSeries {
                 scene: args.scene.first().map(|s| SceneSource::parse(s)).transpose()?,
@@ -105,7 +97,12 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
                 tolerances: args.tolerances.clone().unwrap_or(TOLERANCES.to_vec()),
                 shadowed_blocks: args.shadowed_blocks,
             };
-            let mut result = run_compression(&series, backend, &progress, ranks.as_ref())?;
+            let mut result = run_compression(
+                &series,
+                backend.unwrap_or(Backend::Cpu),
+                &progress,
+                ranks.as_ref(),
+            )?;
             // Every rank ran the compressed operators; rank 0 holds the rows and prints them.
             if !is_root() {
                 return Ok(());
@@ -134,11 +131,11 @@ pub(crate) fn run(args: &StudyArgs) -> Result<()> {
             emit(&result, json, || report::city_table(&result, format))
         }
         "stiff" => {
-            let result = radiosity::study::stability::run_stiff(device)?;
+            let result = radiosity::study::stability::run_stiff(backend)?;
             emit(&result, json, || report::stiff_table(&result, format))
         }
         _ => {
-            let options = StudyOptions { max_n, device, progress: super::progress::on_stderr() };
+            let options = StudyOptions { max_n, backend, progress: super::progress::on_stderr() };
             let mut result = radiosity::study::run_study(id, &options)?;
             result.figures = report::write_study_figures(&result, std::path::Path::new(figures))?;
             emit(&result, json, || report::study_table(&result, format))

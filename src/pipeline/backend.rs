@@ -4,8 +4,33 @@ use super::{Backend, Problem};
 use crate::assembly::{self, Assembly, AssemblyOptions, Quadrature};
 use crate::discretization::Method;
 use crate::error::{Error, Result};
-use crate::gpu::{self, GpuAssembler, GpuTimings};
+use crate::gpu::{self, GpuAssembler, GpuTimings, Precision};
 use crate::progress::Progress;
+
+impl Backend {
+    /// This backend if it can run here: the CPU always, the GPU where an adapter that runs
+    /// kernels of its precision is found (why not, otherwise).
+    pub fn found(self) -> Result<Self> {
+        match self {
+            Self::Cpu => Ok(self),
+            Self::Gpu(precision) => gpu::context_for(precision).map(|_| self),
+        }
+    }
+}
+
+/// The backends a command runs on when none is named (`bench`, the studies): the CPU, plus the
+/// GPU in each of `precisions` where an adapter is found; a note says why a GPU is left out.
+/// The one place where "the GPU where found" is decided.
+pub fn cpu_and_found_gpus(precisions: &[Precision], notes: &mut Vec<String>) -> Vec<Backend> {
+    let mut backends = vec![Backend::Cpu];
+    for &precision in precisions {
+        match Backend::Gpu(precision).found() {
+            Ok(gpu) => backends.push(gpu),
+            Err(e) => notes.push(format!("the GPU in {} is left out: {e}", precision.name())),
+        }
+    }
+    backends
+}
 
 /// A backend ready to assemble K: on the GPU, the kernels compiled once (the one-time cost that
 /// timings of the assembly leave out). Every command that assembles goes through it, so `bench`

@@ -71,18 +71,6 @@ impl Backend {
     }
 }
 
-/// Where a study's series run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StudyDevice {
-    /// CPU, plus the studies' GPU series where an adapter is found.
-    Auto,
-    /// CPU only; GPU series are left out.
-    Cpu,
-    /// Everything that can run on the GPU runs there, in this precision (GPU series keep theirs);
-    /// a missing adapter is an error.
-    Gpu(Precision),
-}
-
 /// Where the scene comes from.
 #[derive(Clone, Debug)]
 pub enum SceneSource {

@@ -20,10 +20,10 @@ mod summary;
 
 pub use crate::assembly::Problem;
 pub use crate::assembly::peak_rss_bytes;
-pub use backend::{Assembler, assemble_on};
+pub use backend::{Assembler, assemble_on, cpu_and_found_gpus};
 pub use built::{BuiltOperator, TimedAssembly, distributed_report};
 pub use choice::{OperatorKind, operator_kind};
-pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource, StudyDevice};
+pub use config::{Backend, MeshChoice, REPEAT_BELOW_SECONDS, RunConfig, SceneSource};
 pub use device::compressed_on_device;
 pub use operator::{build_compressed, build_operator};
 pub use options::{BackendName, MeshName, RunOptions};

@@ -17,20 +17,19 @@ use serde::Serialize;
 
 use crate::assembly::Quadrature;
 use crate::error::{Error, Result};
-use crate::gpu;
 use crate::pipeline::{self, Backend, RunConfig, RunLabel};
 use crate::progress::ProgressSink;
 use crate::quadrature::ImtRule;
-
-pub use crate::pipeline::StudyDevice;
 
 /// Options shared by all studies.
 #[derive(Clone, Debug)]
 pub struct StudyOptions {
     /// Largest n to run (default: the study's).
     pub max_n: Option<usize>,
-    /// Where the series run.
-    pub device: StudyDevice,
+    /// Where the series run: `None` the CPU, plus the GPU series where an adapter is found
+    /// ([`Backend::found`]); the CPU only; or on the GPU everything that can run
+    /// there (GPU series keep their precision), a missing adapter being an error.
+    pub backend: Option<Backend>,
     /// Where progress goes (which run starts, assembly and emission stages).
     pub progress: ProgressSink,
 }
@@ -105,19 +104,16 @@ pub struct StudyResult {
     pub figures: Vec<String>,
 }
 
-/// Where `series` runs under `device`, or why it does not.
-fn backend_for(series: &Series, device: StudyDevice) -> std::result::Result<Backend, String> {
-    match (series.placement, device) {
-        (Placement::Selected, StudyDevice::Gpu(p)) if series.quadrature == Quadrature::Exact => {
+/// Where `series` runs when `asked` ([`StudyOptions::backend`]), or why it does not.
+fn backend_for(series: &Series, asked: Option<Backend>) -> std::result::Result<Backend, String> {
+    match (series.placement, asked) {
+        (Placement::Selected, Some(Backend::Gpu(p))) if series.quadrature == Quadrature::Exact => {
             Ok(Backend::Gpu(p))
         }
         (Placement::Selected | Placement::Cpu, _) => Ok(Backend::Cpu),
-        (Placement::Gpu(_), StudyDevice::Cpu) => Err("left out: the CPU was asked for".into()),
-        (Placement::Gpu(p), StudyDevice::Gpu(_)) => Ok(Backend::Gpu(p)),
-        (Placement::Gpu(p), StudyDevice::Auto) => match gpu::context_for(p) {
-            Ok(_) => Ok(Backend::Gpu(p)),
-            Err(e) => Err(format!("left out: {e}")),
-        },
+        (Placement::Gpu(_), Some(Backend::Cpu)) => Err("left out: the CPU was asked for".into()),
+        (Placement::Gpu(p), Some(Backend::Gpu(_))) => Ok(Backend::Gpu(p)),
+        (Placement::Gpu(p), None) => Backend::Gpu(p).found().map_err(|e| format!("left out: {e}")),
     }
 }
 
@@ -133,7 +129,7 @@ pub fn run_study(id: &str, options: &StudyOptions) -> Result<StudyResult> {
     let mut summaries = Vec::new();
     for series in &spec.series {
         let label = series.label();
-        match backend_for(series, options.device) {
+        match backend_for(series, options.backend) {
             Ok(backend) => {
                 let first = rows.len();
                 let run = SeriesRun { spec: &spec, series, backend, options };

@@ -5,6 +5,7 @@ use crate::common;
 
 use common::gpu::{gpu, max_row_relative_diff, sliver_scene};
 use radiosity::gpu::{self, Precision, math};
+use radiosity::pipeline::Backend;
 
 #[test]
 fn f32_math_library_is_within_3_ulp_for_normal_numbers() {
@@ -104,10 +105,10 @@ fn f32_kernels_are_within_single_precision_error_of_the_f64_cpu_matrix() {
 #[test]
 fn the_gpu_column_of_table_4_1_agrees_with_the_exact_cpu_column() {
     let Some(_) = gpu() else { return };
-    use radiosity::study::{StudyDevice, StudyOptions, run_study};
+    use radiosity::study::{StudyOptions, run_study};
     let options = StudyOptions {
         max_n: Some(160),
-        device: StudyDevice::Gpu(Precision::F64),
+        backend: Some(Backend::Gpu(Precision::F64)),
         progress: Default::default(),
     };
     let result = run_study("table-4.1", &options).unwrap();
@@ -123,11 +124,12 @@ fn the_gpu_column_of_table_4_1_agrees_with_the_exact_cpu_column() {
 #[test]
 fn studies_on_the_gpu_print_the_cpu_errors() {
     let Some(_) = gpu() else { return };
-    use radiosity::study::{StudyDevice, StudyOptions, run_study};
-    let options = |device| StudyOptions { max_n: Some(160), device, progress: Default::default() };
+    use radiosity::study::{StudyOptions, run_study};
+    let options =
+        |backend| StudyOptions { max_n: Some(160), backend, progress: Default::default() };
     for id in ["table-3.1", "table-3.4"] {
-        let cpu = run_study(id, &options(StudyDevice::Cpu)).unwrap();
-        let gpu = run_study(id, &options(StudyDevice::Gpu(Precision::F64))).unwrap();
+        let cpu = run_study(id, &options(Some(Backend::Cpu))).unwrap();
+        let gpu = run_study(id, &options(Some(Backend::Gpu(Precision::F64)))).unwrap();
         assert_eq!(cpu.rows.len(), gpu.rows.len());
         for (c, g) in cpu.rows.iter().zip(&gpu.rows) {
             assert_eq!(g.label.backend, "gpu");
@@ -258,10 +260,8 @@ fn bench_prints_per_backend_timings_and_differences_as_json() {
 #[test]
 fn the_stability_study_passes_its_bounds_on_the_gpu_in_f64_and_f32() {
     let Some(_) = gpu() else { return };
-    let result = radiosity::study::stability::run_stability(radiosity::study::StudyDevice::Gpu(
-        Precision::F64,
-    ))
-    .unwrap();
+    let result =
+        radiosity::study::stability::run_stability(Some(Backend::Gpu(Precision::F64))).unwrap();
     for precision in ["f64", "f32"] {
         let rows: Vec<_> =
             result.rows.iter().filter(|r| r.backend == "gpu" && r.precision == precision).collect();

@@ -8,8 +8,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::gpu::Precision;
-use crate::pipeline::Backend;
-use crate::pipeline::StudyDevice;
+use crate::pipeline::{self, Backend};
 
 /// The study ids this module answers.
 pub const STUDY_IDS: [&str; 2] = ["stability", "stiff"];
@@ -38,30 +37,22 @@ pub struct StiffResult {
     pub notes: Vec<String>,
 }
 
-/// The backends of the stability study for a device choice: the CPU, and the GPU in f64 and f32
-/// (`Auto`: where an adapter is found).
-fn backends(device: StudyDevice, notes: &mut Vec<String>) -> Result<Vec<Backend>> {
-    Ok(match device {
-        StudyDevice::Cpu => vec![Backend::Cpu],
-        StudyDevice::Gpu(_) => {
-            crate::gpu::context_for(Precision::F64)?;
-            vec![Backend::Cpu, Backend::Gpu(Precision::F64), Backend::Gpu(Precision::F32)]
+/// The backends of the stability study: the CPU, and the GPU in f64 and f32 (asked for: the
+/// adapter required; `None`: where one is found).
+fn backends(asked: Option<Backend>, notes: &mut Vec<String>) -> Result<Vec<Backend>> {
+    const PRECISIONS: [Precision; 2] = [Precision::F64, Precision::F32];
+    Ok(match asked {
+        Some(Backend::Cpu) => vec![Backend::Cpu],
+        Some(Backend::Gpu(_)) => {
+            let gpus = PRECISIONS.map(|p| Backend::Gpu(p).found());
+            std::iter::once(Ok(Backend::Cpu)).chain(gpus).collect::<Result<_>>()?
         }
-        StudyDevice::Auto => {
-            let mut backends = vec![Backend::Cpu];
-            for precision in [Precision::F64, Precision::F32] {
-                match crate::gpu::context_for(precision) {
-                    Ok(_) => backends.push(Backend::Gpu(precision)),
-                    Err(e) => notes.push(format!("GPU {} rows left out: {e}", precision.name())),
-                }
-            }
-            backends
-        }
+        None => pipeline::cpu_and_found_gpus(&PRECISIONS, notes),
     })
 }
 
 /// `study stability`.
-pub fn run_stability(device: StudyDevice) -> Result<StabilityResult> {
+pub fn run_stability(asked: Option<Backend>) -> Result<StabilityResult> {
     let mut notes = vec![
         "relative_error: max over the row's entries |K - reference| / max |reference| (absolute \
          where the reference is 0); reference: adaptive quadrature to 1e-15, in polar \
@@ -71,18 +62,15 @@ pub fn run_stability(device: StudyDevice) -> Result<StabilityResult> {
          trace)"
             .to_string(),
     ];
-    let backends = backends(device, &mut notes)?;
+    let backends = backends(asked, &mut notes)?;
     let rows = extreme::run(&backends)?;
     let failed = rows.iter().filter(|r| !r.passed).count();
     Ok(StabilityResult { study: "stability", rows, failed, notes })
 }
 
 /// `study stiff` (assembly on the CPU, or on the GPU when asked).
-pub fn run_stiff(device: StudyDevice) -> Result<StiffResult> {
-    let backend = match device {
-        StudyDevice::Gpu(p) => Backend::Gpu(p),
-        _ => Backend::Cpu,
-    };
+pub fn run_stiff(asked: Option<Backend>) -> Result<StiffResult> {
+    let backend = asked.unwrap_or(Backend::Cpu);
     let notes = vec![
         "u* = 1 + x/2 + y/4 + z/8 at the nodes, E = (I - K) u* with compensated dot products; \
          error_lu: plain LU; error_refined: the solver (condition estimate, refinement with \
