@@ -91,7 +91,7 @@ impl Quadrature {
     /// A short label with the parameters, e.g. `gauss(1,4)`.
     pub fn label(&self) -> String {
         match *self {
-            Self::Exact => "exact".into(),
+            Self::Exact => self.name().into(),
             Self::SevenPoint { max_level, near_ratio } if near_ratio == graded::DEFAULT_NEAR => {
                 format!("seven-point({max_level})")
             }

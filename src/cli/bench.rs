@@ -2,7 +2,7 @@
 
 use radiosity::error::{Error, Result};
 use radiosity::operator::OperatorChoice;
-use radiosity::pipeline::{self, Backend};
+use radiosity::pipeline::{self, Backend, BackendName};
 use radiosity::report;
 
 use super::args::BenchArgs;
@@ -56,7 +56,7 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
     if config.ranks.is_some() {
         return Err(Error::InvalidParameter {
             name: "operator",
-            value: "dense".into(),
+            value: OperatorChoice::Dense.name().into(),
             reason: "under mpirun, bench times the compressed operator on the CPU: give \
                      --operator compressed --backends cpu"
                 .into(),
@@ -70,7 +70,7 @@ pub(crate) fn run_bench(args: &BenchArgs) -> Result<()> {
         "{} ({} mesh, {} method): n = {}, dof = {}, {} pairs ({} evaluated)",
         r.scene, r.mesh, r.method, r.n, r.dof, r.pairs, r.pairs_evaluated
     );
-    for (name, t) in [("cpu", &r.cpu), ("gpu", &r.gpu)] {
+    for (name, t) in [(BackendName::Cpu, &r.cpu), (BackendName::Gpu, &r.gpu)] {
         if let Some(t) = t {
             println!(
                 "{name} ({}): setup {:.3} s, {:.3e} pairs/s (preparation {:.3} s, best of {})",
@@ -120,7 +120,7 @@ fn compressed(
     if config.ranks.is_some() && backends.iter().any(|&b| b != Backend::Cpu) {
         return Err(Error::InvalidParameter {
             name: "backends",
-            value: "gpu".into(),
+            value: BackendName::Gpu.name().into(),
             reason: "under mpirun, bench builds on the CPU: give --backends cpu".into(),
         });
     }

@@ -91,7 +91,11 @@ fn check_storage(config: &RunConfig, compressed: bool) -> Result<()> {
         "only a matrix kept on the GPU is stored in f32: it needs --backend gpu (f64 kernels) \
          and --solver iterative"
     };
-    Err(Error::InvalidParameter { name: "storage", value: "f32".into(), reason: why.into() })
+    Err(Error::InvalidParameter {
+        name: "storage",
+        value: Precision::F32.name().into(),
+        reason: why.into(),
+    })
 }
 
 /// Refuses what a run over `size` ranks cannot do: only the compressed operator is spread over
@@ -101,7 +105,11 @@ pub(super) fn check_distributed(config: &RunConfig, size: usize) -> Result<()> {
     let why = if config.operator == OperatorChoice::Dense {
         Some(("operator", OperatorChoice::Dense.name(), "the dense operator is not distributed"))
     } else if config.solver.choice == SolverChoice::Lu {
-        Some(("solver", "lu", "LU needs the dense matrix, which is not distributed"))
+        Some((
+            "solver",
+            SolverChoice::Lu.name(),
+            "LU needs the dense matrix, which is not distributed",
+        ))
     } else if config.operator_file.is_some() {
         Some((
             "operator-file",

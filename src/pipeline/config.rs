@@ -17,6 +17,8 @@ use crate::progress::ProgressSink;
 use crate::scene::{BuiltinScene, ImportOptions, Scene, SurfaceParameters};
 use crate::solve::SolverOptions;
 
+use super::{BackendName, MeshName};
+
 /// Which mesh to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -35,10 +37,12 @@ impl MeshChoice {
     /// Name used in reports and on the command line.
     pub fn name(&self) -> &'static str {
         match self {
-            Self::Uniform => "uniform",
-            Self::Discontinuity(S5Diagonals::Paper) => "discontinuity",
-            Self::Discontinuity(S5Diagonals::AsUniform) => "discontinuity-uniform-diagonals",
-            Self::AutoDiscontinuity(LineExtent::Chords) => "auto-discontinuity",
+            Self::Uniform => MeshName::Uniform.name(),
+            Self::Discontinuity(S5Diagonals::Paper) => MeshName::Discontinuity.name(),
+            Self::Discontinuity(S5Diagonals::AsUniform) => {
+                MeshName::DiscontinuityUniformDiagonals.name()
+            }
+            Self::AutoDiscontinuity(LineExtent::Chords) => MeshName::AutoDiscontinuity.name(),
             Self::AutoDiscontinuity(LineExtent::Segments) => "auto-discontinuity-segments",
         }
     }
@@ -57,8 +61,8 @@ impl Backend {
     /// `cpu` or `gpu`.
     pub fn name(&self) -> &'static str {
         match self {
-            Self::Cpu => "cpu",
-            Self::Gpu(_) => "gpu",
+            Self::Cpu => BackendName::Cpu.name(),
+            Self::Gpu(_) => BackendName::Gpu.name(),
         }
     }
 

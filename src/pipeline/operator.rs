@@ -97,7 +97,7 @@ pub fn build_compressed(
     if config.solver.choice == solve::SolverChoice::Lu {
         return Err(Error::InvalidParameter {
             name: "solver",
-            value: "lu".into(),
+            value: solve::SolverChoice::Lu.name().into(),
             reason: "LU needs the dense matrix; the compressed operator is solved by GMRES \
                      (the iterative solver), or choose the dense operator"
                 .into(),

@@ -123,7 +123,7 @@ pub fn solve_many(
         let (x, solver, iterations, condition_estimate, refinement_steps) = match &factors {
             Some(factors) => {
                 let lu = factors.solve(&sys, &reduced_rhs, REFINEMENT_STEPS)?;
-                (lu.u, "lu", 0, Some(lu.condition), lu.refinement_steps)
+                (lu.u, SolverChoice::Lu.name(), 0, Some(lu.condition), lu.refinement_steps)
             }
             None => {
                 let g = gmres::gmres(&sys, &reduced_rhs, options.tolerance)?;
