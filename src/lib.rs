@@ -33,10 +33,11 @@ pub mod discretization;
 pub mod assembly;
 
 // Engines and products built on assembly: the GPU, the compressed operator, true solutions
-// and their emission, view factors.
+// and their emission, view factors, direct sunlight.
 pub mod gpu;
 pub mod operator;
 pub mod problems;
+pub mod sun;
 pub mod viewfactors;
 
 // Solving, and what is measured of a solution.

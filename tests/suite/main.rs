@@ -8,7 +8,8 @@
 //!   invariants on scenes generated from seeds, and property tests;
 //! - `fuzz_replay`: the fuzz targets' checks on stable;
 //! - `gpu`, `gpu_clipping`: the GPU against the CPU (lavapipe in CI);
-//! - `module_graph`: which module may use which.
+//! - `module_graph`: which module may use which;
+//! - `sun`: the sunlit parts against the analytic shadow of a box and the energy they carry.
 //!
 //! The MPI tests are a binary of their own (`tests/mpi.rs`, feature `mpi`).
 
@@ -25,3 +26,4 @@ mod module_graph;
 mod properties;
 mod scene_bands;
 mod scenes;
+mod sun;

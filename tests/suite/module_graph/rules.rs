@@ -41,7 +41,7 @@ pub const LAYERS: &[&[&str]] = &[
     &["mesh"],
     &["discretization"],
     &["assembly"],
-    &["gpu", "operator", "problems", "viewfactors"],
+    &["gpu", "operator", "problems", "sun", "viewfactors"],
     &["solve", "solution", "surface_error"],
     &["pipeline"],
     &["bench", "study"],

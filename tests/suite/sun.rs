@@ -1,0 +1,206 @@
+//! The sunlit parts ([`radiosity::sun::sunlit`]) against independent truth: the analytic shadow
+//! of a box on a plane, the energy a closed city catches (every ray from the sun over the
+//! ground ends on exactly one face that faces it), and rays cast at random points.
+
+use glam::DVec3;
+use radiosity::mesh::{Mesh, MeshKind};
+use radiosity::scene::generated::{self, box_faces, face};
+use radiosity::scene::{Face, Scene};
+use radiosity::sun::{DEFAULT_X_AZIMUTH, Sun, Sunlit, sunlit};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+/// Suns from high to low, from every quarter.
+const SUNS: [(f64, f64); 6] =
+    [(0.0, 0.0), (10.0, 135.0), (35.0, 200.0), (50.0, 290.0), (62.0, 17.0), (75.0, 90.0)];
+
+/// The ground, a square of side `2 half` centred on the origin, facing up.
+fn ground(half: f64) -> Face {
+    let c = |x: f64, y: f64| DVec3::new(x * half, y * half, 0.0);
+    face("ground".into(), vec![c(-1.0, -1.0), c(1.0, -1.0), c(1.0, 1.0), c(-1.0, 1.0)])
+}
+
+/// The faces' sunlit parts at `refine`, summed per face.
+fn by_face(scene: &Scene, refine: u32, sun: &Sun) -> Vec<Sunlit> {
+    let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();
+    let elements = sunlit(scene, &mesh, sun.direction()).unwrap();
+    Sunlit::by_face(&mesh, &elements)
+}
+
+fn sun(zenith: f64, azimuth: f64) -> Sun {
+    Sun::new(zenith, azimuth, DEFAULT_X_AZIMUTH, 1.0).unwrap()
+}
+
+#[test]
+fn a_box_on_the_ground_casts_its_analytic_shadow() {
+    let (a, b, h) = (3.0, 7.0, 11.0);
+    let mut faces = vec![ground(100.0)];
+    faces.extend(box_faces("box", DVec3::new(0.5, -2.0, 0.0), DVec3::new(0.5 + a, 5.0, h), false));
+    let scene = Scene::new("box on the ground", faces).unwrap();
+    for (zenith, azimuth) in SUNS {
+        let sun = sun(zenith, azimuth);
+        let s = sun.direction();
+        // The box seen from the sun covers its footprint swept by the top's displacement.
+        let (dx, dy) = (h * s.x / s.z, h * s.y / s.z);
+        let shadow = a * b + dx.abs() * b + dy.abs() * a;
+        for refine in [0, 2] {
+            let faces = by_face(&scene, refine, &sun);
+            let lit = faces[0].lit_area;
+            let want = 200.0 * 200.0 - shadow;
+            assert!(
+                (lit - want).abs() <= 1e-12 * want,
+                "Z {zenith} A {azimuth} r {refine}: {lit} vs {want}"
+            );
+            for (f, face) in scene.faces.iter().enumerate().skip(1) {
+                // Nothing shadows the box: each face facing the sun is lit whole.
+                let facing = face.frame.normal.dot(s) > 0.0;
+                let fraction = faces[f].fraction();
+                let want = if facing { 1.0 } else { 0.0 };
+                assert!((fraction - want).abs() <= 1e-12, "{}: {fraction}", face.name);
+                let cos = face.frame.normal.dot(s).max(0.0);
+                assert!((faces[f].cos_incidence - cos).abs() <= 1e-15, "{}", face.name);
+            }
+        }
+    }
+}
+
+/// The faces of a box of `w` x `d` in plan, turned by `angle` about its centre `(cx, cy)`, from
+/// height `z0` to `z1`, facing out.
+fn turned_box(
+    k: usize,
+    (cx, cy): (f64, f64),
+    (w, d): (f64, f64),
+    (z0, z1): (f64, f64),
+    angle: f64,
+) -> Vec<Face> {
+    let corner = |(sx, sy): (f64, f64), z: f64| {
+        let (x, y) = (sx * 0.5 * w, sy * 0.5 * d);
+        DVec3::new(
+            cx + x * angle.cos() - y * angle.sin(),
+            cy + x * angle.sin() + y * angle.cos(),
+            z,
+        )
+    };
+    let ring = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    let mut faces: Vec<Face> = (0..4)
+        .map(|s| {
+            let (a, b) = (ring[s], ring[(s + 1) % 4]);
+            let wall = vec![corner(a, z0), corner(b, z0), corner(b, z1), corner(a, z1)];
+            face(format!("b{k}-wall{s}"), wall)
+        })
+        .collect();
+    faces.push(face(format!("b{k}-roof"), ring.iter().map(|&c| corner(c, z1)).collect()));
+    faces.push(face(format!("b{k}-floor"), ring.iter().rev().map(|&c| corner(c, z0)).collect()));
+    faces
+}
+
+/// A city of turned towers on a 4 x 4 grid, some standing on the ground and some floating
+/// (bridges whose shadows fall on roofs and walls), all well inside a ground of side 400.
+fn random_city(seed: u64) -> Scene {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut faces = vec![ground(200.0)];
+    for i in 0..4 {
+        for j in 0..4 {
+            let k = 4 * i + j;
+            let centre = (-24.0 + 16.0 * i as f64, -24.0 + 16.0 * j as f64);
+            let size = (rng.random_range(3.0..9.0), rng.random_range(3.0..9.0));
+            let z0 = if rng.random_bool(0.3) { rng.random_range(2.0..10.0) } else { 0.0 };
+            let z1 = z0 + rng.random_range(3.0..30.0);
+            let angle = rng.random_range(0.0..std::f64::consts::FRAC_PI_2);
+            faces.extend(turned_box(k, centre, size, (z0, z1), angle));
+        }
+    }
+    Scene::new(format!("towers-{seed}"), faces).unwrap()
+}
+
+#[test]
+fn a_closed_city_catches_the_sunlight_over_its_ground_exactly() {
+    for seed in 0..4 {
+        let scene = random_city(seed);
+        for (zenith, azimuth) in SUNS {
+            let sun = sun(zenith, azimuth);
+            let want = 400.0 * 400.0 * sun.direction().z;
+            for refine in [0, 1] {
+                let caught: f64 = by_face(&scene, refine, &sun)
+                    .iter()
+                    .map(|f| f.lit_area * f.cos_incidence)
+                    .sum();
+                assert!(
+                    (caught - want).abs() <= 1e-12 * want,
+                    "seed {seed} Z {zenith} A {azimuth} refine {refine}: {caught} vs {want} ({:.1e})",
+                    (caught - want) / want
+                );
+            }
+        }
+    }
+}
+
+/// Whether the ray from `origin` along `direction` meets the triangle `[a, b, c]` beyond
+/// `t_min` (Möller–Trumbore).
+fn hits(origin: DVec3, direction: DVec3, [a, b, c]: [DVec3; 3], t_min: f64) -> bool {
+    let (e1, e2) = (b - a, c - a);
+    let p = direction.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-14 * e1.length() * e2.length() {
+        return false;
+    }
+    let s = origin - a;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = direction.dot(q) / det;
+    let t = e2.dot(q) / det;
+    (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && t > t_min
+}
+
+#[test]
+fn sunlit_fractions_agree_with_rays_cast_at_random_points() {
+    const RAYS: usize = 4000;
+    let mut rng = StdRng::seed_from_u64(7);
+    for seed in 0..2 {
+        let scene = generated::city(seed);
+        let triangles = Mesh::new(&scene, &MeshKind::Uniform, 0).unwrap();
+        let mesh = Mesh::new(&scene, &MeshKind::Uniform, 1).unwrap();
+        for (zenith, azimuth) in [(30.0, 160.0), (60.0, 250.0)] {
+            let sun = sun(zenith, azimuth);
+            let s = sun.direction();
+            let exact = Sunlit::by_face(&mesh, &sunlit(&scene, &mesh, s).unwrap());
+            for (f, face) in scene.faces.iter().enumerate() {
+                if exact[f].cos_incidence == 0.0 {
+                    continue;
+                }
+                let elements = &mesh.elements()[mesh.face_range(f)];
+                let mut lit = 0;
+                for _ in 0..RAYS {
+                    // A uniform point of the face: an element by area, then a point in it.
+                    let mut pick = rng.random_range(0.0..exact[f].area);
+                    let e = elements.iter().find(|e| {
+                        pick -= e.area();
+                        pick <= 0.0
+                    });
+                    let [a, b, c] = e.unwrap_or(&elements[elements.len() - 1]).vertices;
+                    let (mut u, mut v): (f64, f64) = (rng.random(), rng.random());
+                    if u + v > 1.0 {
+                        (u, v) = (1.0 - u, 1.0 - v);
+                    }
+                    let p = a + u * (b - a) + v * (c - a);
+                    let blocked = triangles
+                        .elements()
+                        .iter()
+                        .filter(|o| o.face != f)
+                        .any(|o| hits(p, s, o.vertices, 1e-9));
+                    lit += usize::from(!blocked);
+                }
+                let sampled = lit as f64 / RAYS as f64;
+                let p = exact[f].fraction();
+                // Five standard deviations of the sampled fraction (and at least those of
+                // p(1 - p) = 1/RAYS, where the face is all lit or all shadowed).
+                let sigma = (p * (1.0 - p)).max(1.0 / RAYS as f64).sqrt() / (RAYS as f64).sqrt();
+                assert!(
+                    (sampled - p).abs() <= 5.0 * sigma,
+                    "seed {seed} Z {zenith} {}: exact {p}, sampled {sampled} (sigma {sigma:.1e})",
+                    face.name
+                );
+            }
+        }
+    }
+}
