@@ -45,8 +45,9 @@ pub mod solution;
 pub mod solve;
 pub mod surface_error;
 
-// One run from a configuration, end to end.
+// One run from a configuration, end to end; shortwave light under the sun and the sky.
 pub mod pipeline;
+pub mod shortwave;
 
 // Whole-run benchmarks and the paper's studies.
 pub mod bench;

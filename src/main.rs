@@ -32,6 +32,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench(args) => cli::bench::run_bench(&args),
         Command::Assemble(args) => cli::assemble::run_assemble(&args),
         Command::Viewfactors(args) => cli::viewfactors::run_viewfactors(&args),
+        Command::Sun(args) => cli::sun::run_sun(&args),
         Command::BenchPlan { scene, nodes, json } => {
             cli::bench_plan::run(&scene, nodes, json.as_deref())
         }

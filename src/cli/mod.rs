@@ -15,11 +15,12 @@ pub(crate) mod progress;
 pub(crate) mod ranks;
 pub(crate) mod solve;
 pub(crate) mod study;
+pub(crate) mod sun;
 pub(crate) mod viewfactors;
 
 use clap::{Parser, Subcommand};
 
-use args::{AssembleArgs, BenchArgs, SolveArgs, StudyArgs, ViewFactorArgs, named};
+use args::{AssembleArgs, BenchArgs, SolveArgs, StudyArgs, SunArgs, ViewFactorArgs, named};
 use radiosity::gpu::Precision;
 
 #[derive(Parser)]
@@ -48,6 +49,9 @@ pub(crate) enum Command {
     Assemble(AssembleArgs),
     /// Element-to-element view factors F_ij, with reciprocity and closure checks
     Viewfactors(ViewFactorArgs),
+    /// Shortwave light under the sun and an isotropic sky: each face's exactly sunlit part,
+    /// direct, sky and reflected irradiance, absorbed and reflected flux
+    Sun(SunArgs),
     /// Time the pair plan (views of sampled nodes against every face) with and without the
     /// occluder index (R*-tree), and check that both give the same views
     BenchPlan {

@@ -16,7 +16,7 @@ mod system;
 
 use serde::Serialize;
 
-pub use gmres::{Gmres, KrylovSystem, MAX_ITERATIONS, Need, RESTART};
+pub use gmres::{Gmres, GmresSolution, KrylovSystem, MAX_ITERATIONS, Need, RESTART, gmres};
 pub use lu::{LuFactors, LuSolution, inverse_norm_1_estimate};
 pub use products::{Products, solve_by_products, solve_by_products_many};
 pub use system::ReducedSystem;

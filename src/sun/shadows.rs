@@ -136,7 +136,8 @@ fn lit_part(
             break;
         }
     }
-    let lit_area = pieces.iter().map(|p| signed_area(p)).sum();
+    // From +0: an empty sum of f64 is -0.
+    let lit_area = pieces.iter().fold(0.0, |sum, p| sum + signed_area(p));
     Sunlit { area, lit_area, cos_incidence: sun.z }
 }
 

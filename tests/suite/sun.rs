@@ -204,3 +204,129 @@ fn sunlit_fractions_agree_with_rays_cast_at_random_points() {
         }
     }
 }
+
+/// View factors of `scene` at refine `refine`, tolerance 1e-8, and the mesh.
+fn view_factors_of(scene: &Scene, refine: u32) -> (Mesh, radiosity::viewfactors::ViewFactors) {
+    use radiosity::viewfactors::{ViewFactorOptions, view_factors};
+    let mesh = Mesh::new(scene, &MeshKind::Uniform, refine).unwrap();
+    let planner = radiosity::visibility::PairPlanner::new(scene);
+    let options = ViewFactorOptions { tolerance: 1e-8, ..Default::default() };
+    let f = view_factors(scene, &mesh, &planner, &options, &radiosity::progress::Silent).unwrap();
+    (mesh, f)
+}
+
+#[test]
+fn an_open_plane_receives_the_sun_and_the_whole_sky() {
+    use radiosity::shortwave::{Sources, shortwave};
+    let mut plane = ground(10.0);
+    plane.rho = 0.3;
+    let scene = Scene::new("plane", vec![plane]).unwrap();
+    let (mesh, f) = view_factors_of(&scene, 1);
+    let sources = Sources::new(Sun::new(40.0, 120.0, 90.0, 800.0).unwrap(), 100.0).unwrap();
+    let result = shortwave(&scene, &mesh, &f, &sources, 1e-13).unwrap();
+    let direct = 800.0 * 40f64.to_radians().cos();
+    for e in &result.elements {
+        assert!((e.direct - direct).abs() <= 1e-12 * direct, "{e:?}");
+        assert_eq!(
+            (e.sky, e.sky_view_factor, e.reflected, e.sunlit_fraction),
+            (100.0, 1.0, 0.0, 1.0)
+        );
+        assert!((e.absorbed - 0.7 * (direct + 100.0)).abs() <= 1e-12 * direct);
+    }
+}
+
+#[test]
+fn reflections_in_a_sunlit_city_close_the_energy_and_match_lu() {
+    use radiosity::shortwave::{Sources, shortwave};
+    for seed in 0..2 {
+        let scene = generated::city(seed);
+        let (mesh, f) = view_factors_of(&scene, 1);
+        for (zenith, azimuth) in [(20.0, 150.0), (65.0, 280.0)] {
+            let sun = Sun::new(zenith, azimuth, 90.0, 850.0).unwrap();
+            let sources = Sources::new(sun, 120.0).unwrap();
+            let result = shortwave(&scene, &mesh, &f, &sources, 1e-13).unwrap();
+            let b = &result.balance;
+            assert!(b.relative_gap <= 1e-9, "seed {seed} Z {zenith}: {b:?}");
+            assert!(b.absorbed > 0.5 * b.received && b.escaped > 0.0, "{b:?}");
+            // The same reflections by LU on the dense I - diag(rho) F.
+            let n = mesh.len();
+            let rho: Vec<f64> = mesh.elements().iter().map(|e| scene.faces[e.face].rho).collect();
+            let a = faer::Mat::<f64>::from_fn(n, n, |i, j| {
+                f64::from(u8::from(i == j)) - rho[i] * f.get(i, j)
+            });
+            let e = faer::Mat::<f64>::from_fn(n, 1, |i, _| {
+                rho[i] * (result.elements[i].direct + result.elements[i].sky)
+            });
+            let lu = a.partial_piv_lu();
+            let b_lu = faer::linalg::solvers::Solve::solve(&lu, &e);
+            let largest = result.elements.iter().map(|e| e.outgoing).fold(0.0, f64::max);
+            for i in 0..n {
+                let gap = (result.elements[i].outgoing - b_lu[(i, 0)]).abs();
+                assert!(gap <= 1e-10 * largest, "seed {seed} element {i}: {gap:e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
+    use crate::common::{json, radiosity, temp_dir};
+    let dir = temp_dir("sun");
+    let (faces, elements) = (dir.join("faces.csv"), dir.join("elements.csv"));
+    let (faces, elements) = (faces.to_str().unwrap(), elements.to_str().unwrap());
+    let common = [
+        "sun",
+        "--scene",
+        "city:2x1",
+        "--refine",
+        "1",
+        "--zenith",
+        "35",
+        "--azimuth",
+        "160",
+        "--direct-normal",
+        "800",
+        "--diffuse-horizontal",
+        "100",
+        "--tolerance",
+        "1e-6",
+    ];
+    let mut args = common.to_vec();
+    args.extend(["--csv", faces, "--element-csv", elements, "--json", "-"]);
+    let v = json(&args);
+    let number = |key: &str| v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"));
+    assert!(number("relative_gap") <= 1e-9, "{v}");
+    assert!(number("sunlit_area") > 0.0 && number("sunlit_area") < number("area_facing_sun"));
+    assert!(number("absorbed") + number("escaped") > 0.99 * number("received"));
+    assert_eq!(v["sun"]["zenith"], 35.0);
+    // Each file's rows, weighted by area, give the absorbed power of the summary.
+    for (path, first, rows) in
+        [(faces, "face,name,", v["faces"].as_u64()), (elements, "element,face,", v["n"].as_u64())]
+    {
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap();
+        assert!(header.starts_with(first) && header.ends_with(",absorbed,outgoing"), "{header}");
+        let values: Vec<Vec<f64>> =
+            lines.map(|l| l.split(',').skip(2).map(|x| x.parse().unwrap()).collect()).collect();
+        assert_eq!(values.len() as u64, rows.unwrap());
+        let absorbed: f64 = values.iter().map(|r| r[0] * r[7]).sum();
+        assert!((absorbed - number("absorbed")).abs() <= 1e-12 * absorbed, "{path}");
+    }
+    // Bad values are refused by name, before any work.
+    for (flag, value, named) in [
+        ("--zenith", "200", "sun zenith"),
+        ("--direct-normal", "nan", "direct normal irradiance"),
+        ("--diffuse-horizontal", "-1", "diffuse horizontal irradiance"),
+        ("--csv", "faces.txt", "csv"),
+    ] {
+        let mut args = common.to_vec();
+        let at = args.iter().position(|a| *a == flag);
+        match at {
+            Some(k) => args[k + 1] = value,
+            None => args.extend([flag, value]),
+        }
+        let (ok, _, stderr) = radiosity(&args);
+        assert!(!ok && stderr.contains(named), "{flag} {value}: {stderr}");
+    }
+}

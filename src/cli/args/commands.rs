@@ -194,3 +194,43 @@ pub(crate) struct AssembleArgs {
     #[arg(long, value_name = "OP.bin")]
     pub(crate) save: Option<String>,
 }
+
+#[derive(Args)]
+pub(crate) struct SunArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// The sun's angle from the zenith, degrees (0 overhead, 90 on the horizon; beyond, no
+    /// direct light)
+    #[arg(long, allow_negative_numbers = true)]
+    pub(crate) zenith: f64,
+    /// The sun's compass azimuth, degrees clockwise from north
+    #[arg(long, allow_negative_numbers = true)]
+    pub(crate) azimuth: f64,
+    /// The compass direction of the scene's +x, degrees clockwise from north (90: +x east and
+    /// +y north, z up)
+    #[arg(long, allow_negative_numbers = true, default_value_t = radiosity::sun::DEFAULT_X_AZIMUTH)]
+    pub(crate) x_azimuth: f64,
+    /// Direct normal irradiance of the sun (W/m²; every flux comes out in its unit)
+    #[arg(long, allow_negative_numbers = true)]
+    pub(crate) direct_normal: f64,
+    /// Diffuse horizontal irradiance of an isotropic sky, in the same unit
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
+    pub(crate) diffuse_horizontal: f64,
+    /// Absolute tolerance on each view factor F_ij, which carry the sky light (the sky view
+    /// factor 1 - Σ_j F_ij) and the reflections
+    #[arg(long, default_value_t = 1e-6)]
+    pub(crate) tolerance: f64,
+    /// Condition the view factors before they carry light (reciprocity exact, rows + sky = 1,
+    /// no entry moved beyond the estimate; `viewfactors --condition`)
+    #[arg(long)]
+    pub(crate) condition: bool,
+    /// Write each face's fluxes (area averages over its elements) to FILE.csv
+    #[arg(long, value_name = "FILE.csv")]
+    pub(crate) csv: Option<String>,
+    /// Write each element's fluxes to FILE.csv
+    #[arg(long, value_name = "FILE.csv")]
+    pub(crate) element_csv: Option<String>,
+    /// Write the summary as JSON to PATH (`-` for standard output) instead of text
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<String>,
+}

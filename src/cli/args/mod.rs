@@ -13,7 +13,7 @@ mod run_config;
 mod values;
 
 pub(crate) use commands::{
-    AssembleArgs, BenchArgs, DEFAULT_FIGURES, SolveArgs, StudyArgs, ViewFactorArgs,
+    AssembleArgs, BenchArgs, DEFAULT_FIGURES, SolveArgs, StudyArgs, SunArgs, ViewFactorArgs,
 };
 pub(crate) use named::named;
 pub(crate) use outputs::OutputArgs;

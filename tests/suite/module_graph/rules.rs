@@ -43,7 +43,7 @@ pub const LAYERS: &[&[&str]] = &[
     &["assembly"],
     &["gpu", "operator", "problems", "sun", "viewfactors"],
     &["solve", "solution", "surface_error"],
-    &["pipeline"],
+    &["pipeline", "shortwave"],
     &["bench", "study"],
     &["report"],
     &["cli"],
