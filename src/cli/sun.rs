@@ -1,4 +1,7 @@
-//! `radiosity sun`: shortwave light under the sun and an isotropic sky, per face and element.
+//! `radiosity sun`: shortwave light under the sun and an isotropic sky, per face and element,
+//! for one sun or a day of sun positions (each solved on the same view factors).
+
+use std::time::Instant;
 
 use serde::Serialize;
 
@@ -6,20 +9,40 @@ use radiosity::error::{Error, Result};
 use radiosity::pipeline::{self, Problem};
 use radiosity::report;
 use radiosity::scene::Scene;
-use radiosity::shortwave::{Balance, Fluxes, Sources, shortwave};
+use radiosity::shortwave::{Balance, Fluxes, Shortwave, shortwave};
 use radiosity::solve::DEFAULT_TOLERANCE;
-use radiosity::sun::Sun;
+use radiosity::sun::{Moment, Sources, Sun, read_moments};
 use radiosity::viewfactors::{ClosureOptions, ViewFactorOptions, view_factors};
 
 use super::args::SunArgs;
 
-/// What `sun --json` writes.
+/// What `sun --json` writes: the view factors' figures, then one sun's light (flattened) or,
+/// with `--sun-positions`, each time's under `times`.
 #[derive(Serialize)]
 struct SunSummary<'a> {
     scene: &'a str,
     /// Elements.
     n: usize,
     faces: usize,
+    view_factor_tolerance: f64,
+    view_factor_error_estimate: f64,
+    sky_view_factor_min: f64,
+    sky_view_factor_max: f64,
+    conditioned: bool,
+    view_factor_seconds: f64,
+    shortwave_seconds: f64,
+    seconds: f64,
+    #[serde(flatten)]
+    light: Option<Light<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    times: Option<Vec<Light<'a>>>,
+}
+
+/// One sun's light over the scene.
+#[derive(Serialize)]
+struct Light<'a> {
+    #[serde(skip_serializing_if = "str::is_empty")]
+    time: &'a str,
     sun: Sun,
     /// Unit vector towards the sun.
     direction: [f64; 3],
@@ -32,19 +55,50 @@ struct SunSummary<'a> {
     balance: Balance,
     /// GMRES's products for the reflections.
     iterations: usize,
-    view_factor_tolerance: f64,
-    view_factor_error_estimate: f64,
-    sky_view_factor_min: f64,
-    sky_view_factor_max: f64,
-    conditioned: bool,
-    view_factor_seconds: f64,
-    shortwave_seconds: f64,
     seconds: f64,
 }
 
+impl<'a> Light<'a> {
+    fn of(moment: &'a Moment, light: &Shortwave, seconds: f64) -> Self {
+        let Sources { sun, diffuse_horizontal } = moment.sources;
+        let elements = &light.elements;
+        Self {
+            time: &moment.time,
+            sun,
+            direction: sun.direction().into(),
+            diffuse_horizontal,
+            sunlit_area: elements.iter().map(|e| e.area * e.sunlit_fraction).sum(),
+            area_facing_sun: elements
+                .iter()
+                .filter(|e| e.cos_incidence > 0.0)
+                .map(|e| e.area)
+                .sum(),
+            balance: light.balance,
+            iterations: light.iterations,
+            seconds,
+        }
+    }
+}
+
+/// The moments the arguments ask for: the day of `--sun-positions`, or the one sun of
+/// `--zenith`, `--azimuth` and `--direct-normal` (clap requires those three without it).
+fn moments(args: &SunArgs) -> Result<Vec<Moment>> {
+    if let Some(path) = &args.sun_positions {
+        return read_moments(std::path::Path::new(path), args.x_azimuth);
+    }
+    let given = |v: Option<f64>| v.expect("clap requires it without --sun-positions");
+    let sun = Sun::new(
+        given(args.zenith),
+        given(args.azimuth),
+        args.x_azimuth,
+        given(args.direct_normal),
+    )?;
+    let sources = Sources::new(sun, args.diffuse_horizontal.unwrap_or(0.0))?;
+    Ok(vec![Moment { time: String::new(), sources }])
+}
+
 pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
-    let sun = Sun::new(args.zenith, args.azimuth, args.x_azimuth, args.direct_normal)?;
-    let sources = Sources::new(sun, args.diffuse_horizontal)?;
+    let moments = moments(args)?;
     let options = ViewFactorOptions { tolerance: args.tolerance, ..Default::default() };
     options.validate()?;
     for (flag, path) in [("csv", &args.csv), ("element-csv", &args.element_csv)] {
@@ -56,7 +110,7 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
             });
         }
     }
-    let started = std::time::Instant::now();
+    let started = Instant::now();
     let config = args.scene.config()?;
     let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, planner, .. } = &problem;
@@ -67,58 +121,78 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
     progress.finish();
     f.close(&ClosureOptions { condition: args.condition, drop_below: None })?;
     let view_factor_seconds = started.elapsed().as_secs_f64();
-    let light = shortwave(scene, mesh, &f, &sources, DEFAULT_TOLERANCE)?;
+    let mut lights = Vec::with_capacity(moments.len());
+    for moment in &moments {
+        let t = Instant::now();
+        let light = shortwave(scene, mesh, &f, &moment.sources, DEFAULT_TOLERANCE)?;
+        lights.push((light, t.elapsed().as_secs_f64()));
+    }
     let seconds = started.elapsed().as_secs_f64();
-    let elements = &light.elements;
-    let sky = elements.iter().map(|e| e.sky_view_factor);
+    let sky = f.sky_view_factors();
+    let one = moments.len() == 1 && args.sun_positions.is_none();
+    let mut summaries = moments
+        .iter()
+        .zip(&lights)
+        .map(|(m, (light, s))| Light::of(m, light, *s))
+        .collect::<Vec<_>>();
     let summary = SunSummary {
         scene: &scene.name,
         n: mesh.len(),
         faces: scene.faces.len(),
-        sun,
-        direction: sun.direction().into(),
-        diffuse_horizontal: args.diffuse_horizontal,
-        sunlit_area: elements.iter().map(|e| e.area * e.sunlit_fraction).sum(),
-        area_facing_sun: elements.iter().filter(|e| e.cos_incidence > 0.0).map(|e| e.area).sum(),
-        balance: light.balance,
-        iterations: light.iterations,
         view_factor_tolerance: args.tolerance,
         view_factor_error_estimate: f.error_estimate,
-        sky_view_factor_min: sky.clone().fold(f64::INFINITY, f64::min),
-        sky_view_factor_max: sky.fold(f64::NEG_INFINITY, f64::max),
+        sky_view_factor_min: sky.iter().copied().fold(f64::INFINITY, f64::min),
+        sky_view_factor_max: sky.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         conditioned: args.condition,
         view_factor_seconds,
         shortwave_seconds: seconds - view_factor_seconds,
         seconds,
+        light: if one { summaries.pop() } else { None },
+        times: if one { None } else { Some(summaries) },
     };
-    let faces = light.by_face(mesh);
     if let Some(path) = &args.csv {
-        let names = scene.faces.iter().map(|f| f.name.as_str());
-        write_csv(path, "face,name", names.zip(&faces))?;
+        let rows = moments.iter().zip(&lights).flat_map(|(m, (light, _))| {
+            let names = scene.faces.iter().map(|f| f.name.as_str());
+            let faces = light.by_face(mesh);
+            names.zip(faces).enumerate().map(move |(k, (name, f))| (m.time.as_str(), k, name, f))
+        });
+        write_csv(path, "face,name", !one, rows)?;
     }
     if let Some(path) = &args.element_csv {
-        let names = mesh.elements().iter().map(|e| scene.faces[e.face].name.as_str());
-        write_csv(path, "element,face", names.zip(elements))?;
+        let rows = moments.iter().zip(&lights).flat_map(|(m, (light, _))| {
+            let names = mesh.elements().iter().map(|e| scene.faces[e.face].name.as_str());
+            names
+                .zip(light.elements.iter().copied())
+                .enumerate()
+                .map(move |(k, (name, f))| (m.time.as_str(), k, name, f))
+        });
+        write_csv(path, "element,face", !one, rows)?;
     }
     if let Some(target) = &args.json {
         return report::write_json(&summary, target);
     }
-    print_summary(&summary, &faces, scene);
+    print_summary(&summary, &lights[0].0, scene, mesh);
     Ok(())
 }
 
-/// One row per face or element: its index and its face's name (`columns`: "face,name" or
-/// "element,face"), then its fluxes.
+/// One row per face or element (and time, where `timed`): its index and its face's name
+/// (`columns`: "face,name" or "element,face"), then its fluxes.
 fn write_csv<'a>(
     path: &str,
     columns: &str,
-    rows: impl Iterator<Item = (&'a str, &'a Fluxes)>,
+    timed: bool,
+    rows: impl Iterator<Item = (&'a str, usize, &'a str, Fluxes)>,
 ) -> Result<()> {
+    let time = if timed { "time," } else { "" };
     let mut text = format!(
-        "{columns},area,sunlit_fraction,cos_incidence,sky_view_factor,direct,sky,\
+        "{time}{columns},area,sunlit_fraction,cos_incidence,sky_view_factor,direct,sky,\
          reflected,absorbed,outgoing\n"
     );
-    for (k, (name, f)) in rows.enumerate() {
+    for (time, k, name, f) in rows {
+        if timed {
+            text.push_str(time);
+            text.push(',');
+        }
         text.push_str(&format!(
             "{k},{name},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
             f.area,
@@ -136,29 +210,12 @@ fn write_csv<'a>(
     Ok(())
 }
 
-/// The summary as text, and each face's fluxes for scenes of at most 12 faces.
-fn print_summary(s: &SunSummary, faces: &[Fluxes], scene: &Scene) {
+/// The summary as text: one sun's figures and, for scenes of at most 12 faces, each face's
+/// fluxes; or a line per time of a day.
+fn print_summary(s: &SunSummary, first: &Shortwave, scene: &Scene, mesh: &radiosity::mesh::Mesh) {
     println!(
         "{}: n = {} elements on {} faces, {:.2} s (view factors {:.2} s, light {:.2} s)",
         s.scene, s.n, s.faces, s.seconds, s.view_factor_seconds, s.shortwave_seconds
-    );
-    let [x, y, z] = s.direction;
-    println!(
-        "sun: zenith {} deg, azimuth {} deg (+x at {} deg), direction ({x:.6}, {y:.6}, {z:.6}), \
-         direct normal {}; sky: diffuse horizontal {}",
-        s.sun.zenith, s.sun.azimuth, s.sun.x_azimuth, s.sun.direct_normal, s.diffuse_horizontal
-    );
-    println!(
-        "sunlit: {:.6e} of the {:.6e} facing the sun ({:.2} %)",
-        s.sunlit_area,
-        s.area_facing_sun,
-        if s.area_facing_sun > 0.0 { 100.0 * s.sunlit_area / s.area_facing_sun } else { 0.0 }
-    );
-    let b = &s.balance;
-    println!(
-        "power: received from sun and sky {:.6e}, absorbed {:.6e}, escaped to the sky {:.6e} \
-         (balance {:.1e} relative); reflections by GMRES in {} products",
-        b.received, b.absorbed, b.escaped, b.relative_gap, s.iterations
     );
     println!(
         "view factors: tolerance {:.0e}, estimate {:.2e}{}; sky view factors {:.6} .. {:.6}",
@@ -168,12 +225,64 @@ fn print_summary(s: &SunSummary, faces: &[Fluxes], scene: &Scene) {
         s.sky_view_factor_min,
         s.sky_view_factor_max
     );
-    if faces.len() <= 12 {
+    let share = |l: &Light| {
+        if l.area_facing_sun > 0.0 { 100.0 * l.sunlit_area / l.area_facing_sun } else { 0.0 }
+    };
+    if let Some(times) = &s.times {
+        println!(
+            "{:>10} {:>8} {:>8} {:>8} {:>12} {:>12} {:>12} {:>8} {:>4}",
+            "time",
+            "zenith",
+            "azimuth",
+            "sunlit%",
+            "received",
+            "absorbed",
+            "escaped",
+            "balance",
+            "its"
+        );
+        for l in times {
+            let b = &l.balance;
+            println!(
+                "{:>10} {:>8.3} {:>8.3} {:>8.2} {:>12.6e} {:>12.6e} {:>12.6e} {:>8.1e} {:>4}",
+                l.time,
+                l.sun.zenith,
+                l.sun.azimuth,
+                share(l),
+                b.received,
+                b.absorbed,
+                b.escaped,
+                b.relative_gap,
+                l.iterations
+            );
+        }
+        return;
+    }
+    let Some(l) = &s.light else { return };
+    let [x, y, z] = l.direction;
+    println!(
+        "sun: zenith {} deg, azimuth {} deg (+x at {} deg), direction ({x:.6}, {y:.6}, {z:.6}), \
+         direct normal {}; sky: diffuse horizontal {}",
+        l.sun.zenith, l.sun.azimuth, l.sun.x_azimuth, l.sun.direct_normal, l.diffuse_horizontal
+    );
+    println!(
+        "sunlit: {:.6e} of the {:.6e} facing the sun ({:.2} %)",
+        l.sunlit_area,
+        l.area_facing_sun,
+        share(l)
+    );
+    let b = &l.balance;
+    println!(
+        "power: received from sun and sky {:.6e}, absorbed {:.6e}, escaped to the sky {:.6e} \
+         (balance {:.1e} relative); reflections by GMRES in {} products",
+        b.received, b.absorbed, b.escaped, b.relative_gap, l.iterations
+    );
+    if scene.faces.len() <= 12 {
         println!(
             "{:>12} {:>8} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10}",
             "face", "sunlit", "svf", "direct", "sky", "reflected", "absorbed", "outgoing"
         );
-        for (face, f) in scene.faces.iter().zip(faces) {
+        for (face, f) in scene.faces.iter().zip(first.by_face(mesh)) {
             println!(
                 "{:>12} {:>8.4} {:>8.4} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>10.3}",
                 face.name,

@@ -15,32 +15,8 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::solve::{self, KrylovSystem};
-use crate::sun::{Sun, Sunlit, sunlit};
+use crate::sun::{Sources, Sunlit, sunlit};
 use crate::viewfactors::ViewFactors;
-
-/// The sources: the sun (direct light, with exact shadows) and an isotropic sky.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Sources {
-    /// The sun.
-    pub sun: Sun,
-    /// Diffuse horizontal irradiance of the sky (isotropic), in the sun's unit.
-    pub diffuse_horizontal: f64,
-}
-
-impl Sources {
-    /// The sun and a sky of `diffuse_horizontal` irradiance; refused where that is negative or
-    /// not finite.
-    pub fn new(sun: Sun, diffuse_horizontal: f64) -> Result<Self> {
-        if !(diffuse_horizontal.is_finite() && diffuse_horizontal >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "diffuse horizontal irradiance",
-                value: diffuse_horizontal.to_string(),
-                reason: "at least 0".into(),
-            });
-        }
-        Ok(Self { sun, diffuse_horizontal })
-    }
-}
 
 /// What one element (or, averaged over its elements by area, one face) receives, absorbs and
 /// reflects: irradiances in the sources' unit (W/m² where they are in W/m²).

@@ -4,6 +4,7 @@
 //! same exact polygon machinery as the pair plan's, with a parallel projection instead of a
 //! central one).
 
+mod positions;
 mod shadows;
 
 use glam::DVec3;
@@ -11,6 +12,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 
+pub use positions::{Moment, read_moments};
 pub use shadows::{Sunlit, sunlit};
 
 /// The compass direction of +x when the scene does not say: east (+y is then north).
@@ -65,6 +67,30 @@ impl Sun {
     /// Whether the sun is above the horizon (it lights nothing otherwise).
     pub fn is_up(&self) -> bool {
         self.zenith < 90.0
+    }
+}
+
+/// The sources: the sun (direct light, with exact shadows) and an isotropic sky.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Sources {
+    /// The sun.
+    pub sun: Sun,
+    /// Diffuse horizontal irradiance of the sky (isotropic), in the sun's unit.
+    pub diffuse_horizontal: f64,
+}
+
+impl Sources {
+    /// The sun and a sky of `diffuse_horizontal` irradiance; refused where that is negative or
+    /// not finite.
+    pub fn new(sun: Sun, diffuse_horizontal: f64) -> Result<Self> {
+        if !(diffuse_horizontal.is_finite() && diffuse_horizontal >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "diffuse horizontal irradiance",
+                value: diffuse_horizontal.to_string(),
+                reason: "at least 0".into(),
+            });
+        }
+        Ok(Self { sun, diffuse_horizontal })
     }
 }
 

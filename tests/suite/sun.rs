@@ -217,7 +217,8 @@ fn view_factors_of(scene: &Scene, refine: u32) -> (Mesh, radiosity::viewfactors:
 
 #[test]
 fn an_open_plane_receives_the_sun_and_the_whole_sky() {
-    use radiosity::shortwave::{Sources, shortwave};
+    use radiosity::shortwave::shortwave;
+    use radiosity::sun::Sources;
     let mut plane = ground(10.0);
     plane.rho = 0.3;
     let scene = Scene::new("plane", vec![plane]).unwrap();
@@ -237,7 +238,8 @@ fn an_open_plane_receives_the_sun_and_the_whole_sky() {
 
 #[test]
 fn reflections_in_a_sunlit_city_close_the_energy_and_match_lu() {
-    use radiosity::shortwave::{Sources, shortwave};
+    use radiosity::shortwave::shortwave;
+    use radiosity::sun::Sources;
     for seed in 0..2 {
         let scene = generated::city(seed);
         let (mesh, f) = view_factors_of(&scene, 1);
@@ -329,4 +331,62 @@ fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
         let (ok, _, stderr) = radiosity(&args);
         assert!(!ok && stderr.contains(named), "{flag} {value}: {stderr}");
     }
+}
+
+#[test]
+fn a_day_of_sun_positions_is_solved_on_one_set_of_view_factors() {
+    use crate::common::{json, temp_dir};
+    let dir = temp_dir("sun-day");
+    let day = dir.join("day.csv");
+    std::fs::write(
+        &day,
+        "time,zenith,azimuth,direct_normal,diffuse_horizontal\n\
+         09:00,55,115,650,95\n12:00,30,180,850,110\n21:00,100,310,0,0\n",
+    )
+    .unwrap();
+    let faces = dir.join("faces.csv");
+    let v = json(&[
+        "sun",
+        "--scene",
+        "city:2x1",
+        "--refine",
+        "0",
+        "--sun-positions",
+        day.to_str().unwrap(),
+        "--csv",
+        faces.to_str().unwrap(),
+        "--json",
+        "-",
+    ]);
+    let times = v["times"].as_array().unwrap_or_else(|| panic!("{v}"));
+    assert_eq!(times.len(), 3);
+    assert_eq!(times[1]["time"], "12:00");
+    assert_eq!(times[1]["sun"]["azimuth"], 180.0);
+    assert!(times[..2].iter().all(|t| t["relative_gap"].as_f64().unwrap() <= 1e-9));
+    // Below the horizon, and no sky: nothing received.
+    assert_eq!(times[2]["received"], 0.0);
+    // The same noon as one sun, to the bit.
+    let noon = json(&[
+        "sun",
+        "--scene",
+        "city:2x1",
+        "--refine",
+        "0",
+        "--zenith",
+        "30",
+        "--azimuth",
+        "180",
+        "--direct-normal",
+        "850",
+        "--diffuse-horizontal",
+        "110",
+        "--json",
+        "-",
+    ]);
+    assert_eq!(noon["absorbed"], times[1]["absorbed"]);
+    let text = std::fs::read_to_string(&faces).unwrap();
+    assert!(text.starts_with("time,face,name,area,"), "{text}");
+    let faces = v["faces"].as_u64().unwrap() as usize;
+    assert_eq!(text.lines().count(), 1 + 3 * faces);
+    assert_eq!(text.lines().filter(|l| l.starts_with("12:00,")).count(), faces);
 }

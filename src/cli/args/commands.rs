@@ -201,21 +201,41 @@ pub(crate) struct SunArgs {
     pub(crate) scene: SceneArgs,
     /// The sun's angle from the zenith, degrees (0 overhead, 90 on the horizon; beyond, no
     /// direct light)
-    #[arg(long, allow_negative_numbers = true)]
-    pub(crate) zenith: f64,
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        required_unless_present = "sun_positions",
+        conflicts_with = "sun_positions"
+    )]
+    pub(crate) zenith: Option<f64>,
     /// The sun's compass azimuth, degrees clockwise from north
-    #[arg(long, allow_negative_numbers = true)]
-    pub(crate) azimuth: f64,
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        required_unless_present = "sun_positions",
+        conflicts_with = "sun_positions"
+    )]
+    pub(crate) azimuth: Option<f64>,
     /// The compass direction of the scene's +x, degrees clockwise from north (90: +x east and
     /// +y north, z up)
     #[arg(long, allow_negative_numbers = true, default_value_t = radiosity::sun::DEFAULT_X_AZIMUTH)]
     pub(crate) x_azimuth: f64,
     /// Direct normal irradiance of the sun (W/m²; every flux comes out in its unit)
-    #[arg(long, allow_negative_numbers = true)]
-    pub(crate) direct_normal: f64,
-    /// Diffuse horizontal irradiance of an isotropic sky, in the same unit
-    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
-    pub(crate) diffuse_horizontal: f64,
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        required_unless_present = "sun_positions",
+        conflicts_with = "sun_positions"
+    )]
+    pub(crate) direct_normal: Option<f64>,
+    /// Diffuse horizontal irradiance of an isotropic sky, in the same unit (default 0)
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "sun_positions")]
+    pub(crate) diffuse_horizontal: Option<f64>,
+    /// A day of sun positions instead of one sun: a CSV file with the columns time, zenith,
+    /// azimuth, direct_normal, diffuse_horizontal (one row per time), each solved on the same
+    /// view factors
+    #[arg(long, value_name = "FILE.csv")]
+    pub(crate) sun_positions: Option<String>,
     /// Absolute tolerance on each view factor F_ij, which carry the sky light (the sky view
     /// factor 1 - Σ_j F_ij) and the reflections
     #[arg(long, default_value_t = 1e-6)]
@@ -224,7 +244,8 @@ pub(crate) struct SunArgs {
     /// no entry moved beyond the estimate; `viewfactors --condition`)
     #[arg(long)]
     pub(crate) condition: bool,
-    /// Write each face's fluxes (area averages over its elements) to FILE.csv
+    /// Write each face's fluxes (area averages over its elements) to FILE.csv (a first column
+    /// `time` with --sun-positions)
     #[arg(long, value_name = "FILE.csv")]
     pub(crate) csv: Option<String>,
     /// Write each element's fluxes to FILE.csv
