@@ -1,6 +1,7 @@
 //! `radiosity sun`: shortwave light under the sun and an isotropic sky, per face and element,
 //! for one sun or a day of sun positions (each solved on the same view factors).
 
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -8,7 +9,8 @@ use serde::Serialize;
 use radiosity::error::{Error, Result};
 use radiosity::pipeline::{self, Problem};
 use radiosity::report;
-use radiosity::scene::Scene;
+use radiosity::report::{UrbanExport, VFSPARSE_THRESHOLD};
+use radiosity::scene::{Scene, stl_triangles};
 use radiosity::shortwave::{Balance, Fluxes, Shortwave, shortwave};
 use radiosity::solve::DEFAULT_TOLERANCE;
 use radiosity::sun::{Moment, Sources, Sun, read_moments};
@@ -32,6 +34,9 @@ struct SunSummary<'a> {
     view_factor_seconds: f64,
     shortwave_seconds: f64,
     seconds: f64,
+    /// The files `--export` wrote.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    exported: Vec<String>,
     #[serde(flatten)]
     light: Option<Light<'a>>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -99,6 +104,18 @@ fn moments(args: &SunArgs) -> Result<Vec<Moment>> {
 
 pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
     let moments = moments(args)?;
+    if args.export.is_some() && args.sun_positions.is_some() {
+        // timedepsw.inp numbers its times: refused now, not after the work.
+        if let Some(m) = moments.iter().find(|m| m.time.parse::<f64>().is_err()) {
+            return Err(Error::InvalidParameter {
+                name: "export",
+                value: m.time.clone(),
+                reason: "timedepsw.inp numbers its times in seconds: label each sun position \
+                         with its time in seconds"
+                    .into(),
+            });
+        }
+    }
     let options = ViewFactorOptions { tolerance: args.tolerance, ..Default::default() };
     options.validate()?;
     for (flag, path) in [("csv", &args.csv), ("element-csv", &args.element_csv)] {
@@ -115,11 +132,31 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
     let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, planner, .. } = &problem;
     super::output::print_notes(scene);
+    // Which element each exported facet is, settled before the work.
+    let facets = match &args.export {
+        Some(_) if args.scene.refine != 0 => {
+            return Err(Error::InvalidParameter {
+                name: "export",
+                value: format!("--refine {}", args.scene.refine),
+                reason: "the files hold one value per facet: give --refine 0".into(),
+            });
+        }
+        Some(_) => {
+            let stl = args.scene.scene.to_ascii_lowercase().ends_with(".stl");
+            let triangles = stl.then(|| stl_triangles(Path::new(&args.scene.scene))).transpose()?;
+            Some(report::facet_elements(scene, mesh, triangles.as_deref())?)
+        }
+        None => None,
+    };
+    let closure = match facets {
+        Some(_) => ClosureOptions { condition: true, drop_below: Some(VFSPARSE_THRESHOLD) },
+        None => ClosureOptions { condition: args.condition, drop_below: None },
+    };
     let progress = super::progress::on_stderr();
     progress.start("viewfactors", mesh.len());
     let mut f = view_factors(scene, mesh, planner, &options, &*progress)?;
     progress.finish();
-    f.close(&ClosureOptions { condition: args.condition, drop_below: None })?;
+    f.close(&closure)?;
     let view_factor_seconds = started.elapsed().as_secs_f64();
     let mut lights = Vec::with_capacity(moments.len());
     for moment in &moments {
@@ -127,6 +164,20 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         let light = shortwave(scene, mesh, &f, &moment.sources, DEFAULT_TOLERANCE)?;
         lights.push((light, t.elapsed().as_secs_f64()));
     }
+    let exported = match (&facets, &args.export) {
+        (Some(facets), Some(dir)) => {
+            let times = moments.iter().zip(&lights).map(|(m, (l, _))| (m.time.as_str(), l));
+            let export = UrbanExport {
+                dir: Path::new(dir),
+                expnr: args.expnr.as_deref(),
+                facets,
+                view_factors: &f,
+                times: times.collect(),
+            };
+            export.write()?.iter().map(|p| p.display().to_string()).collect()
+        }
+        _ => Vec::new(),
+    };
     let seconds = started.elapsed().as_secs_f64();
     let sky = f.sky_view_factors();
     let one = moments.len() == 1 && args.sun_positions.is_none();
@@ -143,10 +194,11 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         view_factor_error_estimate: f.error_estimate,
         sky_view_factor_min: sky.iter().copied().fold(f64::INFINITY, f64::min),
         sky_view_factor_max: sky.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        conditioned: args.condition,
+        conditioned: closure.condition,
         view_factor_seconds,
         shortwave_seconds: seconds - view_factor_seconds,
         seconds,
+        exported,
         light: if one { summaries.pop() } else { None },
         times: if one { None } else { Some(summaries) },
     };
@@ -172,6 +224,9 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         return report::write_json(&summary, target);
     }
     print_summary(&summary, &lights[0].0, scene, mesh);
+    for path in &summary.exported {
+        println!("wrote {path}");
+    }
     Ok(())
 }
 

@@ -13,6 +13,7 @@ mod stability_tables;
 mod study_figures;
 mod study_table;
 mod table;
+mod urban;
 mod vtk;
 
 pub use city_study::city_table;
@@ -27,4 +28,5 @@ pub use stability_tables::{stability_table, stiff_table};
 pub use study_figures::write_study_figures;
 pub use study_table::study_table;
 pub use table::TableFormat;
+pub use urban::{NETSW_HEADER, TIMEDEPSW_HEADER, UrbanExport, VFSPARSE_THRESHOLD, facet_elements};
 pub use vtk::write_vtu;

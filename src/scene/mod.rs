@@ -15,7 +15,7 @@ pub use face::{
 };
 pub use file::{
     Coplanar, Duplicates, IMPORT_RHO, ImportOptions, NonPlanar, Side, from_triangles,
-    is_scene_file, load, load_with, parse_toml,
+    is_scene_file, load, load_with, parse_toml, stl_triangles,
 };
 pub use merge::{Merged, merge_coplanar};
 

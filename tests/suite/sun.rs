@@ -390,3 +390,199 @@ fn a_day_of_sun_positions_is_solved_on_one_set_of_view_factors() {
     assert_eq!(text.lines().count(), 1 + 3 * faces);
     assert_eq!(text.lines().filter(|l| l.starts_with("12:00,")).count(), faces);
 }
+
+/// A street canyon as an ASCII STL whose triangles are listed out of their faces' order (the
+/// ground's three and each wall's two interleaved), with the files' areas and normals.
+const CANYON_STL: &str = "solid canyon
+facet normal 0 1 0
+outer loop
+vertex 0 0 0
+vertex 0 0 6
+vertex 20 0 0
+endloop
+endfacet
+facet normal 0 0 1
+outer loop
+vertex 0 0 0
+vertex 8 0 0
+vertex 0 10 0
+endloop
+endfacet
+facet normal 0 -1 0
+outer loop
+vertex 0 10 0
+vertex 20 10 0
+vertex 0 10 6
+endloop
+endfacet
+facet normal 0 0 1
+outer loop
+vertex 8 0 0
+vertex 20 10 0
+vertex 0 10 0
+endloop
+endfacet
+facet normal 0 1 0
+outer loop
+vertex 20 0 0
+vertex 0 0 6
+vertex 20 0 6
+endloop
+endfacet
+facet normal 0 0 1
+outer loop
+vertex 8 0 0
+vertex 20 0 0
+vertex 20 10 0
+endloop
+endfacet
+facet normal 0 -1 0
+outer loop
+vertex 20 10 0
+vertex 20 10 6
+vertex 0 10 6
+endloop
+endfacet
+endsolid canyon
+";
+
+/// The lines of `path` after `header` (checked, where given).
+fn lines_after(path: &std::path::Path, header: Option<&str>) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    if let Some(header) = header {
+        assert_eq!(lines.next(), Some(header), "{}", path.display());
+    }
+    lines.map(str::to_owned).collect()
+}
+
+#[test]
+fn the_export_writes_the_files_an_urban_les_reads_in_the_stl_s_order() {
+    use crate::common::{json, radiosity, temp_dir};
+    use radiosity::report::{NETSW_HEADER, TIMEDEPSW_HEADER};
+    let dir = temp_dir("sun-export");
+    let stl = dir.join("canyon.stl");
+    std::fs::write(&stl, CANYON_STL).unwrap();
+    let out = dir.join("inputs");
+    let scene = stl.to_str().unwrap();
+    let v = json(&[
+        "sun",
+        "--scene",
+        scene,
+        "--refine",
+        "0",
+        "--zenith",
+        "30",
+        "--azimuth",
+        "170",
+        "--direct-normal",
+        "800",
+        "--diffuse-horizontal",
+        "100",
+        "--export",
+        out.to_str().unwrap(),
+        "--expnr",
+        "001",
+        "--json",
+        "-",
+    ]);
+    assert_eq!(v["exported"].as_array().unwrap().len(), 5, "{v}");
+    let file = |name: &str| out.join(format!("{name}.001"));
+    // Areas in the file's order: walls 60, ground 40, 100 and 60.
+    let areas: Vec<f64> = lines_after(&file("facetarea.inp"), Some("# area of facets"))
+        .iter()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    assert_eq!(areas, [60.0, 40.0, 60.0, 100.0, 60.0, 60.0, 60.0]);
+    let svf: Vec<f64> = lines_after(&file("svf.inp"), Some("# sky view factors"))
+        .iter()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    assert_eq!(svf.len(), 7);
+    // Each line of vfsparse: i j F_ij, by row then column.
+    let entries: Vec<(usize, usize, f64)> = lines_after(&file("vfsparse.inp"), None)
+        .iter()
+        .map(|l| {
+            let f: Vec<&str> = l.split(' ').collect();
+            assert_eq!(f.len(), 3, "{l}");
+            assert_eq!(f[2].split('.').nth(1).map(str::len), Some(8), "{l}");
+            (f[0].parse().unwrap(), f[1].parse().unwrap(), f[2].parse().unwrap())
+        })
+        .collect();
+    assert!(entries.windows(2).all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1)), "sorted");
+    let mut rows = vec![0.0; 7];
+    for &(i, j, fij) in &entries {
+        assert!(i != j && fij >= 5e-7, "{i} {j} {fij}");
+        rows[i - 1] += fij;
+        let back = entries.iter().find(|e| (e.0, e.1) == (j, i)).expect("both directions kept");
+        let gap = (areas[i - 1] * fij - areas[j - 1] * back.2).abs();
+        assert!(gap <= (areas[i - 1] + areas[j - 1]) * 5e-9, "reciprocity {i} {j}: {gap:e}");
+    }
+    for (k, (row, sky)) in rows.iter().zip(&svf).enumerate() {
+        assert!((row + sky - 1.0).abs() <= 1e-7, "facet {}: {row} + {sky}", k + 1);
+    }
+    // The ground sees the walls, a wall the ground and the other wall.
+    assert!(svf[1] < 1.0 && svf[0] < 1.0);
+    let netsw: Vec<f64> = lines_after(&file("netsw.inp"), Some(NETSW_HEADER))
+        .iter()
+        .map(|l| l.trim().parse().unwrap())
+        .collect();
+    let absorbed: f64 = netsw.iter().zip(&areas).map(|(k, a)| k * a).sum();
+    let want = v["absorbed"].as_f64().unwrap();
+    assert!((absorbed - want).abs() <= 1e-4 * areas.iter().sum::<f64>(), "{absorbed} vs {want}");
+    let direct: Vec<f64> =
+        lines_after(&file("Sdir.txt"), None).iter().map(|l| l.parse().unwrap()).collect();
+    // The wall at y = 0 faces north, away from a sun in the south: no direct light; the wall
+    // at y = 10 faces it.
+    assert_eq!((direct.len(), direct[0], direct[4]), (7, 0.0, 0.0));
+    assert!(direct[2] > 0.0 && direct[6] > 0.0, "{direct:?}");
+    let lit = 800.0 * 30f64.to_radians().cos();
+    assert!(direct[1] > 0.0 && direct[1] <= lit + 1e-4, "{direct:?}");
+
+    // A day: one column per time in Sdir.txt and timedepsw.inp, times in seconds.
+    let day = dir.join("day.csv");
+    std::fs::write(&day, "time,zenith,azimuth,direct_normal,diffuse_horizontal\n36000,40,150,700,90\n43200,30,180,800,100\n").unwrap();
+    let out = dir.join("day");
+    let args = [
+        "sun",
+        "--scene",
+        scene,
+        "--refine",
+        "0",
+        "--sun-positions",
+        day.to_str().unwrap(),
+        "--export",
+        out.to_str().unwrap(),
+    ];
+    let (ok, _, stderr) = radiosity(&args);
+    assert!(ok, "{stderr}");
+    let timed = lines_after(&out.join("timedepsw.inp"), Some(TIMEDEPSW_HEADER));
+    assert_eq!(timed.len(), 8);
+    assert_eq!(timed[0].split_whitespace().collect::<Vec<_>>(), ["36000.00", "43200.00"]);
+    assert!(lines_after(&out.join("Sdir.txt"), None).iter().all(|l| l.split(' ').count() == 2));
+    assert!(!out.join("netsw.inp").exists());
+    // Labels that are no seconds, and a refined mesh, are refused before the work.
+    std::fs::write(
+        &day,
+        "time,zenith,azimuth,direct_normal,diffuse_horizontal\n10:00,40,150,700,90\n",
+    )
+    .unwrap();
+    let (ok, _, stderr) = radiosity(&args);
+    assert!(!ok && stderr.contains("10:00") && stderr.contains("seconds"), "{stderr}");
+    let (ok, _, stderr) = radiosity(&[
+        "sun",
+        "--scene",
+        scene,
+        "--refine",
+        "1",
+        "--zenith",
+        "30",
+        "--azimuth",
+        "170",
+        "--direct-normal",
+        "800",
+        "--export",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("--refine 0"), "{stderr}");
+}

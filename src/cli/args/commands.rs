@@ -251,6 +251,15 @@ pub(crate) struct SunArgs {
     /// Write each element's fluxes to FILE.csv
     #[arg(long, value_name = "FILE.csv")]
     pub(crate) element_csv: Option<String>,
+    /// Write the files of an urban LES's preprocessing (uDALES: facetarea.inp, svf.inp,
+    /// netsw.inp or timedepsw.inp, Sdir.txt, vfsparse.inp) to DIR, one value per facet: the
+    /// triangles of an .stl scene in its order (at --refine 0). The view factors are then
+    /// conditioned and their pairs below 5e-7 dropped, and the light computed on them
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export: Option<String>,
+    /// The experiment number appended to the exported files' names (e.g. 001)
+    #[arg(long, value_name = "N", requires = "export")]
+    pub(crate) expnr: Option<String>,
     /// Write the summary as JSON to PATH (`-` for standard output) instead of text
     #[arg(long, value_name = "PATH")]
     pub(crate) json: Option<String>,

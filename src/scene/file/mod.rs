@@ -119,6 +119,22 @@ pub fn is_scene_file(name: &str) -> bool {
     matches!(ext.as_deref(), Some("toml" | "obj" | "stl"))
 }
 
+/// The triangles of an STL file in the file's order and coordinates (f32 widened to f64): the
+/// facets that urban models number.
+pub fn stl_triangles(path: &Path) -> Result<Vec<[DVec3; 3]>> {
+    let is_stl = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if is_stl.as_deref() != Some("stl") {
+        return Err(Error::SceneFile {
+            path: path.display().to_string(),
+            reason: "expected an .stl file (its triangles are the facets)".into(),
+        });
+    }
+    Ok(read_mesh(path)?
+        .into_iter()
+        .map(|p| [p.vertices[0], p.vertices[1], p.vertices[2]])
+        .collect())
+}
+
 /// Loads a scene from a `.toml` scene file or an `.obj` / `.stl` mesh (OBJ faces named by file
 /// and line, STL triangles `STEM/k`; rho from the OBJ material or [`IMPORT_RHO`], no emission),
 /// with the default [`ImportOptions`].
