@@ -510,7 +510,7 @@ fn the_export_writes_the_files_an_urban_les_reads_in_the_stl_s_order() {
         })
         .collect();
     assert!(entries.windows(2).all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1)), "sorted");
-    let mut rows = vec![0.0; 7];
+    let mut rows = [0.0; 7];
     for &(i, j, fij) in &entries {
         assert!(i != j && fij >= 5e-7, "{i} {j} {fij}");
         rows[i - 1] += fij;
