@@ -1,10 +1,10 @@
 //! `radiosity solve`: one run, its outputs (VTU, CSV, PNG) and its summary.
 
-use radiosity::error::{Error, Result};
+use radiosity::error::Result;
 use radiosity::pipeline::{self, RunReport};
 use radiosity::report;
 
-use super::args::{OutputArgs, SolveArgs, parse_point};
+use super::args::{OutputArgs, SolveArgs, parse_point, parse_size};
 use super::ranks::is_root;
 
 pub(crate) fn write_outputs(
@@ -20,15 +20,7 @@ pub(crate) fn write_outputs(
         report::write_node_csv(&field, std::path::Path::new(path))?;
     }
     if let Some(path) = &out.png {
-        let size = out
-            .png_size
-            .split_once('x')
-            .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
-            .ok_or_else(|| Error::InvalidParameter {
-                name: "png-size",
-                value: out.png_size.clone(),
-                reason: "expected WIDTHxHEIGHT in pixels".into(),
-            })?;
+        let size = parse_size("png-size", &out.png_size)?;
         let mut camera = report::Camera::default_view(&field, picture.0);
         // The user gives points in their coordinates; the scene is drawn in its local frame.
         let origin = run.scene.origin;
@@ -40,7 +32,14 @@ pub(crate) fn write_outputs(
         }
         let r = &run.report;
         let title = format!("{}: u, {} method, n = {}", r.label.surface, r.label.method, r.label.n);
-        report::render_png(&field, &camera, size, &title, picture.1, std::path::Path::new(path))?;
+        report::render_png(
+            &field,
+            &camera,
+            size,
+            (&title, "u"),
+            picture.1,
+            std::path::Path::new(path),
+        )?;
     }
     Ok(())
 }

@@ -6,17 +6,19 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use radiosity::discretization::{Discretization, Method};
 use radiosity::error::{Error, Result};
 use radiosity::pipeline::{self, Problem};
 use radiosity::report;
-use radiosity::report::{UrbanExport, VFSPARSE_THRESHOLD};
+use radiosity::report::{Tone, UrbanExport, VFSPARSE_THRESHOLD};
 use radiosity::scene::{Scene, stl_triangles};
 use radiosity::shortwave::{Balance, Fluxes, Shortwave, shortwave};
+use radiosity::solution::SolutionField;
 use radiosity::solve::DEFAULT_TOLERANCE;
 use radiosity::sun::{Moment, Sources, Sun, read_moments};
 use radiosity::viewfactors::{ClosureOptions, ViewFactorOptions, view_factors};
 
-use super::args::SunArgs;
+use super::args::{SunArgs, parse_size};
 
 /// What `sun --json` writes: the view factors' figures, then one sun's light (flattened) or,
 /// with `--sun-positions`, each time's under `times`.
@@ -220,6 +222,21 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         });
         write_csv(path, "element,face", !one, rows)?;
     }
+    if let Some(path) = &args.png {
+        let time = &moments[0].time;
+        let title = format!(
+            "{}: absorbed shortwave{}{time}",
+            scene.name,
+            if time.is_empty() { "" } else { " at " }
+        );
+        write_picture(
+            &problem,
+            &lights[0].0,
+            &title,
+            parse_size("png-size", &args.png_size)?,
+            path,
+        )?;
+    }
     if let Some(target) = &args.json {
         return report::write_json(&summary, target);
     }
@@ -228,6 +245,32 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         println!("wrote {path}");
     }
     Ok(())
+}
+
+/// The scene coloured by each element's absorbed flux, into the PNG at `path`.
+fn write_picture(
+    problem: &Problem,
+    light: &Shortwave,
+    title: &str,
+    size: (u32, u32),
+    path: &str,
+) -> Result<()> {
+    let Problem { scene, mesh, .. } = problem;
+    let disc = Discretization::new(scene, mesh, Method::Centroid)?;
+    let absorbed: Vec<f64> = light.elements.iter().map(|e| e.absorbed).collect();
+    let none = vec![0.0; absorbed.len()];
+    let field = SolutionField {
+        scene,
+        mesh,
+        disc: &disc,
+        u: &absorbed,
+        emission: &none,
+        bands: &[],
+        cases: &[],
+    };
+    let camera = report::Camera::default_view(&field, glam::DVec3::Z);
+    let quantity = "absorbed (W/m2)";
+    report::render_png(&field, &camera, size, (title, quantity), Tone::Linear, Path::new(path))
 }
 
 /// One row per face or element (and time, where `timed`): its index and its face's name

@@ -161,8 +161,8 @@ impl Tone {
 const BAR_WIDTH: u32 = 150;
 const BACKGROUND: [u8; 3] = [255, 255, 255];
 
-/// Renders `field` (u_n) seen by `camera` into a `width` x `height` PNG at `path`, through the
-/// tone map `tone`. The scale spans u_n over the elements of non-emitting faces (emitters, usually
+/// Renders `field` (u_n, or the flux that `quantity` names on the colour bar) seen by `camera`
+/// into a `width` x `height` PNG at `path` titled `title`, through the tone map `tone`. The scale spans u_n over the elements of non-emitting faces (emitters, usually
 /// far brighter, are clipped to the top colour) unless every face emits. With r, g and b bands the
 /// picture is in colour, on one scale from 0 for the three bands (so that their ratios, the
 /// colours, are kept); otherwise in viridis false colour.
@@ -170,7 +170,7 @@ pub fn render_png(
     field: &SolutionField,
     camera: &Camera,
     (width, height): (u32, u32),
-    title: &str,
+    (title, quantity): (&str, &str),
     tone: Tone,
     path: &Path,
 ) -> Result<()> {
@@ -210,7 +210,7 @@ pub fn render_png(
     register_font();
     {
         let root = BitMapBackend::with_buffer(&mut image, (width, height)).into_drawing_area();
-        let bar = ColourBar { span, tone, colour: rgb.is_some() };
+        let bar = ColourBar { span, tone, colour: rgb.is_some(), quantity };
         draw_colour_bar(&root, (width, height), &bar, title)?;
         root.present().map_err(plot_error)?;
     }
@@ -362,10 +362,12 @@ fn colour(t: f64) -> [u8; 3] {
 
 /// What the colour bar shows: the scale, its tone map, and whether the picture is in colour
 /// (then the bar is a grey ramp: the level of each of r, g and b).
-struct ColourBar {
+struct ColourBar<'a> {
     span: (f64, f64),
     tone: Tone,
     colour: bool,
+    /// What the field is (`u`, or an absorbed flux).
+    quantity: &'a str,
 }
 
 fn draw_colour_bar<DB: DrawingBackend>(
@@ -398,12 +400,13 @@ fn draw_colour_bar<DB: DrawingBackend>(
         root.draw(&Text::new(format!("{value:.3e}"), (x0 + 33, y - 7), font.clone()))
             .map_err(plot_error)?;
     }
-    let what = if bar.colour { "u of r, g, b" } else { "u" };
+    let what =
+        if bar.colour { format!("{} of r, g, b", bar.quantity) } else { bar.quantity.to_string() };
     let scale = match bar.tone {
         Tone::Gamma => format!("gamma {GAMMA}"),
         tone => format!("{} scale", tone.name()),
     };
-    for (k, line) in [what.to_string(), scale].into_iter().enumerate() {
+    for (k, line) in [what, scale].into_iter().enumerate() {
         let y = top - 36 + 16 * k as i32;
         root.draw(&Text::new(line, (x0 - 12, y), font.clone())).map_err(plot_error)?;
     }
@@ -444,8 +447,15 @@ mod tests {
         {
             let target = DVec3::new(0.1, 0.2, 0.4);
             let camera = Camera { eye, target, fov_degrees: 60.0, up: DVec3::Z };
-            render_png(&field, &camera, (400, 300), "t", Tone::Linear, &dir.join("cube.png"))
-                .unwrap();
+            render_png(
+                &field,
+                &camera,
+                (400, 300),
+                ("t", "u"),
+                Tone::Linear,
+                &dir.join("cube.png"),
+            )
+            .unwrap();
         }
     }
 

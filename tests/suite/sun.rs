@@ -276,6 +276,7 @@ fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
     let dir = temp_dir("sun");
     let (faces, elements) = (dir.join("faces.csv"), dir.join("elements.csv"));
     let (faces, elements) = (faces.to_str().unwrap(), elements.to_str().unwrap());
+    let picture = dir.join("absorbed.png");
     let common = [
         "sun",
         "--scene",
@@ -295,7 +296,10 @@ fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
     ];
     let mut args = common.to_vec();
     args.extend(["--csv", faces, "--element-csv", elements, "--json", "-"]);
+    args.extend(["--png", picture.to_str().unwrap(), "--png-size", "400x300"]);
     let v = json(&args);
+    let png = std::fs::read(&picture).unwrap();
+    assert!(png.starts_with(b"\x89PNG") && png.len() > 2000, "{} bytes", png.len());
     let number = |key: &str| v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"));
     assert!(number("relative_gap") <= 1e-9, "{v}");
     assert!(number("sunlit_area") > 0.0 && number("sunlit_area") < number("area_facing_sun"));

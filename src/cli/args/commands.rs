@@ -257,6 +257,13 @@ pub(crate) struct SunArgs {
     /// conditioned and their pairs below 5e-7 dropped, and the light computed on them
     #[arg(long, value_name = "DIR")]
     pub(crate) export: Option<String>,
+    /// Render the scene coloured by each element's absorbed flux (one sun, or the first time
+    /// of a day), seen from the south-west, above
+    #[arg(long, value_name = "FILE.png")]
+    pub(crate) png: Option<String>,
+    /// Picture size in pixels
+    #[arg(long, value_name = "WxH", default_value = "1200x800")]
+    pub(crate) png_size: String,
     /// The experiment number appended to the exported files' names (e.g. 001)
     #[arg(long, value_name = "N", requires = "export")]
     pub(crate) expnr: Option<String>,

@@ -17,4 +17,4 @@ pub(crate) use commands::{
 };
 pub(crate) use named::named;
 pub(crate) use outputs::OutputArgs;
-pub(crate) use values::parse_point;
+pub(crate) use values::{parse_point, parse_size};

@@ -19,6 +19,17 @@ pub(crate) fn parse_point(name: &'static str, text: &str) -> Result<glam::DVec3>
     }
 }
 
+/// A picture's size, `WxH` in pixels.
+pub(crate) fn parse_size(name: &'static str, text: &str) -> Result<(u32, u32)> {
+    text.split_once('x').and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?))).ok_or_else(
+        || Error::InvalidParameter {
+            name,
+            value: text.into(),
+            reason: "expected WIDTHxHEIGHT in pixels".into(),
+        },
+    )
+}
+
 pub(crate) fn parse_params(text: &str) -> Result<SurfaceParameters> {
     let bad = || Error::InvalidParameter {
         name: "params",
