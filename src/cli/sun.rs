@@ -87,37 +87,39 @@ impl<'a> Light<'a> {
     }
 }
 
-/// The moments the arguments ask for: the day of `--sun-positions`, or the one sun of
-/// `--zenith`, `--azimuth` and `--direct-normal` (clap requires those three without it).
-fn moments(args: &SunArgs) -> Result<Vec<Moment>> {
+/// The moments the arguments ask for: the day of `--sun-positions`, the one sun of `--zenith`,
+/// `--azimuth` and `--direct-normal` (clap requires the three together), or the scene file's
+/// `[sun]` and `[sky]`.
+fn moments(args: &SunArgs, scene: &Scene) -> Result<Vec<Moment>> {
     if let Some(path) = &args.sun_positions {
-        return read_moments(std::path::Path::new(path), args.x_azimuth);
+        return read_moments(Path::new(path), args.x_azimuth);
     }
-    let given = |v: Option<f64>| v.expect("clap requires it without --sun-positions");
-    let sun = Sun::new(
-        given(args.zenith),
-        given(args.azimuth),
-        args.x_azimuth,
-        given(args.direct_normal),
-    )?;
-    let sources = Sources::new(sun, args.diffuse_horizontal.unwrap_or(0.0))?;
+    let sources = match (args.zenith, args.azimuth, args.direct_normal, &scene.daylight) {
+        (Some(zenith), Some(azimuth), Some(direct_normal), _) => {
+            let sun = Sun::new(zenith, azimuth, args.x_azimuth, direct_normal)?;
+            Sources::new(sun, args.diffuse_horizontal.unwrap_or(0.0))?
+        }
+        (None, None, None, Some(daylight)) => {
+            let mut daylight = *daylight;
+            if let Some(d) = args.diffuse_horizontal {
+                daylight.diffuse_horizontal = d;
+            }
+            Sources::of_daylight(&daylight)?
+        }
+        _ => {
+            return Err(Error::InvalidParameter {
+                name: "sun",
+                value: scene.name.clone(),
+                reason: "give --zenith, --azimuth and --direct-normal, --sun-positions FILE, or \
+                         a [sun] table in the scene file"
+                    .into(),
+            });
+        }
+    };
     Ok(vec![Moment { time: String::new(), sources }])
 }
 
 pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
-    let moments = moments(args)?;
-    if args.export.is_some() && args.sun_positions.is_some() {
-        // timedepsw.inp numbers its times: refused now, not after the work.
-        if let Some(m) = moments.iter().find(|m| m.time.parse::<f64>().is_err()) {
-            return Err(Error::InvalidParameter {
-                name: "export",
-                value: m.time.clone(),
-                reason: "timedepsw.inp numbers its times in seconds: label each sun position \
-                         with its time in seconds"
-                    .into(),
-            });
-        }
-    }
     let options = ViewFactorOptions { tolerance: args.tolerance, ..Default::default() };
     options.validate()?;
     for (flag, path) in [("csv", &args.csv), ("element-csv", &args.element_csv)] {
@@ -133,6 +135,19 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
     let config = args.scene.config()?;
     let problem = pipeline::build(&config)?;
     let Problem { scene, mesh, planner, .. } = &problem;
+    let moments = moments(args, scene)?;
+    if args.export.is_some() && args.sun_positions.is_some() {
+        // timedepsw.inp numbers its times: refused now, not after the work.
+        if let Some(m) = moments.iter().find(|m| m.time.parse::<f64>().is_err()) {
+            return Err(Error::InvalidParameter {
+                name: "export",
+                value: m.time.clone(),
+                reason: "timedepsw.inp numbers its times in seconds: label each sun position \
+                         with its time in seconds"
+                    .into(),
+            });
+        }
+    }
     super::output::print_notes(scene);
     // Which element each exported facet is, settled before the work.
     let facets = match &args.export {

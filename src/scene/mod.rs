@@ -40,6 +40,26 @@ pub struct Scene {
     /// What the loader repaired in the file (non-planar polygons split, duplicates dropped), one
     /// line per kind, for the user.
     pub notes: Vec<String>,
+    /// The sun and the sky the scene file gives (`[sun]`, `[sky]`), for `sun` runs.
+    pub daylight: Option<Daylight>,
+}
+
+/// The sun and the sky of a scene file, as its `[sun]` and `[sky]` tables give them (checked
+/// by the `sun` module, which takes them as its sources).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Daylight {
+    /// `[sun] zenith`, degrees from the zenith.
+    pub zenith: f64,
+    /// `[sun] azimuth`, compass degrees clockwise from north.
+    pub azimuth: f64,
+    /// `[sun] x_azimuth`, the compass direction of +x (default 90: east).
+    pub x_azimuth: Option<f64>,
+    /// `[sun] direct_normal`, the direct normal irradiance.
+    pub direct_normal: f64,
+    /// `[sky] diffuse_horizontal` (0 without a `[sky]` table).
+    #[serde(skip)]
+    pub diffuse_horizontal: f64,
 }
 
 /// Largest ratio of the scene's largest coordinate to its smallest face: beyond it, the kernels'
@@ -89,7 +109,7 @@ impl Scene {
         } else {
             faces.iter().map(|f| f.moved_by(origin)).collect()
         };
-        let scene = Self { name, faces, origin, notes: Vec::new() };
+        let scene = Self { name, faces, origin, notes: Vec::new(), daylight: None };
         scene.check_no_overlap()?;
         Ok(scene)
     }

@@ -11,6 +11,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::scene::Daylight;
 
 pub use positions::{Moment, read_moments};
 pub use shadows::{Sunlit, sunlit};
@@ -80,6 +81,14 @@ pub struct Sources {
 }
 
 impl Sources {
+    /// The sources of a scene file's `[sun]` and `[sky]` tables, checked as [`Sun::new`] and
+    /// [`Sources::new`] check them.
+    pub fn of_daylight(daylight: &Daylight) -> Result<Self> {
+        let x_azimuth = daylight.x_azimuth.unwrap_or(DEFAULT_X_AZIMUTH);
+        let sun = Sun::new(daylight.zenith, daylight.azimuth, x_azimuth, daylight.direct_normal)?;
+        Self::new(sun, daylight.diffuse_horizontal)
+    }
+
     /// The sun and a sky of `diffuse_horizontal` irradiance; refused where that is negative or
     /// not finite.
     pub fn new(sun: Sun, diffuse_horizontal: f64) -> Result<Self> {

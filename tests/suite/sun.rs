@@ -590,3 +590,90 @@ fn the_export_writes_the_files_an_urban_les_reads_in_the_stl_s_order() {
     ]);
     assert!(!ok && stderr.contains("--refine 0"), "{stderr}");
 }
+
+#[test]
+fn a_scene_file_s_sun_and_sky_tables_are_its_sources() {
+    use crate::common::{json, radiosity, temp_dir};
+    let dir = temp_dir("sun-tables");
+    let faces = r#"name = "court"
+[[faces]]
+name = "ground"
+vertices = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]
+rho = 0.2
+[[faces]]
+name = "wall"
+vertices = [[0, 10, 0], [10, 10, 0], [10, 10, 6], [0, 10, 6]]
+rho = 0.4
+"#;
+    let write = |name: &str, tables: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, format!("{faces}{tables}")).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let with_tables = write(
+        "court.toml",
+        "[sun]\nzenith = 40\nazimuth = 170\nx_azimuth = 80\ndirect_normal = 750\n\
+         [sky]\ndiffuse_horizontal = 90\n",
+    );
+    let bare = write("bare.toml", "");
+    let from_file = json(&["sun", "--scene", &with_tables, "--refine", "1", "--json", "-"]);
+    let from_flags = json(&[
+        "sun",
+        "--scene",
+        &bare,
+        "--refine",
+        "1",
+        "--zenith",
+        "40",
+        "--azimuth",
+        "170",
+        "--x-azimuth",
+        "80",
+        "--direct-normal",
+        "750",
+        "--diffuse-horizontal",
+        "90",
+        "--json",
+        "-",
+    ]);
+    for key in ["absorbed", "received", "escaped", "sunlit_area", "sun", "direction"] {
+        assert_eq!(from_file[key], from_flags[key], "{key}");
+    }
+    // The flags, all three given, override the tables.
+    let overridden = json(&[
+        "sun",
+        "--scene",
+        &with_tables,
+        "--refine",
+        "1",
+        "--zenith",
+        "20",
+        "--azimuth",
+        "170",
+        "--direct-normal",
+        "750",
+        "--json",
+        "-",
+    ]);
+    assert_eq!(
+        (overridden["sun"]["zenith"].as_f64(), overridden["diffuse_horizontal"].as_f64()),
+        (Some(20.0), Some(0.0))
+    );
+    // Refusals: no sun at all, a sky alone, an unknown key, a bad value, one flag of three.
+    let sky_alone = write("sky.toml", "[sky]\ndiffuse_horizontal = 90\n");
+    let unknown = write(
+        "unknown.toml",
+        "[sun]\nzenith = 40\nazimuth = 1\ndirect_normal = 1\nelevation = 50\n",
+    );
+    let bad = write("bad.toml", "[sun]\nzenith = 400\nazimuth = 1\ndirect_normal = 1\n");
+    for (args, named) in [
+        (vec!["sun", "--scene", &bare], "give --zenith, --azimuth and --direct-normal"),
+        (vec!["sun", "--scene", &sky_alone], "a [sky] table needs a [sun] table"),
+        (vec!["sun", "--scene", &unknown], "elevation"),
+        (vec!["sun", "--scene", &bad], "sun zenith"),
+        (vec!["sun", "--scene", &bare, "--zenith", "30"], "--azimuth"),
+    ] {
+        let (ok, _, stderr) = radiosity(&args);
+        assert!(!ok && stderr.contains(named), "{args:?}: {stderr}");
+    }
+}

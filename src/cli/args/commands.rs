@@ -200,11 +200,11 @@ pub(crate) struct SunArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
     /// The sun's angle from the zenith, degrees (0 overhead, 90 on the horizon; beyond, no
-    /// direct light)
+    /// direct light). Without it and --sun-positions, the scene file's [sun] and [sky] tables
     #[arg(
         long,
         allow_negative_numbers = true,
-        required_unless_present = "sun_positions",
+        requires_all = ["azimuth", "direct_normal"],
         conflicts_with = "sun_positions"
     )]
     pub(crate) zenith: Option<f64>,
@@ -212,7 +212,7 @@ pub(crate) struct SunArgs {
     #[arg(
         long,
         allow_negative_numbers = true,
-        required_unless_present = "sun_positions",
+        requires_all = ["zenith", "direct_normal"],
         conflicts_with = "sun_positions"
     )]
     pub(crate) azimuth: Option<f64>,
@@ -224,7 +224,7 @@ pub(crate) struct SunArgs {
     #[arg(
         long,
         allow_negative_numbers = true,
-        required_unless_present = "sun_positions",
+        requires_all = ["zenith", "azimuth"],
         conflicts_with = "sun_positions"
     )]
     pub(crate) direct_normal: Option<f64>,

@@ -292,7 +292,23 @@ fn parse_toml_with(text: &str, path: &Path, options: ImportOptions) -> Result<Sc
             builder.push(&format!("{prefix}/{}", poly.label), vertices, props, None)?;
         }
     }
-    builder.finish(file.name.unwrap_or_else(|| stem(path)))
+    let mut scene = builder.finish(file.name.unwrap_or_else(|| stem(path)))?;
+    scene.daylight = match (file.sun, file.sky) {
+        (Some(sun), sky) => Some(crate::scene::Daylight {
+            diffuse_horizontal: sky.map_or(0.0, |s| s.diffuse_horizontal),
+            ..sun
+        }),
+        (None, Some(_)) => {
+            return Err(Error::SceneFile {
+                path: display,
+                reason:
+                    "a [sky] table needs a [sun] table (give direct_normal = 0 for a sky alone)"
+                        .into(),
+            });
+        }
+        (None, None) => None,
+    };
+    Ok(scene)
 }
 
 #[cfg(test)]

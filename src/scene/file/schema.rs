@@ -110,6 +110,17 @@ pub(super) struct SceneFile {
     pub(super) faces: Vec<FaceEntry>,
     #[serde(default)]
     pub(super) meshes: Vec<MeshEntry>,
+    /// The sun of `radiosity sun`.
+    pub(super) sun: Option<crate::scene::Daylight>,
+    /// Its sky.
+    pub(super) sky: Option<SkyEntry>,
+}
+
+/// `[sky]`: an isotropic sky.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SkyEntry {
+    pub(super) diffuse_horizontal: f64,
 }
 
 #[derive(Debug, Deserialize)]
