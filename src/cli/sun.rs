@@ -297,27 +297,14 @@ fn write_csv<'a>(
     rows: impl Iterator<Item = (&'a str, usize, &'a str, Fluxes)>,
 ) -> Result<()> {
     let time = if timed { "time," } else { "" };
-    let mut text = format!(
-        "{time}{columns},area,sunlit_fraction,cos_incidence,sky_view_factor,direct,sky,\
-         reflected,absorbed,outgoing\n"
-    );
+    let mut text = format!("{time}{columns},{}\n", Fluxes::COLUMNS.join(","));
     for (time, k, name, f) in rows {
         if timed {
             text.push_str(time);
             text.push(',');
         }
-        text.push_str(&format!(
-            "{k},{name},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
-            f.area,
-            f.sunlit_fraction,
-            f.cos_incidence,
-            f.sky_view_factor,
-            f.direct,
-            f.sky,
-            f.reflected,
-            f.absorbed,
-            f.outgoing
-        ));
+        let values: Vec<String> = f.values().iter().map(|v| format!("{v:e}")).collect();
+        text.push_str(&format!("{k},{name},{}\n", values.join(",")));
     }
     std::fs::write(path, text)?;
     Ok(())

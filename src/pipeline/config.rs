@@ -17,8 +17,6 @@ use crate::progress::ProgressSink;
 use crate::scene::{BuiltinScene, ImportOptions, Scene, SurfaceParameters};
 use crate::solve::SolverOptions;
 
-use super::{BackendName, MeshName};
-
 /// Which mesh to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -33,21 +31,6 @@ pub enum MeshChoice {
     AutoDiscontinuity(LineExtent),
 }
 
-impl MeshChoice {
-    /// Name used in reports and on the command line.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Uniform => MeshName::Uniform.name(),
-            Self::Discontinuity(S5Diagonals::Paper) => MeshName::Discontinuity.name(),
-            Self::Discontinuity(S5Diagonals::AsUniform) => {
-                MeshName::DiscontinuityUniformDiagonals.name()
-            }
-            Self::AutoDiscontinuity(LineExtent::Chords) => MeshName::AutoDiscontinuity.name(),
-            Self::AutoDiscontinuity(LineExtent::Segments) => "auto-discontinuity-segments",
-        }
-    }
-}
-
 /// Where the collocation matrix is assembled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
@@ -58,14 +41,6 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// `cpu` or `gpu`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Cpu => BackendName::Cpu.name(),
-            Self::Gpu(_) => BackendName::Gpu.name(),
-        }
-    }
-
     /// Precision of the matrix entries (`f64` on the CPU).
     pub fn precision(&self) -> Precision {
         match self {

@@ -43,6 +43,19 @@ crate::vocabulary::named_options! {
 }
 
 impl MeshChoice {
+    /// Name used in reports and on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Uniform => MeshName::Uniform.name(),
+            Self::Discontinuity(S5Diagonals::Paper) => MeshName::Discontinuity.name(),
+            Self::Discontinuity(S5Diagonals::AsUniform) => {
+                MeshName::DiscontinuityUniformDiagonals.name()
+            }
+            Self::AutoDiscontinuity(LineExtent::Chords) => MeshName::AutoDiscontinuity.name(),
+            Self::AutoDiscontinuity(LineExtent::Segments) => "auto-discontinuity-segments",
+        }
+    }
+
     /// The mesh named `name`; `lines` is the shadow lines' extent of `auto-discontinuity`.
     pub fn named(name: MeshName, lines: LineExtent) -> Self {
         match name {
@@ -55,6 +68,14 @@ impl MeshChoice {
 }
 
 impl Backend {
+    /// `cpu` or `gpu`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Cpu => BackendName::Cpu.name(),
+            Self::Gpu(_) => BackendName::Gpu.name(),
+        }
+    }
+
     /// The backend named `name`; `precision` is the GPU kernels'.
     pub fn named(name: BackendName, precision: Precision) -> Self {
         match name {

@@ -36,7 +36,7 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
-use crate::shortwave::Shortwave;
+use crate::shortwave::{Fluxes, Shortwave};
 use crate::viewfactors::ViewFactors;
 
 /// Entries of F below this are dropped from `vfsparse.inp` (both directions of a pair).
@@ -149,15 +149,7 @@ impl UrbanExport<'_> {
             "# sky view factors\n".to_string()
                 + &per_facet(&|e| format!("{:.8}", non_negative(sky[e]))),
         )?;
-        let columns = |e: usize| -> String {
-            let values: Vec<String> = self
-                .times
-                .iter()
-                .map(|(_, light)| format!("{:.4}", light.elements[e].direct))
-                .collect();
-            values.join(" ")
-        };
-        write("Sdir.txt", per_facet(&columns))?;
+        write("Sdir.txt", per_facet(&|e| self.each_time(e, |f| format!("{:.4}", f.direct))))?;
         write("vfsparse.inp", self.vfsparse())?;
         if let [(time, light)] = self.times[..] {
             if time.is_empty() {
@@ -183,16 +175,16 @@ impl UrbanExport<'_> {
                 })
                 .collect::<Result<_>>()?;
         text.push_str(&(seconds.join(" ") + "\n"));
-        text.push_str(&per_facet(&|e| {
-            let values: Vec<String> = self
-                .times
-                .iter()
-                .map(|(_, light)| format!("{:9.4}", light.elements[e].absorbed))
-                .collect();
-            values.join(" ")
-        }));
+        text.push_str(&per_facet(&|e| self.each_time(e, |f| format!("{:9.4}", f.absorbed))));
         write("timedepsw.inp", text)?;
         Ok(files)
+    }
+
+    /// Element `e`'s value at each time, as `value` writes it, separated by spaces.
+    fn each_time(&self, e: usize, value: impl Fn(&Fluxes) -> String) -> String {
+        let values: Vec<String> =
+            self.times.iter().map(|(_, light)| value(&light.elements[e])).collect();
+        values.join(" ")
     }
 
     /// `vfsparse.inp`: `i j F_ij` for every entry kept, by facet numbers from 1, sorted by row

@@ -43,6 +43,34 @@ pub struct Fluxes {
 }
 
 impl Fluxes {
+    /// The names of [`Fluxes::values`], as the CSV files head their columns.
+    pub const COLUMNS: [&'static str; 9] = [
+        "area",
+        "sunlit_fraction",
+        "cos_incidence",
+        "sky_view_factor",
+        "direct",
+        "sky",
+        "reflected",
+        "absorbed",
+        "outgoing",
+    ];
+
+    /// Every field, in the order of [`Fluxes::COLUMNS`].
+    pub fn values(&self) -> [f64; 9] {
+        [
+            self.area,
+            self.sunlit_fraction,
+            self.cos_incidence,
+            self.sky_view_factor,
+            self.direct,
+            self.sky,
+            self.reflected,
+            self.absorbed,
+            self.outgoing,
+        ]
+    }
+
     /// All it receives: direct, sky and reflected.
     pub fn incident(&self) -> f64 {
         self.direct + self.sky + self.reflected

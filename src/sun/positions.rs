@@ -14,7 +14,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{Sources, Sun};
+use super::sources::{Sources, Sun};
 use crate::error::{Error, Result};
 
 /// The columns a sun-positions file must have.
