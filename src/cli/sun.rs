@@ -28,10 +28,11 @@ struct SunSummary<'a> {
     /// Elements.
     n: usize,
     faces: usize,
-    view_factor_tolerance: f64,
-    view_factor_error_estimate: f64,
-    sky_view_factor_min: f64,
-    sky_view_factor_max: f64,
+    /// The view factors' figures: null with `--direct-only`.
+    view_factor_tolerance: Option<f64>,
+    view_factor_error_estimate: Option<f64>,
+    sky_view_factor_min: Option<f64>,
+    sky_view_factor_max: Option<f64>,
     conditioned: bool,
     view_factor_seconds: f64,
     shortwave_seconds: f64,
@@ -169,16 +170,24 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         Some(_) => ClosureOptions { condition: true, drop_below: Some(VFSPARSE_THRESHOLD) },
         None => ClosureOptions { condition: args.condition, drop_below: None },
     };
-    let progress = super::progress::on_stderr();
-    progress.start("viewfactors", mesh.len());
-    let mut f = view_factors(scene, mesh, planner, &options, &*progress)?;
-    progress.finish();
-    f.close(&closure)?;
+    if args.direct_only && moments.iter().any(|m| m.sources.diffuse_horizontal > 0.0) {
+        eprintln!("note: --direct-only leaves out the sky: the diffuse irradiances are not used");
+    }
+    let f = if args.direct_only {
+        None
+    } else {
+        let progress = super::progress::on_stderr();
+        progress.start("viewfactors", mesh.len());
+        let mut f = view_factors(scene, mesh, planner, &options, &*progress)?;
+        progress.finish();
+        f.close(&closure)?;
+        Some(f)
+    };
     let view_factor_seconds = started.elapsed().as_secs_f64();
     let mut lights = Vec::with_capacity(moments.len());
     for moment in &moments {
         let t = Instant::now();
-        let light = shortwave(scene, mesh, &f, &moment.sources, DEFAULT_TOLERANCE)?;
+        let light = shortwave(scene, mesh, f.as_ref(), &moment.sources, DEFAULT_TOLERANCE)?;
         lights.push((light, t.elapsed().as_secs_f64()));
     }
     let exported = match (&facets, &args.export) {
@@ -188,7 +197,7 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
                 dir: Path::new(dir),
                 expnr: args.expnr.as_deref(),
                 facets,
-                view_factors: &f,
+                view_factors: f.as_ref(),
                 times: times.collect(),
             };
             export.write()?.iter().map(|p| p.display().to_string()).collect()
@@ -196,7 +205,7 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         _ => Vec::new(),
     };
     let seconds = started.elapsed().as_secs_f64();
-    let sky = f.sky_view_factors();
+    let sky = f.as_ref().map(|f| f.sky_view_factors());
     let one = moments.len() == 1 && args.sun_positions.is_none();
     let mut summaries = moments
         .iter()
@@ -207,10 +216,12 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         scene: &scene.name,
         n: mesh.len(),
         faces: scene.faces.len(),
-        view_factor_tolerance: args.tolerance,
-        view_factor_error_estimate: f.error_estimate,
-        sky_view_factor_min: sky.iter().copied().fold(f64::INFINITY, f64::min),
-        sky_view_factor_max: sky.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        view_factor_tolerance: f.as_ref().map(|_| args.tolerance),
+        view_factor_error_estimate: f.as_ref().map(|f| f.error_estimate),
+        sky_view_factor_min: sky.as_ref().map(|s| s.iter().copied().fold(f64::INFINITY, f64::min)),
+        sky_view_factor_max: sky
+            .as_ref()
+            .map(|s| s.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
         conditioned: closure.condition,
         view_factor_seconds,
         shortwave_seconds: seconds - view_factor_seconds,
@@ -317,14 +328,20 @@ fn print_summary(s: &SunSummary, first: &Shortwave, scene: &Scene, mesh: &radios
         "{}: n = {} elements on {} faces, {:.2} s (view factors {:.2} s, light {:.2} s)",
         s.scene, s.n, s.faces, s.seconds, s.view_factor_seconds, s.shortwave_seconds
     );
-    println!(
-        "view factors: tolerance {:.0e}, estimate {:.2e}{}; sky view factors {:.6} .. {:.6}",
+    if let (Some(t), Some(e), Some(lo), Some(hi)) = (
         s.view_factor_tolerance,
         s.view_factor_error_estimate,
-        if s.conditioned { ", conditioned" } else { "" },
         s.sky_view_factor_min,
-        s.sky_view_factor_max
-    );
+        s.sky_view_factor_max,
+    ) {
+        let conditioned = if s.conditioned { ", conditioned" } else { "" };
+        println!(
+            "view factors: tolerance {t:.0e}, estimate {e:.2e}{conditioned}; sky view factors \
+             {lo:.6} .. {hi:.6}"
+        );
+    } else {
+        println!("direct sunlight alone (--direct-only): no sky, reflections not followed");
+    }
     let share = |l: &Light| {
         if l.area_facing_sun > 0.0 { 100.0 * l.sunlit_area / l.area_facing_sun } else { 0.0 }
     };

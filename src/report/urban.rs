@@ -107,8 +107,9 @@ pub struct UrbanExport<'a> {
     pub expnr: Option<&'a str>,
     /// Each facet's element.
     pub facets: &'a [usize],
-    /// The view factors the light was computed on.
-    pub view_factors: &'a ViewFactors,
+    /// The view factors the light was computed on; `None` for direct light alone, which writes
+    /// `facetarea.inp` and `Sdir.txt` only.
+    pub view_factors: Option<&'a ViewFactors>,
     /// Each time's label and light; one unlabelled entry for one sun.
     pub times: Vec<(&'a str, &'a Shortwave)>,
 }
@@ -117,7 +118,6 @@ impl UrbanExport<'_> {
     /// Writes the files; returns their paths.
     pub fn write(&self) -> Result<Vec<PathBuf>> {
         std::fs::create_dir_all(self.dir)?;
-        let f = self.view_factors;
         if self.times.is_empty() {
             return Err(Error::InvalidParameter {
                 name: "export",
@@ -139,18 +139,20 @@ impl UrbanExport<'_> {
             files.push(path);
             Ok(())
         };
+        let areas = &self.times[0].1.elements;
         write(
             "facetarea.inp",
-            "# area of facets\n".to_string() + &per_facet(&|e| format!("{:.6}", f.areas[e])),
+            "# area of facets\n".to_string() + &per_facet(&|e| format!("{:.6}", areas[e].area)),
         )?;
+        write("Sdir.txt", per_facet(&|e| self.each_time(e, |f| format!("{:.4}", f.direct))))?;
+        let Some(f) = self.view_factors else { return Ok(files) };
         let sky = f.sky_view_factors();
         write(
             "svf.inp",
             "# sky view factors\n".to_string()
                 + &per_facet(&|e| format!("{:.8}", non_negative(sky[e]))),
         )?;
-        write("Sdir.txt", per_facet(&|e| self.each_time(e, |f| format!("{:.4}", f.direct))))?;
-        write("vfsparse.inp", self.vfsparse())?;
+        write("vfsparse.inp", self.vfsparse(f))?;
         if let [(time, light)] = self.times[..] {
             if time.is_empty() {
                 let absorbed = per_facet(&|e| format!("{:6.4}", light.elements[e].absorbed));
@@ -189,8 +191,7 @@ impl UrbanExport<'_> {
 
     /// `vfsparse.inp`: `i j F_ij` for every entry kept, by facet numbers from 1, sorted by row
     /// then column.
-    fn vfsparse(&self) -> String {
-        let f = self.view_factors;
+    fn vfsparse(&self, f: &ViewFactors) -> String {
         let mut facet_of = vec![0; self.facets.len()];
         for (k, &e) in self.facets.iter().enumerate() {
             facet_of[e] = k;

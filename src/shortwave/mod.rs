@@ -104,15 +104,17 @@ pub struct Shortwave {
 }
 
 /// The shortwave fluxes of every element of `mesh` under `sources`, reflections solved on the
-/// view factors `f` of the same mesh to GMRES's relative residual `tolerance`.
+/// view factors `f` of the same mesh to GMRES's relative residual `tolerance`. Without view
+/// factors, direct light alone: no sky light, reflections not followed (all reflected light
+/// counts as escaped), sky view factors NaN (not computed).
 pub fn shortwave(
     scene: &Scene,
     mesh: &Mesh,
-    f: &ViewFactors,
+    f: Option<&ViewFactors>,
     sources: &Sources,
     tolerance: f64,
 ) -> Result<Shortwave> {
-    if f.len() != mesh.len() {
+    if let Some(f) = f.filter(|f| f.len() != mesh.len()) {
         return Err(Error::InvalidParameter {
             name: "view factors",
             value: format!("{} elements", f.len()),
@@ -126,17 +128,22 @@ pub fn shortwave(
         mesh.elements().iter().map(|e| Sunlit { area: e.area(), ..Default::default() }).collect()
     };
     let rho: Vec<f64> = mesh.elements().iter().map(|e| scene.faces[e.face].rho).collect();
-    let sky_view_factors = f.sky_view_factors();
-    let received: Vec<f64> = (0..mesh.len())
-        .map(|i| lit[i].irradiance(sun.direct_normal) + diffuse_horizontal * sky_view_factors[i])
-        .collect();
+    let sky_view_factors = f.map_or_else(|| vec![f64::NAN; mesh.len()], |f| f.sky_view_factors());
+    let sky = |i: usize| if f.is_some() { diffuse_horizontal * sky_view_factors[i] } else { 0.0 };
+    let received: Vec<f64> =
+        (0..mesh.len()).map(|i| lit[i].irradiance(sun.direct_normal) + sky(i)).collect();
     let emission: Vec<f64> = received.iter().zip(&rho).map(|(r, p)| r * p).collect();
-    let solution = solve::gmres(&Reflections { f, rho: &rho }, &emission, tolerance)?;
-    let b = solution.x;
+    let (b, iterations) = match f {
+        Some(f) => {
+            let solution = solve::gmres(&Reflections { f, rho: &rho }, &emission, tolerance)?;
+            (solution.x, solution.iterations)
+        }
+        None => (Vec::new(), 0),
+    };
     let elements: Vec<Fluxes> = (0..mesh.len())
         .into_par_iter()
         .map(|i| {
-            let reflected = row_dot(f, i, &b);
+            let reflected = f.map_or(0.0, |f| row_dot(f, i, &b));
             let incident = received[i] + reflected;
             Fluxes {
                 area: lit[i].area,
@@ -144,15 +151,15 @@ pub fn shortwave(
                 cos_incidence: lit[i].cos_incidence,
                 sky_view_factor: sky_view_factors[i],
                 direct: lit[i].irradiance(sun.direct_normal),
-                sky: diffuse_horizontal * sky_view_factors[i],
+                sky: sky(i),
                 reflected,
                 absorbed: (1.0 - rho[i]) * incident,
                 outgoing: rho[i] * incident,
             }
         })
         .collect();
-    let balance = balance(&elements);
-    Ok(Shortwave { elements, iterations: solution.iterations, balance })
+    let balance = balance(&elements, f.is_some());
+    Ok(Shortwave { elements, iterations, balance })
 }
 
 impl Shortwave {
@@ -182,12 +189,14 @@ impl Shortwave {
     }
 }
 
-/// Where the power of `elements` went.
-fn balance(elements: &[Fluxes]) -> Balance {
-    let sum = |value: fn(&Fluxes) -> f64| elements.iter().map(|e| e.area * value(e)).sum::<f64>();
-    let received = sum(|e| e.direct + e.sky);
-    let absorbed = sum(|e| e.absorbed);
-    let escaped = sum(|e| e.outgoing * e.sky_view_factor);
+/// Where the power of `elements` went; where reflections were not `followed`, all reflected
+/// light escaped.
+fn balance(elements: &[Fluxes], followed: bool) -> Balance {
+    let sum =
+        |value: &dyn Fn(&Fluxes) -> f64| elements.iter().map(|e| e.area * value(e)).sum::<f64>();
+    let received = sum(&|e| e.direct + e.sky);
+    let absorbed = sum(&|e| e.absorbed);
+    let escaped = sum(&|e| e.outgoing * if followed { e.sky_view_factor } else { 1.0 });
     let gap = (received - absorbed - escaped).abs();
     Balance {
         received,

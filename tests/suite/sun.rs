@@ -224,7 +224,7 @@ fn an_open_plane_receives_the_sun_and_the_whole_sky() {
     let scene = Scene::new("plane", vec![plane]).unwrap();
     let (mesh, f) = view_factors_of(&scene, 1);
     let sources = Sources::new(Sun::new(40.0, 120.0, 90.0, 800.0).unwrap(), 100.0).unwrap();
-    let result = shortwave(&scene, &mesh, &f, &sources, 1e-13).unwrap();
+    let result = shortwave(&scene, &mesh, Some(&f), &sources, 1e-13).unwrap();
     let direct = 800.0 * 40f64.to_radians().cos();
     for e in &result.elements {
         assert!((e.direct - direct).abs() <= 1e-12 * direct, "{e:?}");
@@ -246,7 +246,7 @@ fn reflections_in_a_sunlit_city_close_the_energy_and_match_lu() {
         for (zenith, azimuth) in [(20.0, 150.0), (65.0, 280.0)] {
             let sun = Sun::new(zenith, azimuth, 90.0, 850.0).unwrap();
             let sources = Sources::new(sun, 120.0).unwrap();
-            let result = shortwave(&scene, &mesh, &f, &sources, 1e-13).unwrap();
+            let result = shortwave(&scene, &mesh, Some(&f), &sources, 1e-13).unwrap();
             let b = &result.balance;
             assert!(b.relative_gap <= 1e-9, "seed {seed} Z {zenith}: {b:?}");
             assert!(b.absorbed > 0.5 * b.received && b.escaped > 0.0, "{b:?}");
@@ -543,6 +543,38 @@ fn the_export_writes_the_files_an_urban_les_reads_in_the_stl_s_order() {
     let lit = 800.0 * 30f64.to_radians().cos();
     assert!(direct[1] > 0.0 && direct[1] <= lit + 1e-4, "{direct:?}");
 
+    // Direct light alone: no view factors, the same Sdir.txt and facetarea.inp, nothing else.
+    let direct_only = dir.join("direct-only");
+    let (ok, _, stderr) = radiosity(&[
+        "sun",
+        "--scene",
+        scene,
+        "--refine",
+        "0",
+        "--zenith",
+        "30",
+        "--azimuth",
+        "170",
+        "--direct-normal",
+        "800",
+        "--direct-only",
+        "--export",
+        direct_only.to_str().unwrap(),
+        "--expnr",
+        "001",
+    ]);
+    assert!(ok, "{stderr}");
+    for name in ["Sdir.txt.001", "facetarea.inp.001"] {
+        let (a, b) = (
+            std::fs::read(out.join(name)).unwrap(),
+            std::fs::read(direct_only.join(name)).unwrap(),
+        );
+        assert_eq!(a, b, "{name}");
+    }
+    let written: Vec<_> =
+        std::fs::read_dir(&direct_only).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(written.len(), 2, "{written:?}");
+
     // A day: one column per time in Sdir.txt and timedepsw.inp, times in seconds.
     let day = dir.join("day.csv");
     std::fs::write(&day, "time,zenith,azimuth,direct_normal,diffuse_horizontal\n36000,40,150,700,90\n43200,30,180,800,100\n").unwrap();
@@ -676,4 +708,37 @@ rho = 0.4
         let (ok, _, stderr) = radiosity(&args);
         assert!(!ok && stderr.contains(named), "{args:?}: {stderr}");
     }
+}
+
+#[test]
+fn direct_light_alone_skips_the_view_factors_and_keeps_the_direct_figures() {
+    use crate::common::json;
+    let args = [
+        "sun",
+        "--scene",
+        "city:2x1",
+        "--refine",
+        "1",
+        "--zenith",
+        "50",
+        "--azimuth",
+        "230",
+        "--direct-normal",
+        "700",
+        "--json",
+        "-",
+    ];
+    let full = json(&args);
+    let mut alone_args = args.to_vec();
+    alone_args.push("--direct-only");
+    let alone = json(&alone_args);
+    assert!(alone["view_factor_tolerance"].is_null() && alone["sky_view_factor_min"].is_null());
+    assert_eq!(alone["iterations"], 0);
+    for key in ["received", "sunlit_area", "area_facing_sun"] {
+        assert_eq!(alone[key], full[key], "{key}");
+    }
+    // Reflections not followed: what is not absorbed escapes.
+    let number = |v: &serde_json::Value, key: &str| v[key].as_f64().unwrap();
+    assert!(number(&alone, "relative_gap") <= 1e-12, "{alone}");
+    assert!(number(&alone, "absorbed") < number(&full, "absorbed"));
 }

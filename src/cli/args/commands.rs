@@ -240,6 +240,11 @@ pub(crate) struct SunArgs {
     /// factor 1 - Σ_j F_ij) and the reflections
     #[arg(long, default_value_t = 1e-6)]
     pub(crate) tolerance: f64,
+    /// Direct sunlight alone, for the largest scenes and many sun positions: no view factors,
+    /// so no sky light and reflections not followed (the sky view factors are NaN, all
+    /// reflected light counts as escaped; --export writes facetarea and Sdir.txt only)
+    #[arg(long, conflicts_with_all = ["diffuse_horizontal", "condition"])]
+    pub(crate) direct_only: bool,
     /// Condition the view factors before they carry light (reciprocity exact, rows + sky = 1,
     /// no entry moved beyond the estimate; `viewfactors --condition`)
     #[arg(long)]
