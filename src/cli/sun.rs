@@ -248,6 +248,15 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
         });
         write_csv(path, "element,face", !one, rows)?;
     }
+    if let Some(path) = &args.vtu {
+        let elements = &lights[0].0.elements;
+        let fields: Vec<(&str, Vec<f64>)> = Fluxes::COLUMNS
+            .iter()
+            .enumerate()
+            .map(|(k, &name)| (name, elements.iter().map(|e| e.values()[k]).collect()))
+            .collect();
+        report::write_cell_vtu(scene, mesh, &fields, Path::new(path))?;
+    }
     if let Some(path) = &args.png {
         let time = &moments[0].time;
         let title = format!(

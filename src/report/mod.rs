@@ -29,4 +29,4 @@ pub use study_figures::write_study_figures;
 pub use study_table::study_table;
 pub use table::TableFormat;
 pub use urban::{NETSW_HEADER, TIMEDEPSW_HEADER, UrbanExport, VFSPARSE_THRESHOLD, facet_elements};
-pub use vtk::write_vtu;
+pub use vtk::{write_cell_vtu, write_vtu};

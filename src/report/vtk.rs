@@ -7,26 +7,84 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::Result;
-use crate::scene::CHANNELS;
+use crate::mesh::Mesh;
+use crate::scene::{CHANNELS, Scene};
 use crate::solution::SolutionField;
+
+/// Each element's three vertices (in the user's coordinates) as VTU points, one line each, and
+/// the cells' connectivity, offsets and types.
+fn triangles(scene: &Scene, mesh: &Mesh) -> [String; 4] {
+    let n = mesh.len();
+    let mut points = String::new();
+    for e in mesh.elements() {
+        for v in e.vertices {
+            let v = v + scene.origin;
+            let _ = writeln!(points, "{:e} {:e} {:e}", v.x, v.y, v.z);
+        }
+    }
+    let connectivity: String = (0..3 * n).map(|k| format!("{k} ")).collect();
+    let offsets: String = (1..=n).map(|k| format!("{} ", 3 * k)).collect();
+    [points, connectivity, offsets, "5 ".repeat(n)]
+}
+
+/// Writes the elements of `mesh` to `path` as ASCII VTU with a value per element of each of
+/// `fields` (name, values in the mesh's order) and each element's face.
+pub fn write_cell_vtu(
+    scene: &Scene,
+    mesh: &Mesh,
+    fields: &[(&str, Vec<f64>)],
+    path: &Path,
+) -> Result<()> {
+    let n = mesh.len();
+    let [points, connectivity, offsets, types] = triangles(scene, mesh);
+    let face: String = mesh.elements().iter().map(|e| format!("{} ", e.face)).collect();
+    let mut cell_data = String::new();
+    for (name, values) in fields {
+        let values: String = values.iter().map(|v| format!("{v:e} ")).collect();
+        let _ = writeln!(
+            cell_data,
+            r#"        <DataArray type="Float64" Name="{}" format="ascii">{values}</DataArray>"#,
+            xml_escaped(name)
+        );
+    }
+    let text = format!(
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="{points_count}" NumberOfCells="{n}">
+      <Points>
+        <DataArray type="Float64" NumberOfComponents="3" format="ascii">
+{points}        </DataArray>
+      </Points>
+      <Cells>
+        <DataArray type="Int64" Name="connectivity" format="ascii">{connectivity}</DataArray>
+        <DataArray type="Int64" Name="offsets" format="ascii">{offsets}</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">{types}</DataArray>
+      </Cells>
+      <CellData>
+{cell_data}        <DataArray type="Int64" Name="face" format="ascii">{face}</DataArray>
+      </CellData>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+"#,
+        points_count = 3 * n,
+    );
+    std::fs::write(path, text)?;
+    Ok(())
+}
 
 /// Writes `field` to `path` as ASCII VTU.
 pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
     let elements = field.mesh.elements();
     let n = elements.len();
-    let mut points = String::new();
+    let [points, connectivity, offsets, types] = triangles(field.scene, field.mesh);
     let mut point_u = String::new();
-    for (j, e) in elements.iter().enumerate() {
-        for (v, u) in e.vertices.iter().zip(field.vertex_values(j)) {
-            // In the user's coordinates.
-            let v = *v + field.scene.origin;
-            let _ = writeln!(points, "{:e} {:e} {:e}", v.x, v.y, v.z);
+    for j in 0..n {
+        for u in field.vertex_values(j) {
             let _ = writeln!(point_u, "{u:e}");
         }
     }
-    let connectivity: String = (0..3 * n).map(|k| format!("{k} ")).collect();
-    let offsets: String = (1..=n).map(|k| format!("{} ", 3 * k)).collect();
-    let types = "5 ".repeat(n);
     let cells = |f: &dyn Fn(usize) -> String| -> String { (0..n).map(|j| f(j) + " ").collect() };
     let cell_u = cells(&|j| format!("{:e}", field.element_value(j)));
     let cell_e = cells(&|j| format!("{:e}", field.element_emission(j)));

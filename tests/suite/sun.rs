@@ -277,6 +277,7 @@ fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
     let (faces, elements) = (dir.join("faces.csv"), dir.join("elements.csv"));
     let (faces, elements) = (faces.to_str().unwrap(), elements.to_str().unwrap());
     let picture = dir.join("absorbed.png");
+    let vtu = dir.join("fluxes.vtu");
     let common = [
         "sun",
         "--scene",
@@ -297,7 +298,19 @@ fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
     let mut args = common.to_vec();
     args.extend(["--csv", faces, "--element-csv", elements, "--json", "-"]);
     args.extend(["--png", picture.to_str().unwrap(), "--png-size", "400x300"]);
+    args.extend(["--vtu", vtu.to_str().unwrap()]);
     let v = json(&args);
+    // The VTU's cells carry the element CSV's columns, in the mesh's order.
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    let cells = |name: &str| -> Vec<f64> {
+        let start = format!(r#"Name="{name}" format="ascii">"#);
+        let from = text.find(&start).unwrap_or_else(|| panic!("{name}")) + start.len();
+        let to = from + text[from..].find("</DataArray>").unwrap();
+        text[from..to].split_whitespace().map(|x| x.parse().unwrap()).collect()
+    };
+    let n = v["n"].as_u64().unwrap() as usize;
+    let absorbed = cells("absorbed");
+    assert_eq!((absorbed.len(), cells("sky_view_factor").len(), cells("face").len()), (n, n, n));
     let png = std::fs::read(&picture).unwrap();
     assert!(png.starts_with(b"\x89PNG") && png.len() > 2000, "{} bytes", png.len());
     let number = |key: &str| v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"));
@@ -316,8 +329,12 @@ fn the_sun_command_writes_per_face_and_per_element_fluxes_that_add_up() {
         let values: Vec<Vec<f64>> =
             lines.map(|l| l.split(',').skip(2).map(|x| x.parse().unwrap()).collect()).collect();
         assert_eq!(values.len() as u64, rows.unwrap());
-        let absorbed: f64 = values.iter().map(|r| r[0] * r[7]).sum();
-        assert!((absorbed - number("absorbed")).abs() <= 1e-12 * absorbed, "{path}");
+        let total: f64 = values.iter().map(|r| r[0] * r[7]).sum();
+        assert!((total - number("absorbed")).abs() <= 1e-12 * total, "{path}");
+        if first.starts_with("element") {
+            let column: Vec<f64> = values.iter().map(|r| r[7]).collect();
+            assert_eq!(column, absorbed, "the VTU's cells and the element CSV");
+        }
     }
     // Bad values are refused by name, before any work.
     for (flag, value, named) in [

@@ -262,6 +262,10 @@ pub(crate) struct SunArgs {
     /// conditioned and their pairs below 5e-7 dropped, and the light computed on them
     #[arg(long, value_name = "DIR")]
     pub(crate) export: Option<String>,
+    /// Write each element's fluxes (those of --element-csv) as VTK cell data to FILE.vtu (one
+    /// sun, or the first time of a day), for ParaView
+    #[arg(long, value_name = "FILE.vtu")]
+    pub(crate) vtu: Option<String>,
     /// Render the scene coloured by each element's absorbed flux (one sun, or the first time
     /// of a day), seen from the south-west, above
     #[arg(long, value_name = "FILE.png")]
