@@ -139,15 +139,7 @@ pub(crate) fn run_sun(args: &SunArgs) -> Result<()> {
     let moments = moments(args, scene)?;
     if args.export.is_some() && args.sun_positions.is_some() {
         // timedepsw.inp numbers its times: refused now, not after the work.
-        if let Some(m) = moments.iter().find(|m| m.time.parse::<f64>().is_err()) {
-            return Err(Error::InvalidParameter {
-                name: "export",
-                value: m.time.clone(),
-                reason: "timedepsw.inp numbers its times in seconds: label each sun position \
-                         with its time in seconds"
-                    .into(),
-            });
-        }
+        report::timedepsw_seconds(moments.iter().map(|m| m.time.as_str()))?;
     }
     super::output::print_notes(scene);
     // Which element each exported facet is, settled before the work.

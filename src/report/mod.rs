@@ -28,5 +28,8 @@ pub use stability_tables::{stability_table, stiff_table};
 pub use study_figures::write_study_figures;
 pub use study_table::study_table;
 pub use table::TableFormat;
-pub use urban::{NETSW_HEADER, TIMEDEPSW_HEADER, UrbanExport, VFSPARSE_THRESHOLD, facet_elements};
+pub use urban::{
+    NETSW_HEADER, TIMEDEPSW_HEADER, UrbanExport, VFSPARSE_THRESHOLD, facet_elements,
+    timedepsw_seconds,
+};
 pub use vtk::{write_cell_vtu, write_vtu};

@@ -98,6 +98,22 @@ pub fn facet_elements(
     Ok(facets)
 }
 
+/// The times of a day as `timedepsw.inp` numbers them, in seconds: each label read as a number,
+/// refused naming the first that is not one (checked before the work, and again where written).
+pub fn timedepsw_seconds<'a>(labels: impl Iterator<Item = &'a str>) -> Result<Vec<f64>> {
+    labels
+        .map(|time| {
+            time.parse::<f64>().map_err(|_| Error::InvalidParameter {
+                name: "export",
+                value: time.to_string(),
+                reason: "timedepsw.inp numbers its times in seconds: label each sun position \
+                         with its time in seconds"
+                    .into(),
+            })
+        })
+        .collect()
+}
+
 /// What to write: where, the facets' elements ([`facet_elements`]), the conditioned view
 /// factors and the light of each time (a label, in seconds for a day).
 pub struct UrbanExport<'a> {
@@ -161,21 +177,10 @@ impl UrbanExport<'_> {
             }
         }
         let mut text = format!("{TIMEDEPSW_HEADER}\n");
-        let seconds: Vec<String> =
-            self.times
-                .iter()
-                .map(|(time, _)| {
-                    time.parse::<f64>().map(|t| format!("{t:9.2}")).map_err(|_| {
-                        Error::InvalidParameter {
-                    name: "export",
-                    value: time.to_string(),
-                    reason: "timedepsw.inp numbers its times in seconds: label each sun position \
-                             with its time in seconds"
-                        .into(),
-                }
-                    })
-                })
-                .collect::<Result<_>>()?;
+        let seconds: Vec<String> = timedepsw_seconds(self.times.iter().map(|(time, _)| *time))?
+            .iter()
+            .map(|t| format!("{t:9.2}"))
+            .collect();
         text.push_str(&(seconds.join(" ") + "\n"));
         text.push_str(&per_facet(&|e| self.each_time(e, |f| format!("{:9.4}", f.absorbed))));
         write("timedepsw.inp", text)?;

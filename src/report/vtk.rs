@@ -11,9 +11,9 @@ use crate::mesh::Mesh;
 use crate::scene::{CHANNELS, Scene};
 use crate::solution::SolutionField;
 
-/// Each element's three vertices (in the user's coordinates) as VTU points, one line each, and
-/// the cells' connectivity, offsets and types.
-fn triangles(scene: &Scene, mesh: &Mesh) -> [String; 4] {
+/// Writes to `path` the VTU document of `mesh`'s elements, one triangle each with three points
+/// of its own (in the user's coordinates), with `data`: the `PointData` and `CellData` sections.
+fn write_grid(scene: &Scene, mesh: &Mesh, data: &str, path: &Path) -> Result<()> {
     let n = mesh.len();
     let mut points = String::new();
     for e in mesh.elements() {
@@ -24,29 +24,7 @@ fn triangles(scene: &Scene, mesh: &Mesh) -> [String; 4] {
     }
     let connectivity: String = (0..3 * n).map(|k| format!("{k} ")).collect();
     let offsets: String = (1..=n).map(|k| format!("{} ", 3 * k)).collect();
-    [points, connectivity, offsets, "5 ".repeat(n)]
-}
-
-/// Writes the elements of `mesh` to `path` as ASCII VTU with a value per element of each of
-/// `fields` (name, values in the mesh's order) and each element's face.
-pub fn write_cell_vtu(
-    scene: &Scene,
-    mesh: &Mesh,
-    fields: &[(&str, Vec<f64>)],
-    path: &Path,
-) -> Result<()> {
-    let n = mesh.len();
-    let [points, connectivity, offsets, types] = triangles(scene, mesh);
-    let face: String = mesh.elements().iter().map(|e| format!("{} ", e.face)).collect();
-    let mut cell_data = String::new();
-    for (name, values) in fields {
-        let values: String = values.iter().map(|v| format!("{v:e} ")).collect();
-        let _ = writeln!(
-            cell_data,
-            r#"        <DataArray type="Float64" Name="{}" format="ascii">{values}</DataArray>"#,
-            xml_escaped(name)
-        );
-    }
+    let types = "5 ".repeat(n);
     let text = format!(
         r#"<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">
@@ -61,10 +39,7 @@ pub fn write_cell_vtu(
         <DataArray type="Int64" Name="offsets" format="ascii">{offsets}</DataArray>
         <DataArray type="UInt8" Name="types" format="ascii">{types}</DataArray>
       </Cells>
-      <CellData>
-{cell_data}        <DataArray type="Int64" Name="face" format="ascii">{face}</DataArray>
-      </CellData>
-    </Piece>
+{data}    </Piece>
   </UnstructuredGrid>
 </VTKFile>
 "#,
@@ -74,11 +49,37 @@ pub fn write_cell_vtu(
     Ok(())
 }
 
+/// Writes the elements of `mesh` to `path` as ASCII VTU with a value per element of each of
+/// `fields` (name, values in the mesh's order) and each element's face.
+pub fn write_cell_vtu(
+    scene: &Scene,
+    mesh: &Mesh,
+    fields: &[(&str, Vec<f64>)],
+    path: &Path,
+) -> Result<()> {
+    let face: String = mesh.elements().iter().map(|e| format!("{} ", e.face)).collect();
+    let mut cell_data = String::new();
+    for (name, values) in fields {
+        let values: String = values.iter().map(|v| format!("{v:e} ")).collect();
+        let _ = writeln!(
+            cell_data,
+            r#"        <DataArray type="Float64" Name="{}" format="ascii">{values}</DataArray>"#,
+            xml_escaped(name)
+        );
+    }
+    let data = format!(
+        r#"      <CellData>
+{cell_data}        <DataArray type="Int64" Name="face" format="ascii">{face}</DataArray>
+      </CellData>
+"#
+    );
+    write_grid(scene, mesh, &data, path)
+}
+
 /// Writes `field` to `path` as ASCII VTU.
 pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
     let elements = field.mesh.elements();
     let n = elements.len();
-    let [points, connectivity, offsets, types] = triangles(field.scene, field.mesh);
     let mut point_u = String::new();
     for j in 0..n {
         for u in field.vertex_values(j) {
@@ -119,21 +120,8 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
             );
         }
     }
-    let text = format!(
-        r#"<?xml version="1.0"?>
-<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">
-  <UnstructuredGrid>
-    <Piece NumberOfPoints="{points_count}" NumberOfCells="{n}">
-      <Points>
-        <DataArray type="Float64" NumberOfComponents="3" format="ascii">
-{points}        </DataArray>
-      </Points>
-      <Cells>
-        <DataArray type="Int64" Name="connectivity" format="ascii">{connectivity}</DataArray>
-        <DataArray type="Int64" Name="offsets" format="ascii">{offsets}</DataArray>
-        <DataArray type="UInt8" Name="types" format="ascii">{types}</DataArray>
-      </Cells>
-      <PointData Scalars="u">
+    let data = format!(
+        r#"      <PointData Scalars="u">
         <DataArray type="Float64" Name="u" format="ascii">
 {point_u}        </DataArray>
 {point_bands}      </PointData>
@@ -143,14 +131,9 @@ pub fn write_vtu(field: &SolutionField, path: &Path) -> Result<()> {
         <DataArray type="Float64" Name="rho" format="ascii">{cell_rho}</DataArray>
         <DataArray type="Int64" Name="face" format="ascii">{cell_face}</DataArray>
 {cell_bands}      </CellData>
-    </Piece>
-  </UnstructuredGrid>
-</VTKFile>
-"#,
-        points_count = 3 * n,
+"#
     );
-    std::fs::write(path, text)?;
-    Ok(())
+    write_grid(field.scene, field.mesh, &data, path)
 }
 
 /// `text` with the characters XML gives meaning to replaced by their entities.
